@@ -1,0 +1,413 @@
+//! The table header: what game the table solves, on which grid, and how its bytes are to be read.
+//!
+//! Everything here is postcard-encoded between the preamble and the payload. The header is
+//! self-describing: a consumer needs no other file to interpret the payload or to know under
+//! which assumptions the value function was computed.
+
+use serde::{Deserialize, Serialize};
+
+use crate::Error;
+
+/// The largest number of state axes a table may have (the solver handles games of 2 to 5 axes).
+pub const MAX_DIMS: usize = 5;
+
+/// A closed interval `[min, max]`: an input's bounds, or one axis of a box.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Bounds {
+    /// The lower end.
+    pub min: f32,
+    /// The upper end.
+    pub max: f32,
+}
+
+impl Bounds {
+    /// The interval `[min, max]`.
+    pub const fn new(min: f32, max: f32) -> Self {
+        Bounds { min, max }
+    }
+
+    /// Whether `x` lies in the interval (NaN does not).
+    pub fn contains(&self, x: f32) -> bool {
+        self.min <= x && x <= self.max
+    }
+
+    fn is_valid(&self) -> bool {
+        self.min.is_finite() && self.max.is_finite() && self.min <= self.max
+    }
+}
+
+/// One grid axis: `points` equally spaced nodes from `min` to `max` inclusive.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Axis<'a> {
+    /// The state variable on this axis, e.g. `gap_leader`.
+    pub name: &'a str,
+    /// Its unit, e.g. `m` or `m/s`.
+    pub unit: &'a str,
+    /// The first node's coordinate.
+    pub min: f32,
+    /// The last node's coordinate.
+    pub max: f32,
+    /// The number of nodes, at least 2.
+    pub points: u32,
+}
+
+impl Axis<'_> {
+    /// The distance between neighbouring nodes.
+    pub fn spacing(&self) -> f32 {
+        (self.max - self.min) / (self.points.saturating_sub(1).max(1)) as f32
+    }
+
+    /// The coordinate of node `i` (not range-checked).
+    pub fn coordinate(&self, i: u32) -> f32 {
+        self.min + i as f32 * self.spacing()
+    }
+}
+
+/// The parameters of the Intelligent Driver Model (Treiber, Hennecke & Helbing 2000) that the
+/// three-car IDM game assumes for the follower.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct IdmParameters {
+    /// `a`: maximum acceleration, m/s^2.
+    pub max_acceleration: f32,
+    /// `b`: comfortable deceleration (positive), m/s^2.
+    pub comfortable_deceleration: f32,
+    /// `v0`: desired speed, m/s.
+    pub desired_speed: f32,
+    /// `delta`: acceleration exponent (usually 4).
+    pub exponent: u8,
+    /// `s0`: jam distance (minimum desired gap), m. The paper uses 0.
+    pub jam_distance: f32,
+}
+
+/// How the IDM game obtains the follower's absolute speed `v3 = v_ego - v_g2`, which the 4-D
+/// state does not contain.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FollowerSpeed {
+    /// The paper's reading: the ego drives at a fixed nominal speed, so `v3 = ego_speed - v_g2`.
+    /// An assumption, not a guarantee: the table is only valid near that ego speed.
+    NominalEgoSpeed {
+        /// The assumed ego speed, m/s.
+        ego_speed: f32,
+    },
+    /// The sound reading: `v3` is one more adversarial input over its feasible range
+    /// `max(0, -v_g2) <= v3 <= max_speed`.
+    Adversarial {
+        /// The largest speed any vehicle may have, m/s.
+        max_speed: f32,
+    },
+}
+
+/// The differential game a table solves, with the parameters it was solved for. Accelerations are
+/// in m/s^2; the ego maximises the value, the humans minimise it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Game {
+    /// Two cars: state `(gap_leader, rel_speed_leader)`, `x' = v`, `v' = u1 - u2`.
+    TwoCar {
+        /// Bounds on the ego's acceleration `u2`.
+        ego: Bounds,
+        /// Bounds on the leader's acceleration `u1`.
+        leader: Bounds,
+    },
+    /// Three cars, the paper's baseline: the follower's acceleration `u3` is any value within
+    /// bounds. State `(gap_leader, rel_speed_leader, gap_follower, rel_speed_follower)`.
+    ThreeCarBaseline {
+        /// Bounds on the ego's acceleration `u2`.
+        ego: Bounds,
+        /// Bounds on the leader's acceleration `u1`.
+        leader: Bounds,
+        /// Bounds on the follower's acceleration `u3`.
+        follower: Bounds,
+    },
+    /// Three cars, the paper's alternative: the follower drives by the IDM with an adversarial
+    /// desired time gap (the paper's "safe reaction time") in `time_gap`.
+    ThreeCarIdm {
+        /// Bounds on the ego's acceleration `u2`.
+        ego: Bounds,
+        /// Bounds on the leader's acceleration `u1`.
+        leader: Bounds,
+        /// The follower's IDM acceleration is clipped to these bounds.
+        follower_clip: Bounds,
+        /// The follower's IDM parameters.
+        idm: IdmParameters,
+        /// The range of the IDM desired time gap `T`, s.
+        time_gap: Bounds,
+        /// How the follower's absolute speed is obtained.
+        follower_speed: FollowerSpeed,
+    },
+}
+
+/// The game without its parameters, for checks such as "the firmware expects a three-car table".
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum GameKind {
+    /// [`Game::TwoCar`].
+    TwoCar,
+    /// [`Game::ThreeCarBaseline`].
+    ThreeCarBaseline,
+    /// [`Game::ThreeCarIdm`].
+    ThreeCarIdm,
+}
+
+impl Game {
+    /// The game's kind.
+    pub fn kind(&self) -> GameKind {
+        match self {
+            Game::TwoCar { .. } => GameKind::TwoCar,
+            Game::ThreeCarBaseline { .. } => GameKind::ThreeCarBaseline,
+            Game::ThreeCarIdm { .. } => GameKind::ThreeCarIdm,
+        }
+    }
+
+    /// The number of state axes: 2 for the two-car game, 4 for the three-car games.
+    pub fn dims(&self) -> usize {
+        match self {
+            Game::TwoCar { .. } => 2,
+            _ => 4,
+        }
+    }
+
+    /// Bounds on the ego's acceleration.
+    pub fn ego(&self) -> Bounds {
+        match self {
+            Game::TwoCar { ego, .. }
+            | Game::ThreeCarBaseline { ego, .. }
+            | Game::ThreeCarIdm { ego, .. } => *ego,
+        }
+    }
+
+    fn validate(&self) -> Result<(), Error> {
+        let ok = match self {
+            Game::TwoCar { ego, leader } => ego.is_valid() && leader.is_valid(),
+            Game::ThreeCarBaseline {
+                ego,
+                leader,
+                follower,
+            } => ego.is_valid() && leader.is_valid() && follower.is_valid(),
+            Game::ThreeCarIdm {
+                ego,
+                leader,
+                follower_clip,
+                idm,
+                time_gap,
+                follower_speed,
+            } => {
+                let speed_ok = match follower_speed {
+                    FollowerSpeed::NominalEgoSpeed { ego_speed } => ego_speed.is_finite(),
+                    FollowerSpeed::Adversarial { max_speed } => {
+                        max_speed.is_finite() && *max_speed > 0.0
+                    }
+                };
+                ego.is_valid()
+                    && leader.is_valid()
+                    && follower_clip.is_valid()
+                    && time_gap.is_valid()
+                    && time_gap.min >= 0.0
+                    && idm.max_acceleration.is_finite()
+                    && idm.max_acceleration > 0.0
+                    && idm.comfortable_deceleration.is_finite()
+                    && idm.comfortable_deceleration > 0.0
+                    && idm.desired_speed.is_finite()
+                    && idm.desired_speed > 0.0
+                    && idm.exponent >= 1
+                    && idm.jam_distance.is_finite()
+                    && idm.jam_distance >= 0.0
+                    && speed_ok
+            }
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(Error::InvalidHeader("game parameters"))
+        }
+    }
+}
+
+/// Whether the value function is the finite-horizon one or a converged (invariant) one.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum HorizonStatus {
+    /// Solved to a fixed horizon; the value certifies safety for that long.
+    Fixed,
+    /// Solved until `max |dV/dt| < tolerance`: the value approximates the infinite-horizon one.
+    Converged {
+        /// The stopping tolerance on `max |dV/dt|`, value units per second.
+        tolerance: f32,
+        /// The last `max |dV/dt|` measured.
+        residual: f32,
+    },
+    /// Asked to converge, stopped at the time limit before reaching the tolerance.
+    NotConverged {
+        /// The stopping tolerance on `max |dV/dt|`.
+        tolerance: f32,
+        /// The last `max |dV/dt|` measured.
+        residual: f32,
+    },
+}
+
+/// The time the value function was propagated for, and whether it converged.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Horizon {
+    /// Seconds of backward time solved.
+    pub seconds: f32,
+    /// Fixed horizon or convergence outcome.
+    pub status: HorizonStatus,
+}
+
+/// How stored integers map to values: `value = offset + scale * q`, `q` an unsigned integer of
+/// `bits` bits. Quantization rounds down, so a dequantized node value never exceeds the solver's.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Quantization {
+    /// 8 or 16.
+    pub bits: u8,
+    /// Value units per step, finite and positive.
+    pub scale: f32,
+    /// The value of `q = 0`.
+    pub offset: f32,
+}
+
+impl Quantization {
+    /// Bytes per stored value.
+    pub fn bytes_per_value(&self) -> usize {
+        usize::from(self.bits / 8)
+    }
+
+    /// The value a stored integer stands for.
+    pub fn dequantize(&self, q: u16) -> f32 {
+        self.offset + self.scale * f32::from(q)
+    }
+}
+
+/// How far the table's interpolated value may sit from the solver's value function, in value
+/// units (metres of gap for the paper's games).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ErrorBound {
+    /// Largest amount a dequantized node value lies below the solver's node value (quantization
+    /// only rounds down, so it never lies above).
+    pub quantization: f32,
+    /// Bound on `|I(z) - V(z)|` inside the trusted box, where `I` is the multilinear interpolant
+    /// of the solver's values at the table's nodes (derived by the solver from per-cell
+    /// Lipschitz constants).
+    pub interpolation: f32,
+}
+
+impl ErrorBound {
+    /// The bound on `V_solver(z) - V_table(z)` from below: `V_table(z) - total() <= V_solver(z)`.
+    /// A state with `V_table(z) > total()` is one the solver calls safe.
+    pub fn total(&self) -> f32 {
+        self.quantization + self.interpolation
+    }
+}
+
+/// How the policy bits are to be read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PolicyEncoding {
+    /// One bit per node, set where the ego's Hamiltonian-maximising input is its maximum
+    /// acceleration: `dV/dv_g2 - dV/dv_g1 > 0` in the three-car games, `-dV/dv > 0` in the
+    /// two-car game. Between nodes the bits vote with their multilinear weights: the action is
+    /// "accelerate" where the weighted sum of `+1` (set) and `-1` (clear) is positive, "brake"
+    /// where it is negative, and the bit of the corner with the largest weight on a tie.
+    SignBitWeightedVote,
+}
+
+/// Everything a consumer needs to interpret a table's payload.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Header<'a> {
+    /// The game and its parameters.
+    pub game: Game,
+    /// The constraint is `l(z) = min(gaps) - min_gap`, m.
+    pub min_gap: f32,
+    /// Horizon and convergence.
+    pub horizon: Horizon,
+    /// The grid, in state order (C order: the last axis varies fastest in the payload).
+    #[serde(borrow)]
+    pub axes: heapless::Vec<Axis<'a>, MAX_DIMS>,
+    /// Per axis, the sub-interval where the grid's boundary does not pollute the value.
+    pub trusted_box: heapless::Vec<Bounds, MAX_DIMS>,
+    /// How stored integers map to values.
+    pub quantization: Quantization,
+    /// The error that quantization and interpolation add.
+    pub error_bound: ErrorBound,
+    /// How the policy bits are read.
+    pub policy: PolicyEncoding,
+}
+
+impl Header<'_> {
+    /// The number of grid nodes, or an error if the grid is empty or too large.
+    pub fn node_count(&self) -> Result<usize, Error> {
+        let mut n: usize = 1;
+        for axis in &self.axes {
+            let points =
+                usize::try_from(axis.points).map_err(|_| Error::InvalidHeader("axis points"))?;
+            n = n
+                .checked_mul(points)
+                .filter(|&n| n <= crate::MAX_NODES)
+                .ok_or(Error::InvalidHeader("grid has too many nodes"))?;
+        }
+        Ok(n)
+    }
+
+    /// Bytes of the payload: the values, then the policy bits.
+    pub fn payload_len(&self) -> Result<usize, Error> {
+        let n = self.node_count()?;
+        Ok(n * self.quantization.bytes_per_value() + n.div_ceil(8))
+    }
+
+    /// Checks everything the reader relies on: finite numbers, increasing axes, a trusted box
+    /// inside the grid, a quantization it can read, and a grid whose size fits.
+    pub fn validate(&self) -> Result<(), Error> {
+        self.game.validate()?;
+        if self.axes.len() != self.game.dims() {
+            return Err(Error::InvalidHeader(
+                "number of axes does not match the game",
+            ));
+        }
+        if self.trusted_box.len() != self.axes.len() {
+            return Err(Error::InvalidHeader("trusted box dimensions"));
+        }
+        for (axis, trusted) in self.axes.iter().zip(self.trusted_box.iter()) {
+            if !(axis.min.is_finite() && axis.max.is_finite() && axis.min < axis.max) {
+                return Err(Error::InvalidHeader("axis bounds"));
+            }
+            if axis.points < 2 {
+                return Err(Error::InvalidHeader("axis points"));
+            }
+            let spacing = axis.spacing();
+            if !(spacing.is_finite() && spacing > 0.0) {
+                return Err(Error::InvalidHeader("axis spacing"));
+            }
+            if !(trusted.is_valid() && trusted.min >= axis.min && trusted.max <= axis.max) {
+                return Err(Error::InvalidHeader("trusted box"));
+            }
+        }
+        self.node_count()?;
+        let q = &self.quantization;
+        if !(q.bits == 8 || q.bits == 16) {
+            return Err(Error::InvalidHeader("quantization bits"));
+        }
+        if !(q.scale.is_finite() && q.scale > 0.0 && q.offset.is_finite()) {
+            return Err(Error::InvalidHeader("quantization scale or offset"));
+        }
+        let e = &self.error_bound;
+        if !(e.quantization.is_finite()
+            && e.quantization >= 0.0
+            && e.interpolation.is_finite()
+            && e.interpolation >= 0.0)
+        {
+            return Err(Error::InvalidHeader("error bound"));
+        }
+        if !(self.min_gap.is_finite() && self.horizon.seconds.is_finite()) {
+            return Err(Error::InvalidHeader("min gap or horizon"));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,178 @@
+//! The writer: quantizes a value function conservatively and lays it out as table bytes.
+//!
+//! Quantization lives here, next to the reader that undoes it, so that the two cannot disagree
+//! about rounding: a stored integer `q` stands for `offset + scale * q` computed in `f32`, exactly
+//! as the reader computes it, and `q` is the largest integer whose value does not exceed the
+//! solver's value.
+
+use crate::header::{
+    Axis, Bounds, ErrorBound, Game, Header, Horizon, PolicyEncoding, Quantization, MAX_DIMS,
+};
+use crate::{Error, CRC32, FORMAT_VERSION, MAGIC};
+
+/// The width of a stored value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ValueBits {
+    /// One byte a node: coarse, a quarter of the size of `f32`.
+    Eight,
+    /// Two bytes a node.
+    Sixteen,
+}
+
+impl ValueBits {
+    fn bits(self) -> u8 {
+        match self {
+            ValueBits::Eight => 8,
+            ValueBits::Sixteen => 16,
+        }
+    }
+
+    fn max_q(self) -> u16 {
+        match self {
+            ValueBits::Eight => u16::from(u8::MAX),
+            ValueBits::Sixteen => u16::MAX,
+        }
+    }
+}
+
+/// Everything a table is made of, before quantization.
+#[derive(Debug, Clone)]
+pub struct TableContents<'a> {
+    /// The game and its parameters.
+    pub game: Game,
+    /// `l(z) = min(gaps) - min_gap`.
+    pub min_gap: f32,
+    /// Horizon and convergence.
+    pub horizon: Horizon,
+    /// The grid, in state order.
+    pub axes: &'a [Axis<'a>],
+    /// The trusted box, one interval per axis.
+    pub trusted_box: &'a [Bounds],
+    /// The bound on the interpolation error (see [`ErrorBound::interpolation`]).
+    pub interpolation_error: f32,
+    /// The width of stored values.
+    pub value_bits: ValueBits,
+    /// The value at every node, C order (last axis fastest).
+    pub values: &'a [f32],
+    /// The policy bit at every node, C order: `true` where the ego should accelerate.
+    pub accelerate: &'a [bool],
+}
+
+/// Quantizes `contents` and returns the table's bytes (preamble, header, payload, CRC-32).
+pub fn encode(contents: &TableContents<'_>) -> Result<Vec<u8>, Error> {
+    let mut axes = heapless::Vec::<Axis<'_>, MAX_DIMS>::new();
+    for axis in contents.axes {
+        axes.push(*axis)
+            .map_err(|_| Error::InvalidHeader("too many axes"))?;
+    }
+    let mut trusted_box = heapless::Vec::<Bounds, MAX_DIMS>::new();
+    for b in contents.trusted_box {
+        trusted_box
+            .push(*b)
+            .map_err(|_| Error::InvalidHeader("trusted box dimensions"))?;
+    }
+    let mut header = Header {
+        game: contents.game,
+        min_gap: contents.min_gap,
+        horizon: contents.horizon,
+        axes,
+        trusted_box,
+        quantization: Quantization {
+            bits: contents.value_bits.bits(),
+            scale: 1.0,
+            offset: 0.0,
+        },
+        error_bound: ErrorBound {
+            quantization: 0.0,
+            interpolation: contents.interpolation_error,
+        },
+        policy: PolicyEncoding::SignBitWeightedVote,
+    };
+    header.validate()?;
+    let n = header.node_count()?;
+    for len in [contents.values.len(), contents.accelerate.len()] {
+        if len != n {
+            return Err(Error::ContentsSize {
+                expected: n,
+                found: len,
+            });
+        }
+    }
+    if let Some(node) = contents.values.iter().position(|v| !v.is_finite()) {
+        return Err(Error::NonFiniteValue { node });
+    }
+
+    let (quantization, q, quantization_error) = quantize(contents.values, contents.value_bits);
+    header.quantization = quantization;
+    header.error_bound.quantization = quantization_error;
+    header.validate()?;
+
+    let header_bytes =
+        postcard::to_stdvec(&header).map_err(|_| Error::InvalidHeader("header encoding"))?;
+    let header_len = u16::try_from(header_bytes.len())
+        .map_err(|_| Error::InvalidHeader("header longer than 65535 bytes"))?;
+
+    let mut out = Vec::with_capacity(crate::PREAMBLE_LEN + header_bytes.len() + n * 2 + n / 8 + 8);
+    out.extend_from_slice(&MAGIC);
+    out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+    out.extend_from_slice(&header_len.to_le_bytes());
+    out.extend_from_slice(&header_bytes);
+    match contents.value_bits {
+        ValueBits::Eight => out.extend(q.iter().map(|&v| v as u8)),
+        ValueBits::Sixteen => {
+            for v in &q {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    // Node k is bit k % 8 (least significant first) of byte k / 8.
+    out.extend(contents.accelerate.chunks(8).map(|chunk| {
+        chunk
+            .iter()
+            .enumerate()
+            .fold(0u8, |byte, (bit, &a)| byte | (u8::from(a) << bit))
+    }));
+    let crc = CRC32.checksum(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    Ok(out)
+}
+
+/// Chooses `offset = min(values)` and the scale that spans the range with the available steps,
+/// then rounds every value down. Returns the quantization, the integers and the largest
+/// rounding error. All arithmetic that decides `q` is the reader's `f32` arithmetic.
+fn quantize(values: &[f32], bits: ValueBits) -> (Quantization, Vec<u16>, f32) {
+    let lo = values.iter().copied().fold(f32::INFINITY, f32::min);
+    let hi = values.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let (lo, hi) = if values.is_empty() {
+        (0.0, 0.0)
+    } else {
+        (lo, hi)
+    };
+    let max_q = bits.max_q();
+    let span = (hi - lo).max(f32::MIN_POSITIVE);
+    let scale = span / f32::from(max_q);
+    let quantization = Quantization {
+        bits: bits.bits(),
+        scale,
+        offset: lo,
+    };
+    let mut worst = 0.0f32;
+    let q = values
+        .iter()
+        .map(|&v| {
+            let guess = ((v - lo) / scale).floor().clamp(0.0, f32::from(max_q)) as u16;
+            // Float rounding can put the guess one step off either way: settle on the largest
+            // q whose dequantized value does not exceed v.
+            let mut q = guess;
+            while q > 0 && quantization.dequantize(q) > v {
+                q -= 1;
+            }
+            while q < max_q && quantization.dequantize(q + 1) <= v {
+                q += 1;
+            }
+            worst = worst.max(v - quantization.dequantize(q));
+            q
+        })
+        .collect();
+    (quantization, q, worst)
+}

@@ -1,0 +1,425 @@
+//! Round trips, interpolation, quantization and corruption of whole tables.
+
+use proptest::prelude::*;
+use table_format::{
+    encode, Axis, Bounds, EgoAction, Error, FollowerSpeed, Game, Horizon, HorizonStatus,
+    IdmParameters, Table, TableContents, ValueBits,
+};
+
+const NAMES: [&str; 4] = [
+    "gap_leader",
+    "rel_speed_leader",
+    "gap_follower",
+    "rel_speed_follower",
+];
+
+fn idm_game() -> Game {
+    Game::ThreeCarIdm {
+        ego: Bounds::new(-2.0, 2.0),
+        leader: Bounds::new(-1.5, 1.5),
+        follower_clip: Bounds::new(-1.5, 1.5),
+        idm: IdmParameters {
+            max_acceleration: 1.0,
+            comfortable_deceleration: 1.5,
+            desired_speed: 33.3,
+            exponent: 4,
+            jam_distance: 0.0,
+        },
+        time_gap: Bounds::new(1.0, 2.0),
+        follower_speed: FollowerSpeed::Adversarial { max_speed: 40.0 },
+    }
+}
+
+fn axes(points: [u32; 4]) -> Vec<Axis<'static>> {
+    let ranges = [(-5.0, 45.0), (-10.0, 10.0), (-5.0, 45.0), (-10.0, 10.0)];
+    (0..4)
+        .map(|k| Axis {
+            name: NAMES[k],
+            unit: if k % 2 == 0 { "m" } else { "m/s" },
+            min: ranges[k].0,
+            max: ranges[k].1,
+            points: points[k],
+        })
+        .collect()
+}
+
+fn coords(axis: &Axis<'_>) -> Vec<f32> {
+    (0..axis.points).map(|i| axis.coordinate(i)).collect()
+}
+
+/// A 4-D table whose node values are `f` at the nodes and whose policy bit is `bit`.
+fn table_of(
+    points: [u32; 4],
+    bits: ValueBits,
+    f: impl Fn([f32; 4]) -> f32,
+    bit: impl Fn([f32; 4]) -> bool,
+) -> Vec<u8> {
+    let axes = axes(points);
+    let c: Vec<Vec<f32>> = axes.iter().map(coords).collect();
+    let mut values = Vec::new();
+    let mut accelerate = Vec::new();
+    for a in &c[0] {
+        for b in &c[1] {
+            for d in &c[2] {
+                for e in &c[3] {
+                    values.push(f([*a, *b, *d, *e]));
+                    accelerate.push(bit([*a, *b, *d, *e]));
+                }
+            }
+        }
+    }
+    let trusted: Vec<Bounds> = axes
+        .iter()
+        .map(|a| Bounds::new(a.min + 1.0, a.max - 1.0))
+        .collect();
+    encode(&TableContents {
+        game: idm_game(),
+        min_gap: 0.0,
+        horizon: Horizon {
+            seconds: 3.0,
+            status: HorizonStatus::Fixed,
+        },
+        axes: &axes,
+        trusted_box: &trusted,
+        interpolation_error: 0.05,
+        value_bits: bits,
+        values: &values,
+        accelerate: &accelerate,
+    })
+    .expect("encodes")
+}
+
+fn multilinear(z: [f32; 4]) -> f32 {
+    0.5 * z[0] - 0.2 * z[1] * z[2] / 10.0 + 0.01 * z[0] * z[3] + 0.001 * z[0] * z[1] * z[2] * z[3]
+        - 3.0
+}
+
+fn small() -> Vec<u8> {
+    table_of([4, 3, 5, 3], ValueBits::Sixteen, multilinear, |z| {
+        z[3] > 0.0
+    })
+}
+
+#[test]
+fn round_trip_keeps_header_and_node_values() {
+    let bytes = small();
+    let table = Table::parse(&bytes).expect("parses");
+    let h = table.header();
+    assert_eq!(h.game, idm_game());
+    assert_eq!(h.axes.len(), 4);
+    assert_eq!(h.axes[2].name, "gap_follower");
+    assert_eq!(h.axes[1].unit, "m/s");
+    assert_eq!(table.node_count(), 4 * 3 * 5 * 3);
+    assert_eq!(h.error_bound.interpolation, 0.05);
+    let axes = axes([4, 3, 5, 3]);
+    let mut node = 0;
+    for i in 0..4 {
+        for j in 0..3 {
+            for k in 0..5 {
+                for l in 0..3 {
+                    let z = [
+                        axes[0].coordinate(i),
+                        axes[1].coordinate(j),
+                        axes[2].coordinate(k),
+                        axes[3].coordinate(l),
+                    ];
+                    let v = table.value_at_node(node).unwrap();
+                    assert!(v <= multilinear(z), "conservative at node {node}");
+                    assert!(multilinear(z) - v <= h.error_bound.quantization + 1e-6);
+                    let expected = if z[3] > 0.0 {
+                        EgoAction::Accelerate
+                    } else {
+                        EgoAction::Brake
+                    };
+                    assert_eq!(table.action_at_node(node), Some(expected));
+                    assert_eq!(table.policy_at(&z).unwrap(), expected, "node {node}");
+                    node += 1;
+                }
+            }
+        }
+    }
+    assert_eq!(table.value_at_node(node), None);
+    assert_eq!(table.action_at_node(node), None);
+}
+
+#[test]
+fn header_size_and_bytes_per_node_are_as_documented() {
+    let n = 4 * 3 * 5 * 3;
+    let bytes16 = table_of([4, 3, 5, 3], ValueBits::Sixteen, multilinear, |_| true);
+    let bytes8 = table_of([4, 3, 5, 3], ValueBits::Eight, multilinear, |_| true);
+    let header_len = u16::from_le_bytes([bytes16[6], bytes16[7]]) as usize;
+    assert_eq!(bytes16.len(), 8 + header_len + 2 * n + n.div_ceil(8) + 4);
+    assert_eq!(bytes8.len(), 8 + header_len + n + n.div_ceil(8) + 4);
+    println!("4-D IDM header: {header_len} bytes");
+    assert!(header_len < 256, "header is {header_len} bytes");
+}
+
+#[test]
+fn interpolation_reproduces_multilinear_functions() {
+    let bytes = small();
+    let table = Table::parse(&bytes).unwrap();
+    let tol = table.header().error_bound.quantization + 1e-4;
+    let mut rng = 12345u64;
+    let mut next = || {
+        rng = rng
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (rng >> 40) as f32 / (1u64 << 24) as f32
+    };
+    for _ in 0..2000 {
+        let z = [
+            -5.0 + 50.0 * next(),
+            -10.0 + 20.0 * next(),
+            -5.0 + 50.0 * next(),
+            -10.0 + 20.0 * next(),
+        ];
+        let v = table.value_at(&z).unwrap();
+        let exact = multilinear(z);
+        assert!(
+            (v - exact).abs() <= tol,
+            "at {z:?}: table {v}, exact {exact}"
+        );
+        assert!(v <= exact + 1e-4, "not conservative at {z:?}");
+    }
+}
+
+#[test]
+fn eight_bit_quantization_is_conservative_and_bounded() {
+    let f = |z: [f32; 4]| (z[0] * 0.37).sin() * 20.0 + z[2] - z[1] * z[3] * 0.3;
+    let bytes = table_of([5, 4, 6, 4], ValueBits::Eight, f, |_| false);
+    let table = Table::parse(&bytes).unwrap();
+    let q = table.header().quantization;
+    assert_eq!(q.bits, 8);
+    let e = table.header().error_bound.quantization;
+    assert!(
+        e <= q.scale * 1.0001,
+        "error {e} above one step {}",
+        q.scale
+    );
+    assert!(e > 0.0);
+    let axes = axes([5, 4, 6, 4]);
+    let mut node = 0;
+    for i in 0..5 {
+        for j in 0..4 {
+            for k in 0..6 {
+                for l in 0..4 {
+                    let z = [
+                        axes[0].coordinate(i),
+                        axes[1].coordinate(j),
+                        axes[2].coordinate(k),
+                        axes[3].coordinate(l),
+                    ];
+                    let v = table.value_at_node(node).unwrap();
+                    assert!(v <= f(z));
+                    assert!(f(z) - v <= e);
+                    node += 1;
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn policy_between_nodes_follows_the_weighted_vote() {
+    // Accelerate only where rel_speed_follower is at its top node.
+    let bytes = table_of([3, 3, 3, 3], ValueBits::Eight, |_| 1.0, |z| z[3] > 9.0);
+    let table = Table::parse(&bytes).unwrap();
+    let near_top = [20.0, 0.0, 20.0, 6.0];
+    let near_mid = [20.0, 0.0, 20.0, 4.0];
+    assert_eq!(table.policy_at(&near_top).unwrap(), EgoAction::Accelerate);
+    assert_eq!(table.policy_at(&near_mid).unwrap(), EgoAction::Brake);
+    // Exactly halfway: a tie, resolved by the heaviest corner (the first, which brakes).
+    assert_eq!(
+        table.policy_at(&[20.0, 0.0, 20.0, 5.0]).unwrap(),
+        EgoAction::Brake
+    );
+}
+
+#[test]
+fn states_outside_or_malformed_get_typed_errors() {
+    let bytes = small();
+    let table = Table::parse(&bytes).unwrap();
+    assert_eq!(
+        table.value_at(&[0.0, 0.0, 0.0]),
+        Err(Error::DimensionMismatch {
+            expected: 4,
+            found: 3
+        })
+    );
+    assert_eq!(
+        table.value_at(&[0.0, f32::NAN, 0.0, 0.0]),
+        Err(Error::NonFiniteState { axis: 1 })
+    );
+    assert_eq!(
+        table.value_at(&[0.0, 0.0, f32::INFINITY, 0.0]),
+        Err(Error::NonFiniteState { axis: 2 })
+    );
+    assert_eq!(
+        table.value_at(&[0.0, 0.0, 0.0, 10.5]),
+        Err(Error::OutOfDomain { axis: 3 })
+    );
+    assert!(
+        table.value_at(&[45.0, 10.0, 45.0, 10.0]).is_ok(),
+        "upper corner is in"
+    );
+    assert!(table.contains(&[45.0, 10.0, 45.0, 10.0]));
+    assert!(!table.contains(&[45.0, 10.0, 45.0, f32::NAN]));
+    assert!(!table.in_trusted_box(&[45.0, 10.0, 45.0, 10.0]));
+    assert!(table.in_trusted_box(&[20.0, 0.0, 20.0, 0.0]));
+}
+
+#[test]
+fn every_single_bit_flip_is_rejected() {
+    let bytes = table_of([2, 2, 3, 2], ValueBits::Eight, multilinear, |z| z[0] > 0.0);
+    for byte in 0..bytes.len() {
+        for bit in 0..8 {
+            let mut corrupt = bytes.clone();
+            corrupt[byte] ^= 1 << bit;
+            assert!(
+                Table::parse(&corrupt).is_err(),
+                "flip of bit {bit} in byte {byte} accepted"
+            );
+        }
+    }
+}
+
+#[test]
+fn truncated_or_extended_buffers_are_rejected() {
+    let bytes = small();
+    for len in 0..bytes.len() {
+        assert!(
+            Table::parse(&bytes[..len]).is_err(),
+            "prefix of {len} accepted"
+        );
+    }
+    let mut longer = bytes.clone();
+    longer.push(0);
+    assert!(Table::parse(&longer).is_err());
+}
+
+#[test]
+fn specific_corruptions_name_their_cause() {
+    let bytes = small();
+    let mut wrong_magic = bytes.clone();
+    wrong_magic[0] = b'X';
+    assert_eq!(Table::parse(&wrong_magic).unwrap_err(), Error::BadMagic);
+    let mut wrong_version = bytes.clone();
+    wrong_version[4] = 2;
+    assert_eq!(
+        Table::parse(&wrong_version).unwrap_err(),
+        Error::UnsupportedVersion { found: 2 }
+    );
+    let mut payload_flip = bytes.clone();
+    let last = payload_flip.len() - 5;
+    payload_flip[last] ^= 0x10;
+    assert!(matches!(
+        Table::parse(&payload_flip).unwrap_err(),
+        Error::Checksum { .. }
+    ));
+}
+
+/// Re-signs a modified body with a valid CRC, so that the checks behind the CRC are reached.
+fn resign(mut body: Vec<u8>) -> Vec<u8> {
+    let crc = table_format::CRC32.checksum(&body);
+    body.extend_from_slice(&crc.to_le_bytes());
+    body
+}
+
+#[test]
+fn a_validly_signed_but_short_payload_is_rejected() {
+    let bytes = small();
+    let body = bytes[..bytes.len() - 5].to_vec();
+    assert!(matches!(
+        Table::parse(&resign(body)).unwrap_err(),
+        Error::PayloadSize { .. }
+    ));
+}
+
+#[test]
+fn writer_refuses_bad_contents() {
+    let axes = axes([2, 2, 2, 2]);
+    let trusted: Vec<Bounds> = axes.iter().map(|a| Bounds::new(a.min, a.max)).collect();
+    let values = vec![1.0f32; 16];
+    let accelerate = vec![false; 16];
+    let mut contents = TableContents {
+        game: idm_game(),
+        min_gap: 0.0,
+        horizon: Horizon {
+            seconds: 3.0,
+            status: HorizonStatus::Fixed,
+        },
+        axes: &axes,
+        trusted_box: &trusted,
+        interpolation_error: 0.0,
+        value_bits: ValueBits::Sixteen,
+        values: &values,
+        accelerate: &accelerate,
+    };
+    assert!(encode(&contents).is_ok());
+    contents.accelerate = &accelerate[..15];
+    assert_eq!(
+        encode(&contents).unwrap_err(),
+        Error::ContentsSize {
+            expected: 16,
+            found: 15
+        }
+    );
+    contents.accelerate = &accelerate;
+    let mut with_nan = values.clone();
+    with_nan[3] = f32::NAN;
+    contents.values = &with_nan;
+    assert_eq!(
+        encode(&contents).unwrap_err(),
+        Error::NonFiniteValue { node: 3 }
+    );
+    let wide: Vec<Bounds> = axes
+        .iter()
+        .map(|a| Bounds::new(a.min - 1.0, a.max))
+        .collect();
+    contents.trusted_box = &wide;
+    assert_eq!(
+        encode(&contents).unwrap_err(),
+        Error::InvalidHeader("trusted box")
+    );
+}
+
+proptest! {
+    #[test]
+    fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..512)) {
+        let _ = Table::parse(&bytes);
+    }
+
+    #[test]
+    fn signed_garbage_after_a_valid_preamble_never_panics(
+        tail in proptest::collection::vec(any::<u8>(), 0..300),
+        header_len in 0u16..300,
+    ) {
+        let mut body = b"HJTB".to_vec();
+        body.extend_from_slice(&1u16.to_le_bytes());
+        body.extend_from_slice(&header_len.to_le_bytes());
+        body.extend_from_slice(&tail);
+        let signed = resign(body);
+        if let Ok(table) = Table::parse(&signed) {
+            let z = vec![0.0f32; table.dims()];
+            let _ = table.lookup(&z);
+        };
+    }
+
+    #[test]
+    fn lookups_never_panic_and_stay_within_node_range(
+        z in proptest::array::uniform4(-20.0f32..60.0),
+    ) {
+        let bytes = small();
+        let table = Table::parse(&bytes).unwrap();
+        match table.lookup(&z) {
+            Ok(l) => {
+                prop_assert!(table.contains(&z));
+                let q = table.header().quantization;
+                prop_assert!(l.value >= q.offset - 1e-3);
+                prop_assert!(l.value <= q.offset + q.scale * 65535.0 + 1e-3);
+            }
+            Err(Error::OutOfDomain { .. }) => prop_assert!(!table.contains(&z)),
+            Err(e) => prop_assert!(false, "unexpected {e:?}"),
+        }
+    }
+}
