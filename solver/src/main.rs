@@ -1,6 +1,110 @@
-//! The solver's command line. Not written yet: the level-set solver is tracked in its own issue.
+//! `cargo run -p solver --release [-- --config FILE ... --out DIR]`
+//!
+//! With no `--config`, runs the built-in configs (`solver/configs/*.toml`): the paper's three
+//! results and the firmware's default table.
 
-fn main() {
-    eprintln!("the solver is not implemented yet");
-    std::process::exit(2);
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Parser;
+use indicatif::{ProgressBar, ProgressStyle};
+use solver::config::{builtin, Config};
+use solver::run::{run, Event};
+
+/// HJI safety analysis of car following, compiled into firmware tables.
+#[derive(Parser, Debug)]
+#[command(version, about)]
+struct Args {
+    /// A TOML config (repeatable). Default: the built-in paper configs.
+    #[arg(long = "config", value_name = "FILE")]
+    configs: Vec<PathBuf>,
+    /// Output folder; each config writes `DIR/<name>/`.
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
+    /// No progress bars.
+    #[arg(long)]
+    quiet: bool,
+}
+
+fn main() -> Result<()> {
+    let args = Args::parse();
+    let configs: Vec<(String, Config)> = if args.configs.is_empty() {
+        builtin()
+            .into_iter()
+            .map(|(name, text)| {
+                Config::from_toml(text)
+                    .with_context(|| format!("built-in config {name}"))
+                    .map(|c| (name.to_string(), c))
+            })
+            .collect::<Result<_>>()?
+    } else {
+        args.configs
+            .iter()
+            .map(|path| {
+                let text = std::fs::read_to_string(path)
+                    .with_context(|| format!("reading {}", path.display()))?;
+                let config =
+                    Config::from_toml(&text).with_context(|| format!("in {}", path.display()))?;
+                Ok((path.display().to_string(), config))
+            })
+            .collect::<Result<_>>()?
+    };
+    for (source, config) in &configs {
+        eprintln!("== {} ({source})", config.name);
+        let bar = if args.quiet {
+            ProgressBar::hidden()
+        } else {
+            ProgressBar::new(1000)
+        };
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{prefix:>12} [{bar:40}] {msg} ({elapsed_precise}, eta {eta})",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        let mut limit = 1.0;
+        let summary = run(config, &args.out, &mut |event| match event {
+            Event::SolveStarted(label, until) => {
+                limit = until;
+                bar.reset();
+                bar.set_prefix(label.to_string());
+            }
+            Event::Step(t, residual) => {
+                bar.set_position((1000.0 * t / limit) as u64);
+                bar.set_message(format!("t = {t:6.2} s, max|dV/dt| = {residual:.2e}"));
+            }
+            Event::SolveFinished => {}
+        })?;
+        bar.finish_and_clear();
+        println!(
+            "{}: {} steps to t = {:.2} s ({}), solve {:.1} s; safe share {:.3} (trusted box {:.3})",
+            summary.name,
+            summary.steps,
+            summary.time,
+            summary.convergence,
+            summary.solve_seconds,
+            summary.safe_fraction,
+            summary.safe_fraction_trusted
+        );
+        if let Some(t) = &summary.table {
+            println!(
+                "  table: {} bytes, {:?} nodes x {} bits, error bound {:.4} + {:.4} m, certified {:.3} of the solver's safe set",
+                t.bytes, t.points, t.bits, t.quantization_error, t.interpolation_error, t.certified_ratio
+            );
+        } else {
+            println!("  table: none (the trusted box is empty)");
+        }
+        if let Some(e) = &summary.exact {
+            println!(
+                "  vs exact: max |V - V*| = {:.4} m, mean {:.4} m, boundary error {:.4} m",
+                e.max_value_error, e.mean_value_error, e.max_boundary_error
+            );
+        }
+        println!(
+            "  wrote {}",
+            solver::run::folder(&args.out, config).display()
+        );
+    }
+    Ok(())
 }

@@ -1,0 +1,592 @@
+//! Run configurations: the TOML schema, the defaults that reproduce the paper, and validation
+//! that names the offending field.
+//!
+//! IDM defaults are Treiber & Kesting's highway values (*Traffic Flow Dynamics*, Springer 2013,
+//! Table 11.2): desired speed 120 km/h (33.3 m/s), time gap 1.0 s, jam distance 2 m, maximum
+//! acceleration 1.0 m/s^2, comfortable deceleration 1.5 m/s^2, exponent 4. The paper sets the
+//! jam distance to 0 "to allow crashes"; so do the paper configs here.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::ConfigError;
+use crate::hji::{Boundary, Dissipation, Numerics, RkOrder, Stop};
+use crate::scheme::Spatial;
+
+/// Bounds `[min, max]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Range {
+    /// Lower end.
+    pub min: f64,
+    /// Upper end.
+    pub max: f64,
+}
+
+/// One grid axis.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisConfig {
+    /// First node.
+    pub min: f64,
+    /// Last node.
+    pub max: f64,
+    /// Number of nodes.
+    pub points: usize,
+}
+
+/// Which game.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GameKindConfig {
+    /// 2-D leader-ego game.
+    TwoCar,
+    /// 4-D, follower any bounded acceleration.
+    ThreeCarBaseline,
+    /// 4-D, IDM follower with adversarial time gap.
+    ThreeCarIdm,
+}
+
+/// IDM parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IdmConfig {
+    /// `a`, m/s^2.
+    pub max_acceleration: f64,
+    /// `b`, m/s^2.
+    pub comfortable_deceleration: f64,
+    /// `v0`, m/s.
+    pub desired_speed: f64,
+    /// `delta`.
+    pub exponent: u8,
+    /// `s0`, m.
+    pub jam_distance: f64,
+}
+
+impl Default for IdmConfig {
+    fn default() -> Self {
+        IdmConfig {
+            max_acceleration: 1.0,
+            comfortable_deceleration: 1.5,
+            desired_speed: 33.3,
+            exponent: 4,
+            jam_distance: 2.0,
+        }
+    }
+}
+
+/// How the IDM follower's absolute speed is obtained.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum FollowerSpeedConfig {
+    /// The paper's reading: fixed nominal ego speed.
+    NominalEgoSpeed {
+        /// m/s.
+        ego_speed: f64,
+    },
+    /// The sound reading: adversarial over the feasible range.
+    Adversarial {
+        /// Largest vehicle speed, m/s.
+        max_speed: f64,
+    },
+}
+
+/// The game section.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GameConfig {
+    /// Which game.
+    pub kind: GameKindConfig,
+    /// Ego acceleration bounds.
+    pub ego: Range,
+    /// Leader acceleration bounds.
+    pub leader: Range,
+    /// Follower acceleration bounds (baseline) or IDM clip (IDM game).
+    #[serde(default)]
+    pub follower: Option<Range>,
+    /// `l = min(gaps) - min_gap`, m.
+    #[serde(default)]
+    pub min_gap: f64,
+    /// IDM parameters (IDM game).
+    #[serde(default)]
+    pub idm: Option<IdmConfig>,
+    /// IDM desired time gap range, s (IDM game).
+    #[serde(default)]
+    pub time_gap: Option<Range>,
+    /// Follower speed model (IDM game).
+    #[serde(default)]
+    pub follower_speed: Option<FollowerSpeedConfig>,
+}
+
+/// The grid section: one entry per state axis, by name.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridConfig {
+    /// Gap to the leader, m.
+    pub gap_leader: AxisConfig,
+    /// `v_leader - v_ego`, m/s.
+    pub rel_speed_leader: AxisConfig,
+    /// Gap to the follower, m (three-car games).
+    #[serde(default)]
+    pub gap_follower: Option<AxisConfig>,
+    /// `v_ego - v_follower`, m/s (three-car games).
+    #[serde(default)]
+    pub rel_speed_follower: Option<AxisConfig>,
+}
+
+/// The numerics section.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NumericsConfig {
+    /// `upwind1`, `eno2` or `weno5`.
+    #[serde(default = "default_spatial")]
+    pub spatial: Spatial,
+    /// 1, 2 or 3.
+    #[serde(default = "default_rk")]
+    pub rk_order: u8,
+    /// CFL number.
+    #[serde(default = "default_cfl")]
+    pub cfl: f64,
+    /// `local` or `global`.
+    #[serde(default = "default_dissipation")]
+    pub dissipation: Dissipation,
+    /// `pessimistic` or `extrapolate`.
+    #[serde(default = "default_boundary")]
+    pub boundary: Boundary,
+}
+
+fn default_spatial() -> Spatial {
+    Spatial::Weno5
+}
+fn default_rk() -> u8 {
+    3
+}
+fn default_cfl() -> f64 {
+    0.75
+}
+fn default_dissipation() -> Dissipation {
+    Dissipation::Local
+}
+fn default_boundary() -> Boundary {
+    Boundary::Pessimistic
+}
+
+impl Default for NumericsConfig {
+    fn default() -> Self {
+        NumericsConfig {
+            spatial: default_spatial(),
+            rk_order: default_rk(),
+            cfl: default_cfl(),
+            dissipation: default_dissipation(),
+            boundary: default_boundary(),
+        }
+    }
+}
+
+/// The horizon section: a fixed horizon, or convergence.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HorizonConfig {
+    /// Fixed horizon, s (or the time limit when converging).
+    pub time: f64,
+    /// If set, stop when `max |dV/dt|` falls below it (value units per second).
+    #[serde(default)]
+    pub converge_tolerance: Option<f64>,
+}
+
+/// The table section.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TableConfig {
+    /// 8 or 16.
+    #[serde(default = "default_bits")]
+    pub bits: u8,
+    /// Nodes per axis in state order; each `points - 1` must divide the solver axis's
+    /// `points - 1` (the table's nodes are a subset of the solver's). Default: the solver grid.
+    #[serde(default)]
+    pub points: Option<Vec<usize>>,
+}
+
+fn default_bits() -> u8 {
+    16
+}
+
+impl Default for TableConfig {
+    fn default() -> Self {
+        TableConfig {
+            bits: default_bits(),
+            points: None,
+        }
+    }
+}
+
+/// The trusted-box section.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrustedConfig {
+    /// Measure the trusted box with a second solve under the other boundary condition; if
+    /// false the trusted box is the whole grid (only sound when nothing leaves the grid).
+    #[serde(default = "yes")]
+    pub measure: bool,
+    /// Largest value difference between the two boundary conditions still called "no
+    /// influence", m.
+    #[serde(default = "default_trusted_tolerance")]
+    pub tolerance: f64,
+}
+
+fn yes() -> bool {
+    true
+}
+fn default_trusted_tolerance() -> f64 {
+    0.05
+}
+
+impl Default for TrustedConfig {
+    fn default() -> Self {
+        TrustedConfig {
+            measure: true,
+            tolerance: default_trusted_tolerance(),
+        }
+    }
+}
+
+/// A slice to plot: values of the two axes held fixed (the others are the plot's axes).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SliceConfig {
+    /// `rel_speed_leader`, m/s.
+    pub rel_speed_leader: f64,
+    /// `rel_speed_follower`, m/s.
+    pub rel_speed_follower: f64,
+}
+
+/// A whole run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    /// Output folder name, `[a-z0-9_-]+`.
+    pub name: String,
+    /// A sentence on what the run shows.
+    #[serde(default)]
+    pub description: String,
+    /// The game.
+    pub game: GameConfig,
+    /// The grid.
+    pub grid: GridConfig,
+    /// The numerics.
+    #[serde(default)]
+    pub numerics: NumericsConfig,
+    /// The horizon.
+    pub horizon: HorizonConfig,
+    /// The table.
+    #[serde(default)]
+    pub table: TableConfig,
+    /// The trusted box.
+    #[serde(default)]
+    pub trusted_box: TrustedConfig,
+    /// Slices to plot (three-car games); default: both relative speeds 0.
+    #[serde(default)]
+    pub slices: Vec<SliceConfig>,
+}
+
+fn check(ok: bool, field: &str, reason: &str) -> Result<(), ConfigError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(ConfigError::new(field, reason))
+    }
+}
+
+fn check_range(r: &Range, field: &str) -> Result<(), ConfigError> {
+    check(
+        r.min.is_finite() && r.max.is_finite() && r.min <= r.max,
+        field,
+        "needs finite min <= max",
+    )
+}
+
+fn check_accel(r: &Range, field: &str) -> Result<(), ConfigError> {
+    check_range(r, field)?;
+    check(
+        r.min < 0.0 && r.max > 0.0,
+        field,
+        "an acceleration range must contain both braking (min < 0) and accelerating (max > 0)",
+    )
+}
+
+impl Config {
+    /// Parses and validates a TOML document.
+    pub fn from_toml(text: &str) -> Result<Self, ConfigError> {
+        let config: Config = toml::from_str(text).map_err(|e| {
+            let field = e
+                .span()
+                .map(|s| format!("near byte {}..{}", s.start, s.end))
+                .unwrap_or_else(|| "document".into());
+            ConfigError::new(field, e.message().to_string())
+        })?;
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// Checks every field the solver relies on.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        check(
+            !self.name.is_empty()
+                && self
+                    .name
+                    .chars()
+                    .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-' || c == '_'),
+            "name",
+            "must be non-empty and use only a-z, 0-9, '-' and '_' (it names the output folder)",
+        )?;
+        let g = &self.game;
+        check_accel(&g.ego, "game.ego")?;
+        check_accel(&g.leader, "game.leader")?;
+        check(
+            g.min_gap.is_finite() && g.min_gap >= 0.0,
+            "game.min_gap",
+            "must be finite and >= 0",
+        )?;
+        let three = g.kind != GameKindConfig::TwoCar;
+        if three {
+            let f = g
+                .follower
+                .ok_or_else(|| ConfigError::new("game.follower", "required for three-car games"))?;
+            check_accel(&f, "game.follower")?;
+            check(
+                self.grid.gap_follower.is_some(),
+                "grid.gap_follower",
+                "required for three-car games",
+            )?;
+            check(
+                self.grid.rel_speed_follower.is_some(),
+                "grid.rel_speed_follower",
+                "required for three-car games",
+            )?;
+        } else {
+            check(
+                self.grid.gap_follower.is_none() && self.grid.rel_speed_follower.is_none(),
+                "grid.gap_follower",
+                "the two-car game has no follower axes",
+            )?;
+        }
+        if g.kind == GameKindConfig::ThreeCarIdm {
+            let idm = g.idm.unwrap_or_default();
+            check(
+                idm.max_acceleration.is_finite() && idm.max_acceleration > 0.0,
+                "game.idm.max_acceleration",
+                "must be > 0",
+            )?;
+            check(
+                idm.comfortable_deceleration.is_finite() && idm.comfortable_deceleration > 0.0,
+                "game.idm.comfortable_deceleration",
+                "must be > 0 (a deceleration magnitude)",
+            )?;
+            check(
+                idm.desired_speed.is_finite() && idm.desired_speed > 0.0,
+                "game.idm.desired_speed",
+                "must be > 0",
+            )?;
+            check(
+                (1..=8).contains(&idm.exponent),
+                "game.idm.exponent",
+                "must be 1 to 8",
+            )?;
+            check(
+                idm.jam_distance.is_finite() && idm.jam_distance >= 0.0,
+                "game.idm.jam_distance",
+                "must be >= 0",
+            )?;
+            let t = g
+                .time_gap
+                .ok_or_else(|| ConfigError::new("game.time_gap", "required for the IDM game"))?;
+            check_range(&t, "game.time_gap")?;
+            check(t.min >= 0.0, "game.time_gap.min", "must be >= 0")?;
+            match g.follower_speed {
+                None => return Err(ConfigError::new(
+                    "game.follower_speed",
+                    "required for the IDM game: kind = \"adversarial\" or \"nominal_ego_speed\"",
+                )),
+                Some(FollowerSpeedConfig::Adversarial { max_speed }) => check(
+                    max_speed.is_finite() && max_speed > 0.0,
+                    "game.follower_speed.max_speed",
+                    "must be > 0",
+                )?,
+                Some(FollowerSpeedConfig::NominalEgoSpeed { ego_speed }) => check(
+                    ego_speed.is_finite() && ego_speed >= 0.0,
+                    "game.follower_speed.ego_speed",
+                    "must be >= 0",
+                )?,
+            }
+        }
+        for (name, axis) in self.axes() {
+            let field = format!("grid.{name}");
+            check(
+                axis.min.is_finite() && axis.max.is_finite() && axis.min < axis.max,
+                &field,
+                "needs finite min < max",
+            )?;
+            check(
+                (5..=2001).contains(&axis.points),
+                &format!("{field}.points"),
+                "must be 5 to 2001 (WENO5 needs 5)",
+            )?;
+        }
+        let n = &self.numerics;
+        check(
+            n.cfl.is_finite() && n.cfl > 0.0 && n.cfl <= 1.0,
+            "numerics.cfl",
+            "must be in (0, 1]",
+        )?;
+        check(
+            (1..=3).contains(&n.rk_order),
+            "numerics.rk_order",
+            "must be 1, 2 or 3",
+        )?;
+        let h = &self.horizon;
+        check(
+            h.time.is_finite() && h.time > 0.0,
+            "horizon.time",
+            "must be > 0",
+        )?;
+        if let Some(tol) = h.converge_tolerance {
+            check(
+                tol.is_finite() && tol > 0.0,
+                "horizon.converge_tolerance",
+                "must be > 0",
+            )?;
+        }
+        check(
+            self.table.bits == 8 || self.table.bits == 16,
+            "table.bits",
+            "must be 8 or 16",
+        )?;
+        if let Some(points) = &self.table.points {
+            let axes = self.axes();
+            check(
+                points.len() == axes.len(),
+                "table.points",
+                "needs one entry per grid axis, in state order",
+            )?;
+            for (p, (name, a)) in points.iter().zip(&axes) {
+                check(
+                    *p >= 2 && *p <= a.points && (a.points - 1) % (p - 1) == 0,
+                    "table.points",
+                    &format!(
+                        "{name}: {p} table points do not subsample {} solver points \
+                         (table points - 1 must divide solver points - 1)",
+                        a.points
+                    ),
+                )?;
+            }
+        }
+        check(
+            self.trusted_box.tolerance.is_finite() && self.trusted_box.tolerance > 0.0,
+            "trusted_box.tolerance",
+            "must be > 0",
+        )?;
+        Ok(())
+    }
+
+    /// The grid axes in state order, with their names.
+    pub fn axes(&self) -> Vec<(&'static str, AxisConfig)> {
+        let mut v = vec![
+            ("gap_leader", self.grid.gap_leader),
+            ("rel_speed_leader", self.grid.rel_speed_leader),
+        ];
+        if let (Some(g), Some(r)) = (self.grid.gap_follower, self.grid.rel_speed_follower) {
+            v.push(("gap_follower", g));
+            v.push(("rel_speed_follower", r));
+        }
+        v
+    }
+
+    /// The engine's numerics.
+    pub fn numerics(&self) -> Numerics {
+        Numerics {
+            spatial: self.numerics.spatial,
+            rk: match self.numerics.rk_order {
+                1 => RkOrder::One,
+                2 => RkOrder::Two,
+                _ => RkOrder::Three,
+            },
+            cfl: self.numerics.cfl,
+            dissipation: self.numerics.dissipation,
+            boundary: self.numerics.boundary,
+        }
+    }
+
+    /// The engine's stopping rule.
+    pub fn stop(&self) -> Stop {
+        match self.horizon.converge_tolerance {
+            None => Stop::Horizon(self.horizon.time),
+            Some(tolerance) => Stop::Converge {
+                tolerance,
+                max_time: self.horizon.time,
+            },
+        }
+    }
+
+    /// The game as the table header describes it.
+    pub fn game_description(&self) -> table_format::Game {
+        let b = |r: Range| table_format::Bounds::new(r.min as f32, r.max as f32);
+        let g = &self.game;
+        let follower = g.follower.unwrap_or(g.leader);
+        match g.kind {
+            GameKindConfig::TwoCar => table_format::Game::TwoCar {
+                ego: b(g.ego),
+                leader: b(g.leader),
+            },
+            GameKindConfig::ThreeCarBaseline => table_format::Game::ThreeCarBaseline {
+                ego: b(g.ego),
+                leader: b(g.leader),
+                follower: b(follower),
+            },
+            GameKindConfig::ThreeCarIdm => {
+                let idm = g.idm.unwrap_or_default();
+                table_format::Game::ThreeCarIdm {
+                    ego: b(g.ego),
+                    leader: b(g.leader),
+                    follower_clip: b(follower),
+                    idm: table_format::IdmParameters {
+                        max_acceleration: idm.max_acceleration as f32,
+                        comfortable_deceleration: idm.comfortable_deceleration as f32,
+                        desired_speed: idm.desired_speed as f32,
+                        exponent: idm.exponent,
+                        jam_distance: idm.jam_distance as f32,
+                    },
+                    time_gap: b(g.time_gap.unwrap_or(Range { min: 1.0, max: 2.0 })),
+                    follower_speed: match g.follower_speed {
+                        Some(FollowerSpeedConfig::NominalEgoSpeed { ego_speed }) => {
+                            table_format::FollowerSpeed::NominalEgoSpeed {
+                                ego_speed: ego_speed as f32,
+                            }
+                        }
+                        Some(FollowerSpeedConfig::Adversarial { max_speed }) => {
+                            table_format::FollowerSpeed::Adversarial {
+                                max_speed: max_speed as f32,
+                            }
+                        }
+                        // Refused by `validate`; the sound reading is the safe fallback.
+                        None => table_format::FollowerSpeed::Adversarial { max_speed: 40.0 },
+                    },
+                }
+            }
+        }
+    }
+}
+
+/// The built-in configs that `cargo run -p solver` runs with no `--config`: the paper's three
+/// results and the firmware's default table. The same files are under `solver/configs/`.
+pub fn builtin() -> Vec<(&'static str, &'static str)> {
+    vec![
+        ("two-car.toml", include_str!("../configs/two-car.toml")),
+        (
+            "three-car-baseline.toml",
+            include_str!("../configs/three-car-baseline.toml"),
+        ),
+        (
+            "three-car-idm.toml",
+            include_str!("../configs/three-car-idm.toml"),
+        ),
+    ]
+}

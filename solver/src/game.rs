@@ -1,0 +1,538 @@
+//! The car-following games: dynamics, constraint, Hamiltonian and the players' optimal inputs.
+//!
+//! # Conventions
+//! The value `V(z)` is the smallest constraint value `l` a trajectory from `z` ever reaches when
+//! the ego maximises and the humans minimise (the paper's eq. 4). Its Hamiltonian is
+//! `H(z, p) = max_u min_d p . f(z, u, d)`. Every game here is *separable*: the inputs enter `p . f`
+//! in separate terms, so max-min equals min-max (Isaacs' condition holds) and each player's
+//! optimum is found term by term, exactly, over its real input set.
+//!
+//! # Three-car games, state `z = (x_g1, v_g1, x_g2, v_g2)`
+//! `x_g1' = v_g1`, `v_g1' = u1 - u2`, `x_g2' = v_g2`, `v_g2' = u2 - u3`, so with
+//! `p = (p1, p2, p3, p4)`:
+//!
+//! `p . f = p1 v_g1 + p3 v_g2 + (p4 - p2) u2 + p2 u1 - p4 u3`.
+//!
+//! - Ego (maximises `(p4 - p2) u2`): `u2* = a_max` if `p4 - p2 > 0`, else `a_min` (paper eq. 6).
+//! - Leader (minimises `p2 u1`): `u1* = a_min` if `p2 > 0`, else `a_max` (paper eq. 7).
+//! - Baseline follower (minimises `-p4 u3`): `u3* = a_max` if `p4 > 0`, else `a_min` (eq. 8).
+//! - IDM follower: `u3 = clip(g(z, T, v3))` with the time gap `T` (and, in the sound reading,
+//!   the follower speed `v3`) adversarial. The adversary minimises `-p4 u3`, i.e. it *maximises*
+//!   the follower's acceleration where `p4 > 0` and *minimises* it where `p4 < 0`. The IDM
+//!   acceleration is non-increasing in `T` and in `v3` (see [`Idm::acceleration`]), so the
+//!   optimum is exact and sits at a corner: `(T_min, v3_min)` where `p4 > 0` and
+//!   `(T_max, v3_max)` where `p4 < 0`.
+//!
+//!   The paper's eq. 9 instead sets `T = clip(-v_g2 / (2 sqrt(ab)))` where `p4 > 0`: the `T`
+//!   that zeroes the bracket `v3 T + v3 dv / (2 sqrt(ab))` if the approach rate were
+//!   `dv = +v_g2`. With the paper's own convention `v_g2 = v_ego - v3`, the approach rate is
+//!   `dv = v3 - v_ego = -v_g2`, and in any case the bracket enters `s*` through `max(0, .)`
+//!   with slope `v3 >= 0` in `T`: `s*` is smallest (the follower's acceleration largest) at
+//!   `T_min`, whatever `v_g2` is, and no interior `T` is ever strictly better. Likewise
+//!   `max_T |2 sqrt(ab) T + v_g2|` in the other branch is not the minimiser of the acceleration
+//!   when `v_g2 > 0` (the bracket is then negative and clipped to zero for small `T`). We use
+//!   the derived corner solution; a unit test checks it against a brute-force sweep.
+//!
+//! # Two-car game, state `z = (x, v)`
+//! `x' = v`, `v' = u1 - u2`: `p . f = p1 v - p2 u2 + p2 u1`, so `u2* = a_max` if `p2 < 0`.
+
+use crate::grid::MAX_DIMS;
+
+/// A state or co-state with room for every supported dimension.
+pub type Vector = [f32; MAX_DIMS];
+
+/// The optimal inputs of all players at one state for one co-state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OptimalInputs {
+    /// The ego's acceleration `u2*`.
+    pub ego: f32,
+    /// The leader's acceleration `u1*` (the adversary's).
+    pub leader: f32,
+    /// The follower's acceleration `u3*` (absent in the two-car game).
+    pub follower: Option<f32>,
+    /// The IDM time gap the adversary picks (IDM game only).
+    pub time_gap: Option<f32>,
+    /// The follower speed the adversary picks or the nominal reading implies (IDM game only).
+    pub follower_speed: Option<f32>,
+}
+
+/// A differential game the level-set engine can solve.
+pub trait Dynamics: Sync {
+    /// The number of state axes.
+    fn dims(&self) -> usize;
+    /// The constraint `l(z)`; `l >= 0` is the allowed set.
+    fn constraint(&self, z: &Vector) -> f32;
+    /// `H(z, p) = max_u min_d p . f(z, u, d)`.
+    fn hamiltonian(&self, z: &Vector, p: &Vector) -> f32;
+    /// Per axis a bound `alpha_i(z) >= max_{u,d} |f_i(z, u, d)|` for the Lax-Friedrichs
+    /// dissipation.
+    fn dissipation(&self, z: &Vector, alpha: &mut Vector);
+    /// All players' optimal inputs at `z` for co-state `p`.
+    fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs;
+    /// Whether the ego's optimal input is its maximum acceleration (the table's policy bit).
+    fn ego_accelerates(&self, p: &Vector) -> bool;
+}
+
+/// Bounds of one player's acceleration, m/s^2.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Accel {
+    /// Lower bound (braking, negative).
+    pub min: f32,
+    /// Upper bound.
+    pub max: f32,
+}
+
+impl Accel {
+    /// The extreme that maximises `c * a`.
+    #[inline(always)]
+    fn argmax(self, c: f32) -> f32 {
+        if c > 0.0 {
+            self.max
+        } else {
+            self.min
+        }
+    }
+
+    /// The extreme that minimises `c * a`.
+    #[inline(always)]
+    fn argmin(self, c: f32) -> f32 {
+        if c > 0.0 {
+            self.min
+        } else {
+            self.max
+        }
+    }
+
+    fn from(b: table_format::Bounds) -> Self {
+        Accel {
+            min: b.min,
+            max: b.max,
+        }
+    }
+}
+
+/// The two-car game (paper Fig. 1a).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TwoCar {
+    /// Ego acceleration bounds.
+    pub ego: Accel,
+    /// Leader acceleration bounds.
+    pub leader: Accel,
+    /// `l(z) = x - min_gap`.
+    pub min_gap: f32,
+}
+
+impl Dynamics for TwoCar {
+    fn dims(&self) -> usize {
+        2
+    }
+
+    fn constraint(&self, z: &Vector) -> f32 {
+        z[0] - self.min_gap
+    }
+
+    #[inline(always)]
+    fn hamiltonian(&self, z: &Vector, p: &Vector) -> f32 {
+        let u2 = self.ego.argmax(-p[1]);
+        let u1 = self.leader.argmin(p[1]);
+        p[0] * z[1] + p[1] * (u1 - u2)
+    }
+
+    #[inline(always)]
+    fn dissipation(&self, z: &Vector, alpha: &mut Vector) {
+        alpha[0] = z[1].abs();
+        alpha[1] = (self.leader.max - self.ego.min).max(self.ego.max - self.leader.min);
+    }
+
+    fn optimal_inputs(&self, _z: &Vector, p: &Vector) -> OptimalInputs {
+        OptimalInputs {
+            ego: self.ego.argmax(-p[1]),
+            leader: self.leader.argmin(p[1]),
+            follower: None,
+            time_gap: None,
+            follower_speed: None,
+        }
+    }
+
+    fn ego_accelerates(&self, p: &Vector) -> bool {
+        -p[1] > 0.0
+    }
+}
+
+/// The three-car game where the follower's acceleration is any value within bounds (the
+/// paper's baseline).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ThreeCarBaseline {
+    /// Ego acceleration bounds.
+    pub ego: Accel,
+    /// Leader acceleration bounds.
+    pub leader: Accel,
+    /// Follower acceleration bounds.
+    pub follower: Accel,
+    /// `l(z) = min(x_g1, x_g2) - min_gap`.
+    pub min_gap: f32,
+}
+
+impl Dynamics for ThreeCarBaseline {
+    fn dims(&self) -> usize {
+        4
+    }
+
+    fn constraint(&self, z: &Vector) -> f32 {
+        z[0].min(z[2]) - self.min_gap
+    }
+
+    #[inline(always)]
+    fn hamiltonian(&self, z: &Vector, p: &Vector) -> f32 {
+        let u2 = self.ego.argmax(p[3] - p[1]);
+        let u1 = self.leader.argmin(p[1]);
+        let u3 = self.follower.argmin(-p[3]);
+        p[0] * z[1] + p[2] * z[3] + p[1] * (u1 - u2) + p[3] * (u2 - u3)
+    }
+
+    #[inline(always)]
+    fn dissipation(&self, z: &Vector, alpha: &mut Vector) {
+        alpha[0] = z[1].abs();
+        alpha[1] = (self.leader.max - self.ego.min).max(self.ego.max - self.leader.min);
+        alpha[2] = z[3].abs();
+        alpha[3] = (self.ego.max - self.follower.min).max(self.follower.max - self.ego.min);
+    }
+
+    fn optimal_inputs(&self, _z: &Vector, p: &Vector) -> OptimalInputs {
+        OptimalInputs {
+            ego: self.ego.argmax(p[3] - p[1]),
+            leader: self.leader.argmin(p[1]),
+            follower: Some(self.follower.argmin(-p[3])),
+            time_gap: None,
+            follower_speed: None,
+        }
+    }
+
+    fn ego_accelerates(&self, p: &Vector) -> bool {
+        p[3] - p[1] > 0.0
+    }
+}
+
+/// The Intelligent Driver Model (Treiber, Hennecke & Helbing, 2000).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Idm {
+    /// `a`, m/s^2.
+    pub max_acceleration: f32,
+    /// `b`, m/s^2 (positive).
+    pub comfortable_deceleration: f32,
+    /// `v0`, m/s.
+    pub desired_speed: f32,
+    /// `delta`.
+    pub exponent: i32,
+    /// `s0`, m.
+    pub jam_distance: f32,
+}
+
+impl Idm {
+    /// The IDM acceleration of a vehicle at speed `speed` (>= 0), `gap` metres behind its
+    /// leader, approaching it at `approach_rate = speed - leader_speed`, with desired time gap
+    /// `time_gap`:
+    ///
+    /// `g = a (1 - (v / v0)^delta - (s* / s)^2)`,
+    /// `s* = s0 + max(0, v T + v dv / (2 sqrt(a b)))`.
+    ///
+    /// For `v >= 0`, `g` is non-increasing in `T` (`s*` grows with `T` at rate `v >= 0` where the
+    /// max is active, and `(s*/s)^2` grows with `s* >= 0`) and non-increasing in `v` at a fixed
+    /// approach rate (`(v/v0)^delta` grows, and `s* - s0 = max(0, v (T + dv / (2 sqrt(ab))))`
+    /// is non-decreasing in `v`). The exponent is applied with `powi`, exact for integers.
+    /// A gap of zero or less with a positive desired gap gives `-inf` (the caller clips).
+    #[inline(always)]
+    pub fn acceleration(&self, speed: f32, approach_rate: f32, gap: f32, time_gap: f32) -> f32 {
+        let a = self.max_acceleration;
+        let ab2 = 2.0 * (a * self.comfortable_deceleration).sqrt();
+        let desired = self.jam_distance + (speed * time_gap + speed * approach_rate / ab2).max(0.0);
+        let interaction = if gap > 0.0 {
+            let r = desired / gap;
+            r * r
+        } else if desired > 0.0 {
+            f32::INFINITY
+        } else {
+            0.0
+        };
+        a * (1.0 - (speed / self.desired_speed).powi(self.exponent) - interaction)
+    }
+}
+
+/// How the IDM game gets the follower's absolute speed `v3 = v_ego - v_g2`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FollowerSpeedModel {
+    /// The paper's reading: the ego drives at `ego_speed`, so `v3 = max(0, ego_speed - v_g2)`.
+    NominalEgoSpeed {
+        /// Assumed ego speed, m/s.
+        ego_speed: f32,
+    },
+    /// The sound reading: `v3` is adversarial over all speeds consistent with the state:
+    /// `v3 >= 0`, `v3 <= max_speed`, and the ego's speed `v3 + v_g2` in `[0, max_speed]`, i.e.
+    /// `max(0, -v_g2) <= v3 <= min(max_speed, max_speed - v_g2)`.
+    Adversarial {
+        /// Largest speed of any vehicle, m/s.
+        max_speed: f32,
+    },
+}
+
+impl FollowerSpeedModel {
+    /// The range of follower speeds consistent with `v_g2`.
+    #[inline(always)]
+    pub fn range(&self, v_g2: f32) -> (f32, f32) {
+        match *self {
+            FollowerSpeedModel::NominalEgoSpeed { ego_speed } => {
+                let v3 = (ego_speed - v_g2).max(0.0);
+                (v3, v3)
+            }
+            FollowerSpeedModel::Adversarial { max_speed } => {
+                let lo = (-v_g2).max(0.0).min(max_speed);
+                let hi = max_speed.min(max_speed - v_g2).max(lo);
+                (lo, hi)
+            }
+        }
+    }
+}
+
+/// The three-car game with an IDM follower whose desired time gap (the paper's "safe reaction
+/// time") is adversarial in `[T_min, T_max]` (the paper's alternative).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ThreeCarIdm {
+    /// Ego acceleration bounds.
+    pub ego: Accel,
+    /// Leader acceleration bounds.
+    pub leader: Accel,
+    /// The follower's IDM output is clipped to these bounds.
+    pub follower_clip: Accel,
+    /// The follower's IDM.
+    pub idm: Idm,
+    /// `[T_min, T_max]`, s.
+    pub time_gap: Accel,
+    /// How `v3` is obtained.
+    pub follower_speed: FollowerSpeedModel,
+    /// `l(z) = min(x_g1, x_g2) - min_gap`.
+    pub min_gap: f32,
+}
+
+impl ThreeCarIdm {
+    /// The follower's clipped IDM acceleration and the adversary's `(T, v3)` when the
+    /// adversary wants the follower's acceleration high (`maximise`) or low.
+    #[inline(always)]
+    fn follower(&self, z: &Vector, maximise: bool) -> (f32, f32, f32) {
+        let (v_lo, v_hi) = self.follower_speed.range(z[3]);
+        let (t, v3) = if maximise {
+            (self.time_gap.min, v_lo)
+        } else {
+            (self.time_gap.max, v_hi)
+        };
+        let g = self.idm.acceleration(v3, -z[3], z[2], t);
+        let u3 = g.clamp(self.follower_clip.min, self.follower_clip.max);
+        (u3, t, v3)
+    }
+}
+
+impl Dynamics for ThreeCarIdm {
+    fn dims(&self) -> usize {
+        4
+    }
+
+    fn constraint(&self, z: &Vector) -> f32 {
+        z[0].min(z[2]) - self.min_gap
+    }
+
+    #[inline(always)]
+    fn hamiltonian(&self, z: &Vector, p: &Vector) -> f32 {
+        let u2 = self.ego.argmax(p[3] - p[1]);
+        let u1 = self.leader.argmin(p[1]);
+        let (u3, _, _) = self.follower(z, p[3] > 0.0);
+        p[0] * z[1] + p[2] * z[3] + p[1] * (u1 - u2) + p[3] * (u2 - u3)
+    }
+
+    #[inline(always)]
+    fn dissipation(&self, z: &Vector, alpha: &mut Vector) {
+        alpha[0] = z[1].abs();
+        alpha[1] = (self.leader.max - self.ego.min).max(self.ego.max - self.leader.min);
+        alpha[2] = z[3].abs();
+        alpha[3] =
+            (self.ego.max - self.follower_clip.min).max(self.follower_clip.max - self.ego.min);
+    }
+
+    fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs {
+        let (u3, t, v3) = self.follower(z, p[3] > 0.0);
+        OptimalInputs {
+            ego: self.ego.argmax(p[3] - p[1]),
+            leader: self.leader.argmin(p[1]),
+            follower: Some(u3),
+            time_gap: Some(t),
+            follower_speed: Some(v3),
+        }
+    }
+
+    fn ego_accelerates(&self, p: &Vector) -> bool {
+        p[3] - p[1] > 0.0
+    }
+}
+
+/// Builds the engine's dynamics from a table header's game description.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AnyGame {
+    /// See [`TwoCar`].
+    TwoCar(TwoCar),
+    /// See [`ThreeCarBaseline`].
+    Baseline(ThreeCarBaseline),
+    /// See [`ThreeCarIdm`].
+    Idm(ThreeCarIdm),
+}
+
+impl AnyGame {
+    /// The solver's model of `game` with constraint `l = min(gaps) - min_gap`.
+    pub fn from_description(game: &table_format::Game, min_gap: f32) -> Self {
+        use table_format::Game as G;
+        match *game {
+            G::TwoCar { ego, leader } => AnyGame::TwoCar(TwoCar {
+                ego: Accel::from(ego),
+                leader: Accel::from(leader),
+                min_gap,
+            }),
+            G::ThreeCarBaseline {
+                ego,
+                leader,
+                follower,
+            } => AnyGame::Baseline(ThreeCarBaseline {
+                ego: Accel::from(ego),
+                leader: Accel::from(leader),
+                follower: Accel::from(follower),
+                min_gap,
+            }),
+            G::ThreeCarIdm {
+                ego,
+                leader,
+                follower_clip,
+                idm,
+                time_gap,
+                follower_speed,
+            } => AnyGame::Idm(ThreeCarIdm {
+                ego: Accel::from(ego),
+                leader: Accel::from(leader),
+                follower_clip: Accel::from(follower_clip),
+                idm: Idm {
+                    max_acceleration: idm.max_acceleration,
+                    comfortable_deceleration: idm.comfortable_deceleration,
+                    desired_speed: idm.desired_speed,
+                    exponent: i32::from(idm.exponent),
+                    jam_distance: idm.jam_distance,
+                },
+                time_gap: Accel::from(time_gap),
+                follower_speed: match follower_speed {
+                    table_format::FollowerSpeed::NominalEgoSpeed { ego_speed } => {
+                        FollowerSpeedModel::NominalEgoSpeed { ego_speed }
+                    }
+                    table_format::FollowerSpeed::Adversarial { max_speed } => {
+                        FollowerSpeedModel::Adversarial { max_speed }
+                    }
+                },
+                min_gap,
+            }),
+        }
+    }
+
+    /// The dynamics as a trait object (for code off the hot path).
+    pub fn dynamics(&self) -> &dyn Dynamics {
+        match self {
+            AnyGame::TwoCar(g) => g,
+            AnyGame::Baseline(g) => g,
+            AnyGame::Idm(g) => g,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn idm() -> Idm {
+        Idm {
+            max_acceleration: 1.0,
+            comfortable_deceleration: 1.5,
+            desired_speed: 33.3,
+            exponent: 4,
+            jam_distance: 2.0,
+        }
+    }
+
+    #[test]
+    fn idm_is_non_increasing_in_time_gap_and_speed() {
+        let m = idm();
+        for &gap in &[1.0f32, 5.0, 20.0, 60.0] {
+            for &dv in &[-5.0f32, 0.0, 3.0, 8.0] {
+                for iv in 0..30 {
+                    let v = iv as f32;
+                    let mut prev = f32::INFINITY;
+                    for it in 0..=20 {
+                        let t = 0.5 + 0.1 * it as f32;
+                        let g = m.acceleration(v, dv, gap, t);
+                        assert!(g <= prev + 1e-5, "T monotonicity at v={v} dv={dv} s={gap}");
+                        prev = g;
+                    }
+                    let g_here = m.acceleration(v, dv, gap, 1.5);
+                    let g_faster = m.acceleration(v + 1.0, dv, gap, 1.5);
+                    assert!(g_faster <= g_here + 1e-5, "v monotonicity");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn idm_free_road_and_equilibrium() {
+        let m = idm();
+        // Standing still, far from anything: full acceleration.
+        assert!((m.acceleration(0.0, 0.0, 1e9, 1.5) - 1.0).abs() < 1e-6);
+        // At the desired speed on a free road: zero.
+        assert!(m.acceleration(33.3, 0.0, 1e9, 1.5).abs() < 1e-5);
+        // Exactly at the desired gap, standing: -a.
+        assert!((m.acceleration(0.0, 0.0, 2.0, 1.5) + 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_idm_adversary_is_optimal_over_a_fine_sweep() {
+        let game = ThreeCarIdm {
+            ego: Accel {
+                min: -2.0,
+                max: 2.0,
+            },
+            leader: Accel {
+                min: -1.5,
+                max: 1.5,
+            },
+            follower_clip: Accel {
+                min: -1.5,
+                max: 1.5,
+            },
+            idm: idm(),
+            time_gap: Accel { min: 1.0, max: 2.0 },
+            follower_speed: FollowerSpeedModel::Adversarial { max_speed: 40.0 },
+            min_gap: 0.0,
+        };
+        for &(x2, v2) in &[(3.0f32, -4.0f32), (10.0, 2.0), (25.0, -8.0), (40.0, 5.0)] {
+            for &p4 in &[-1.0f32, 0.7] {
+                let z = [20.0, 0.0, x2, v2, 0.0];
+                let p = [0.1, 0.2, 0.3, p4, 0.0];
+                let h = game.hamiltonian(&z, &p);
+                // Brute force: the adversary minimises over a fine (T, v3) grid.
+                let (lo, hi) = game.follower_speed.range(v2);
+                let mut best = f32::INFINITY;
+                for it in 0..=50 {
+                    let t = 1.0 + it as f32 / 50.0;
+                    for iv in 0..=50 {
+                        let v3 = lo + (hi - lo) * iv as f32 / 50.0;
+                        let u3 = game.idm.acceleration(v3, -v2, x2, t).clamp(-1.5, 1.5);
+                        let u2 = game.ego.argmax(p[3] - p[1]);
+                        let u1 = game.leader.argmin(p[1]);
+                        let val = p[0] * z[1] + p[2] * z[3] + p[1] * (u1 - u2) + p[3] * (u2 - u3);
+                        best = best.min(val);
+                    }
+                }
+                assert!((h - best).abs() < 1e-4, "H {h} vs brute force {best}");
+            }
+        }
+    }
+}

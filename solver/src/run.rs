@@ -1,0 +1,561 @@
+//! One run of a configuration: solve, find the trusted box, extract the policy, compile the
+//! table, measure, and write the run's folder.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use plotters::style::RGBColor;
+use serde::Serialize;
+use table_format::{Horizon, HorizonStatus};
+
+use crate::compile::{compile, CompileInput, CompileReport};
+use crate::config::{Config, GameKindConfig};
+use crate::error::SolverError;
+use crate::exact;
+use crate::game::{AnyGame, Vector};
+use crate::grid::{Grid, GridAxis, MAX_DIMS};
+use crate::hji::{self, Boundary, Numerics, Outcome, Solution, Stop};
+use crate::output::{self, CellMap, PlotAxis};
+use crate::trusted::{agreement_box, IndexBox};
+
+/// Progress events for the command line.
+pub enum Event<'a> {
+    /// A solve starts: label and backward time to reach.
+    SolveStarted(&'a str, f64),
+    /// A step finished: backward time and `max |dV/dt|`.
+    Step(f64, f64),
+    /// A solve finished.
+    SolveFinished,
+}
+
+/// The grid a config describes.
+pub fn grid_of(config: &Config) -> Result<Grid, SolverError> {
+    let axes = config
+        .axes()
+        .into_iter()
+        .map(|(name, a)| GridAxis {
+            name: name.to_string(),
+            unit: if name.starts_with("gap") { "m" } else { "m/s" }.to_string(),
+            min: a.min,
+            max: a.max,
+            points: a.points,
+        })
+        .collect();
+    Ok(Grid::new(axes)?)
+}
+
+/// Solves with whichever concrete game `game` is (monomorphised engine).
+pub fn solve_any(
+    game: &AnyGame,
+    grid: &Grid,
+    numerics: Numerics,
+    stop: Stop,
+    progress: impl FnMut(f64, f64, &[f32]),
+) -> Result<Solution, SolverError> {
+    match game {
+        AnyGame::TwoCar(g) => hji::solve(g, grid, numerics, stop, progress),
+        AnyGame::Baseline(g) => hji::solve(g, grid, numerics, stop, progress),
+        AnyGame::Idm(g) => hji::solve(g, grid, numerics, stop, progress),
+    }
+}
+
+/// The scheme's gradient with whichever concrete game `game` is.
+pub fn gradient_any(
+    game: &AnyGame,
+    grid: &Grid,
+    numerics: Numerics,
+    values: &[f32],
+) -> Vec<Vec<f32>> {
+    match game {
+        AnyGame::TwoCar(g) => hji::gradient(g, grid, numerics, values),
+        AnyGame::Baseline(g) => hji::gradient(g, grid, numerics, values),
+        AnyGame::Idm(g) => hji::gradient(g, grid, numerics, values),
+    }
+}
+
+/// Accuracy against the exact two-car value.
+#[derive(Debug, Clone, Serialize)]
+pub struct ExactComparison {
+    /// Largest `|V - V_exact|` over nodes in the trusted box, m.
+    pub max_value_error: f64,
+    /// Mean `|V - V_exact|` over the same nodes, m.
+    pub mean_value_error: f64,
+    /// Largest distance in gap between the computed and exact safe-set boundaries, over speed
+    /// nodes in the trusted box, m.
+    pub max_boundary_error: f64,
+}
+
+/// The run's summary, written as `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// Config name.
+    pub name: String,
+    /// Config description.
+    pub description: String,
+    /// The config as run.
+    pub config: Config,
+    /// Nodes per axis.
+    pub grid_shape: Vec<usize>,
+    /// Backward time reached, s.
+    pub time: f64,
+    /// Time steps.
+    pub steps: usize,
+    /// Time step, s.
+    pub dt: f64,
+    /// `fixed_horizon`, `converged` or `not_converged`.
+    pub convergence: String,
+    /// Last `max |dV/dt|`.
+    pub residual: f64,
+    /// Wall time of the main solve, s.
+    pub solve_seconds: f64,
+    /// Wall time of the whole run, s.
+    pub total_seconds: f64,
+    /// Share of all nodes with `V > 0`.
+    pub safe_fraction: f64,
+    /// Share of the trusted box's nodes with `V > 0`.
+    pub safe_fraction_trusted: f64,
+    /// Share of all nodes with `V > 1 mm` (hj_reachability's reference figure).
+    pub share_above_1mm: f64,
+    /// `(horizon s, share of nodes with V > 0)` along the solve.
+    pub safe_fraction_history: Vec<(f64, f64)>,
+    /// Trusted box per axis `(min, max)`, or `None` if empty.
+    pub trusted_box: Option<Vec<(f64, f64)>>,
+    /// The table compiler's figures.
+    pub table: Option<CompileReport>,
+    /// Two-car only: accuracy against the exact value.
+    pub exact: Option<ExactComparison>,
+}
+
+/// Solves `config` and writes its folder under `out`. Returns the summary.
+pub fn run(
+    config: &Config,
+    out: &Path,
+    events: &mut dyn FnMut(Event<'_>),
+) -> Result<Summary, SolverError> {
+    config.validate()?;
+    let started = Instant::now();
+    let grid = grid_of(config)?;
+    let game = AnyGame::from_description(&config.game_description(), config.game.min_gap as f32);
+    let numerics = config.numerics();
+    let stop = config.stop();
+    let limit = match stop {
+        Stop::Horizon(t) => t,
+        Stop::Converge { max_time, .. } => max_time,
+    };
+
+    // The main solve, recording the safe fraction every half second of horizon: V is
+    // non-increasing in the horizon, so this curve must be non-increasing too.
+    let mut safe_fraction_history = vec![(0.0, share_positive(&constraint_any(&game, &grid)))];
+    let mut next_mark = 0.5;
+    events(Event::SolveStarted("solve", limit));
+    let t0 = Instant::now();
+    let solution = solve_any(&game, &grid, numerics, stop, |t, r, values| {
+        events(Event::Step(t, r));
+        if t + 1e-9 >= next_mark {
+            safe_fraction_history.push((t, share_positive(values)));
+            next_mark += 0.5;
+        }
+    })?;
+    let solve_seconds = t0.elapsed().as_secs_f64();
+    events(Event::SolveFinished);
+
+    // The trusted box: agreement with the other boundary condition over the same time.
+    let trusted = if config.trusted_box.measure {
+        let other = Numerics {
+            boundary: match numerics.boundary {
+                Boundary::Pessimistic => Boundary::Extrapolate,
+                Boundary::Extrapolate => Boundary::Pessimistic,
+            },
+            ..numerics
+        };
+        events(Event::SolveStarted("trusted box", solution.time));
+        let alt = solve_any(
+            &game,
+            &grid,
+            other,
+            Stop::Horizon(solution.time),
+            |t, r, _| events(Event::Step(t, r)),
+        )?;
+        events(Event::SolveFinished);
+        agreement_box(
+            &grid,
+            &solution.values,
+            &alt.values,
+            config.trusted_box.tolerance,
+        )
+    } else {
+        Some(IndexBox::full(&grid))
+    };
+
+    let grads = gradient_any(&game, &grid, numerics, &solution.values);
+    let dynamics = game.dynamics();
+    let d = grid.dims();
+    let accelerate: Vec<bool> = (0..grid.len())
+        .map(|node| {
+            let mut p: Vector = [0.0; MAX_DIMS];
+            for k in 0..d {
+                p[k] = grads[k][node];
+            }
+            dynamics.ego_accelerates(&p)
+        })
+        .collect();
+
+    let horizon = Horizon {
+        seconds: solution.time as f32,
+        status: match (solution.outcome, config.horizon.converge_tolerance) {
+            (Outcome::Horizon, _) => HorizonStatus::Fixed,
+            (Outcome::Converged, tol) => HorizonStatus::Converged {
+                tolerance: tol.unwrap_or(0.0) as f32,
+                residual: solution.residual as f32,
+            },
+            (Outcome::NotConverged, tol) => HorizonStatus::NotConverged {
+                tolerance: tol.unwrap_or(0.0) as f32,
+                residual: solution.residual as f32,
+            },
+        },
+    };
+    let table = match &trusted {
+        Some(bx) => Some(compile(&CompileInput {
+            game: config.game_description(),
+            min_gap: config.game.min_gap as f32,
+            horizon,
+            grid: &grid,
+            values: &solution.values,
+            accelerate: &accelerate,
+            trusted: bx,
+            table_points: config.table.points.as_deref(),
+            bits: config.table.bits,
+        })?),
+        None => None,
+    };
+
+    let dir = out.join(&config.name);
+    std::fs::create_dir_all(&dir).map_err(|e| SolverError::Io {
+        path: dir.display().to_string(),
+        source: e,
+    })?;
+    output::write_npy(&dir.join("value.npy"), &solution.values, &grid.shape())?;
+    if let Some((bytes, _)) = &table {
+        output::write_bytes(&dir.join("table.bin"), bytes)?;
+    }
+
+    let n = solution.values.len() as f64;
+    let safe_fraction = share_positive(&solution.values);
+    let share_above_1mm = solution.values.iter().filter(|&&v| v > 1e-3).count() as f64 / n;
+    let safe_fraction_trusted = match &trusted {
+        Some(bx) => {
+            let mut idx = [0usize; MAX_DIMS];
+            let (mut inside, mut safe) = (0usize, 0usize);
+            for (node, &v) in solution.values.iter().enumerate() {
+                grid.multi_index(node, &mut idx[..d]);
+                if bx.contains(&idx[..d]) {
+                    inside += 1;
+                    safe += usize::from(v > 0.0);
+                }
+            }
+            safe as f64 / inside.max(1) as f64
+        }
+        None => 0.0,
+    };
+    let exact = if config.game.kind == GameKindConfig::TwoCar {
+        trusted
+            .as_ref()
+            .map(|bx| two_car_comparison(config, &grid, &solution.values, solution.time, bx))
+    } else {
+        None
+    };
+
+    plots(
+        config,
+        &grid,
+        &solution,
+        &accelerate,
+        trusted.as_ref(),
+        &dir,
+        &safe_fraction_history,
+    )?;
+
+    let summary = Summary {
+        name: config.name.clone(),
+        description: config.description.clone(),
+        config: config.clone(),
+        grid_shape: grid.shape(),
+        time: solution.time,
+        steps: solution.steps,
+        dt: solution.dt,
+        convergence: match solution.outcome {
+            Outcome::Horizon => "fixed_horizon",
+            Outcome::Converged => "converged",
+            Outcome::NotConverged => "not_converged",
+        }
+        .into(),
+        residual: solution.residual,
+        solve_seconds,
+        total_seconds: started.elapsed().as_secs_f64(),
+        safe_fraction,
+        safe_fraction_trusted,
+        share_above_1mm,
+        safe_fraction_history,
+        trusted_box: trusted.as_ref().map(|b| b.bounds(&grid)),
+        table: table.map(|t| t.1),
+        exact,
+    };
+    let json = serde_json::to_string_pretty(&summary).map_err(|e| SolverError::Io {
+        path: "summary.json".into(),
+        source: e.into(),
+    })?;
+    output::write_bytes(&dir.join("summary.json"), json.as_bytes())?;
+    Ok(summary)
+}
+
+/// The share of values above zero.
+fn share_positive(values: &[f32]) -> f64 {
+    use rayon::prelude::*;
+    values.par_iter().filter(|&&v| v > 0.0).count() as f64 / values.len().max(1) as f64
+}
+
+/// The constraint at every node.
+fn constraint_any(game: &AnyGame, grid: &Grid) -> Vec<f32> {
+    match game {
+        AnyGame::TwoCar(g) => hji::constraint_values(g, grid),
+        AnyGame::Baseline(g) => hji::constraint_values(g, grid),
+        AnyGame::Idm(g) => hji::constraint_values(g, grid),
+    }
+}
+
+fn two_car_comparison(
+    config: &Config,
+    grid: &Grid,
+    values: &[f32],
+    time: f64,
+    bx: &IndexBox,
+) -> ExactComparison {
+    let g = &config.game;
+    let (xs, vs) = (&grid.axes()[0], &grid.axes()[1]);
+    let exact =
+        |x: f64, v: f64| exact::two_car_value(x, v, time, g.ego.min, g.leader.min, g.min_gap);
+    let (mut max_err, mut sum_err, mut count) = (0f64, 0f64, 0usize);
+    let mut max_boundary = 0f64;
+    for j in bx.lo[1]..=bx.hi[1] {
+        let v = vs.coordinate(j);
+        let mut crossing = None;
+        for i in bx.lo[0]..=bx.hi[0] {
+            let x = xs.coordinate(i);
+            let val = f64::from(values[i * vs.points + j]);
+            let e = (val - exact(x, v)).abs();
+            max_err = max_err.max(e);
+            sum_err += e;
+            count += 1;
+            if i > bx.lo[0] && crossing.is_none() {
+                let prev = f64::from(values[(i - 1) * vs.points + j]);
+                if prev <= 0.0 && val > 0.0 {
+                    let xp = xs.coordinate(i - 1);
+                    crossing = Some(xp + (x - xp) * (-prev) / (val - prev));
+                }
+            }
+        }
+        if let Some(xc) = crossing {
+            let xb = exact::two_car_boundary(v, time, g.ego.min, g.leader.min, g.min_gap);
+            max_boundary = max_boundary.max((xc - xb).abs());
+        }
+    }
+    ExactComparison {
+        max_value_error: max_err,
+        mean_value_error: sum_err / count.max(1) as f64,
+        max_boundary_error: max_boundary,
+    }
+}
+
+const GREEN: RGBColor = RGBColor(140, 210, 140);
+const BLUE: RGBColor = RGBColor(60, 110, 220);
+const RED: RGBColor = RGBColor(230, 120, 100);
+const ORANGE: RGBColor = RGBColor(245, 170, 60);
+const PURPLE: RGBColor = RGBColor(130, 90, 190);
+
+fn plots(
+    config: &Config,
+    grid: &Grid,
+    solution: &Solution,
+    accelerate: &[bool],
+    trusted: Option<&IndexBox>,
+    dir: &Path,
+    history: &[(f64, f64)],
+) -> Result<(), SolverError> {
+    let coords: Vec<Vec<f64>> = grid
+        .axes()
+        .iter()
+        .map(|a| (0..a.points).map(|i| a.coordinate(i)).collect())
+        .collect();
+    let bounds = trusted.map(|b| b.bounds(grid));
+    let values = &solution.values;
+    let horizon_text = format!("{:.1} s", solution.time);
+    if grid.dims() == 2 {
+        let n1 = grid.axes()[1].points;
+        let g = &config.game;
+        let boundary: Vec<(f64, f64)> = coords[1]
+            .iter()
+            .map(|&v| {
+                (
+                    exact::two_car_boundary(v, solution.time, g.ego.min, g.leader.min, g.min_gap),
+                    v,
+                )
+            })
+            .filter(|(x, _)| *x >= coords[0][0] && *x <= *coords[0].last().unwrap_or(&0.0))
+            .collect();
+        let frame = bounds.as_ref().map(|b| (b[0].0, b[0].1, b[1].0, b[1].1));
+        let sets = |i: usize, j: usize| {
+            let node = i * n1 + j;
+            if values[node] > 0.0 {
+                Some(1)
+            } else if coords[0][i] - g.min_gap >= 0.0 {
+                Some(0)
+            } else {
+                None
+            }
+        };
+        output::draw_cell_map(
+            &dir.join("safe_set.png"),
+            &CellMap {
+                title: &format!(
+                    "Two-car game: constraint set and safe set, horizon {horizon_text}"
+                ),
+                x: PlotAxis {
+                    label: "gap_leader [m]",
+                    coords: &coords[0],
+                },
+                y: PlotAxis {
+                    label: "rel_speed_leader = v_leader - v_ego [m/s]",
+                    coords: &coords[1],
+                },
+                cell: &sets,
+                legend: &[("constraint set l >= 0", GREEN), ("safe set V > 0", BLUE)],
+                curves: &[("exact safe-set boundary", RED, boundary)],
+                frame,
+            },
+        )?;
+        let policy = |i: usize, j: usize| Some(if accelerate[i * n1 + j] { 0 } else { 1 });
+        output::draw_cell_map(
+            &dir.join("policy.png"),
+            &CellMap {
+                title: "Two-car game: ego input u2*",
+                x: PlotAxis {
+                    label: "gap_leader [m]",
+                    coords: &coords[0],
+                },
+                y: PlotAxis {
+                    label: "rel_speed_leader [m/s]",
+                    coords: &coords[1],
+                },
+                cell: &policy,
+                legend: &[("u2* = a_max", ORANGE), ("u2* = a_min", PURPLE)],
+                curves: &[],
+                frame,
+            },
+        )?;
+    } else {
+        let slices = if config.slices.is_empty() {
+            vec![crate::config::SliceConfig {
+                rel_speed_leader: 0.0,
+                rel_speed_follower: 0.0,
+            }]
+        } else {
+            config.slices.clone()
+        };
+        let min_gap = config.game.min_gap;
+        for s in &slices {
+            let at = |i: usize, j: usize| -> f64 {
+                grid.interpolate(
+                    values,
+                    &[
+                        coords[0][i],
+                        s.rel_speed_leader,
+                        coords[2][j],
+                        s.rel_speed_follower,
+                    ],
+                )
+            };
+            let policy_at = |i: usize, j: usize| -> bool {
+                // The policy of the nearest node in speed.
+                let nearest = |k: usize, x: f64| -> usize {
+                    let a = &grid.axes()[k];
+                    (((x - a.min) / a.spacing()).round().max(0.0) as usize).min(a.points - 1)
+                };
+                let node = i * grid.strides()[0]
+                    + nearest(1, s.rel_speed_leader) * grid.strides()[1]
+                    + j * grid.strides()[2]
+                    + nearest(3, s.rel_speed_follower);
+                accelerate[node]
+            };
+            let sets = |i: usize, j: usize| {
+                if at(i, j) > 0.0 {
+                    Some(1)
+                } else if coords[0][i].min(coords[2][j]) - min_gap >= 0.0 {
+                    Some(0)
+                } else {
+                    None
+                }
+            };
+            let tag = format!(
+                "vg1_{:+.1}_vg2_{:+.1}",
+                s.rel_speed_leader, s.rel_speed_follower
+            );
+            let frame = bounds.as_ref().map(|b| (b[0].0, b[0].1, b[2].0, b[2].1));
+            let kind = match config.game.kind {
+                GameKindConfig::ThreeCarBaseline => "baseline follower",
+                _ => "IDM follower",
+            };
+            output::draw_cell_map(
+                &dir.join(format!("safe_set_{tag}.png")),
+                &CellMap {
+                    title: &format!(
+                        "Three cars, {kind}: slice v_g1 = {:.1}, v_g2 = {:.1} m/s, horizon {horizon_text}",
+                        s.rel_speed_leader, s.rel_speed_follower
+                    ),
+                    x: PlotAxis { label: "gap_leader x_g1 [m]", coords: &coords[0] },
+                    y: PlotAxis { label: "gap_follower x_g2 [m]", coords: &coords[2] },
+                    cell: &sets,
+                    legend: &[("constraint set l >= 0", GREEN), ("safe set V > 0", BLUE)],
+                    curves: &[],
+                    frame,
+                },
+            )?;
+            let policy = |i: usize, j: usize| Some(if policy_at(i, j) { 0 } else { 1 });
+            output::draw_cell_map(
+                &dir.join(format!("policy_{tag}.png")),
+                &CellMap {
+                    title: &format!(
+                        "Three cars, {kind}: ego input u2*, v_g1 = {:.1}, v_g2 = {:.1} m/s",
+                        s.rel_speed_leader, s.rel_speed_follower
+                    ),
+                    x: PlotAxis {
+                        label: "gap_leader x_g1 [m]",
+                        coords: &coords[0],
+                    },
+                    y: PlotAxis {
+                        label: "gap_follower x_g2 [m]",
+                        coords: &coords[2],
+                    },
+                    cell: &policy,
+                    legend: &[("u2* = a_max", ORANGE), ("u2* = a_min", PURPLE)],
+                    curves: &[],
+                    frame,
+                },
+            )?;
+        }
+    }
+    if history.len() > 1 {
+        output::draw_curves(
+            &dir.join("safe_fraction.png"),
+            "Share of grid nodes with V > 0 against the horizon",
+            "horizon [s]",
+            "share of nodes",
+            &[("V > 0", BLUE, history.to_vec())],
+        )?;
+    }
+    Ok(())
+}
+
+/// The output folder of a config.
+pub fn folder(out: &Path, config: &Config) -> PathBuf {
+    out.join(&config.name)
+}
