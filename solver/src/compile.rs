@@ -20,6 +20,10 @@
 //! grid. (It bounds the distance to the solver's interpolant; the distance from that to the
 //! true value function is the discretisation error, measured by the convergence studies.)
 //!
+//! Values below `clip_below` (a negative level) are stored as `clip_below`. Every statement
+//! above holds for the clipped value function `max(V_s, clip_below)`, which has the same sign as
+//! `V_s`, so a state the table certifies (`V_table - bounds > 0`) is one where `V_s > 0`.
+//!
 //! # The certified ratio
 //! Inside the trusted box, at the solver's nodes: the share of the states the solver calls safe
 //! (`V_s > 0`) that the table certifies (`V_table - quantization - interpolation > 0`). The
@@ -75,6 +79,9 @@ pub struct CompileInput<'a> {
     pub table_points: Option<&'a [usize]>,
     /// 8 or 16.
     pub bits: u8,
+    /// Values below this (negative) level are stored as it: they are all unsafe by a wide
+    /// margin, and clipping them keeps the quantization step fine where it matters.
+    pub clip_below: f32,
 }
 
 /// Builds the table and measures it.
@@ -109,7 +116,7 @@ pub fn compile(input: &CompileInput<'_>) -> Result<(Vec<u8>, CompileReport), Sol
     for t in 0..table_grid.len() {
         table_grid.multi_index(t, &mut idx[..d]);
         let node: usize = (0..d).map(|k| idx[k] * step[k] * grid.strides()[k]).sum();
-        values.push(input.values[node]);
+        values.push(input.values[node].max(input.clip_below));
         accelerate.push(input.accelerate[node]);
     }
 
@@ -125,7 +132,7 @@ pub fn compile(input: &CompileInput<'_>) -> Result<(Vec<u8>, CompileReport), Sol
             let mut z = [0f64; MAX_DIMS];
             grid.node_coordinates(node, &mut z[..d]);
             let i = table_grid.interpolate(&values, &z[..d]);
-            Some((i - f64::from(input.values[node])).abs())
+            Some((i - f64::from(input.values[node].max(input.clip_below))).abs())
         })
         .reduce(|| 0.0, f64::max);
     // Round the bound up past f32 rounding of the interpolation arithmetic.

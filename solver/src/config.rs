@@ -85,6 +85,9 @@ pub enum FollowerSpeedConfig {
     },
     /// The sound reading: adversarial over the feasible range.
     Adversarial {
+        /// Lowest ego speed assumed, m/s (0: no assumption).
+        #[serde(default)]
+        min_ego_speed: f64,
         /// Largest vehicle speed, m/s.
         max_speed: f64,
     },
@@ -149,7 +152,7 @@ pub struct NumericsConfig {
     /// `local` or `global`.
     #[serde(default = "default_dissipation")]
     pub dissipation: Dissipation,
-    /// `pessimistic` or `extrapolate`.
+    /// `pessimistic` (default, sound) or `extrapolate` (hj_reachability's behaviour).
     #[serde(default = "default_boundary")]
     pub boundary: Boundary,
 }
@@ -237,7 +240,7 @@ fn yes() -> bool {
     true
 }
 fn default_trusted_tolerance() -> f64 {
-    0.05
+    0.25
 }
 
 impl Default for TrustedConfig {
@@ -406,11 +409,21 @@ impl Config {
                     "game.follower_speed",
                     "required for the IDM game: kind = \"adversarial\" or \"nominal_ego_speed\"",
                 )),
-                Some(FollowerSpeedConfig::Adversarial { max_speed }) => check(
-                    max_speed.is_finite() && max_speed > 0.0,
-                    "game.follower_speed.max_speed",
-                    "must be > 0",
-                )?,
+                Some(FollowerSpeedConfig::Adversarial {
+                    min_ego_speed,
+                    max_speed,
+                }) => {
+                    check(
+                        min_ego_speed.is_finite() && min_ego_speed >= 0.0,
+                        "game.follower_speed.min_ego_speed",
+                        "must be >= 0",
+                    )?;
+                    check(
+                        max_speed.is_finite() && max_speed > min_ego_speed,
+                        "game.follower_speed.max_speed",
+                        "must be > min_ego_speed",
+                    )?
+                }
                 Some(FollowerSpeedConfig::NominalEgoSpeed { ego_speed }) => check(
                     ego_speed.is_finite() && ego_speed >= 0.0,
                     "game.follower_speed.ego_speed",
@@ -441,6 +454,12 @@ impl Config {
             (1..=3).contains(&n.rk_order),
             "numerics.rk_order",
             "must be 1, 2 or 3",
+        )?;
+        check(
+            n.boundary != Boundary::Optimistic,
+            "numerics.boundary",
+            "\"optimistic\" overestimates the value and only serves to measure the trusted box; \
+             use \"pessimistic\" (sound) or \"extrapolate\"",
         )?;
         let h = &self.horizon;
         check(
@@ -561,13 +580,18 @@ impl Config {
                                 ego_speed: ego_speed as f32,
                             }
                         }
-                        Some(FollowerSpeedConfig::Adversarial { max_speed }) => {
-                            table_format::FollowerSpeed::Adversarial {
-                                max_speed: max_speed as f32,
-                            }
-                        }
+                        Some(FollowerSpeedConfig::Adversarial {
+                            min_ego_speed,
+                            max_speed,
+                        }) => table_format::FollowerSpeed::Adversarial {
+                            min_ego_speed: min_ego_speed as f32,
+                            max_speed: max_speed as f32,
+                        },
                         // Refused by `validate`; the sound reading is the safe fallback.
-                        None => table_format::FollowerSpeed::Adversarial { max_speed: 40.0 },
+                        None => table_format::FollowerSpeed::Adversarial {
+                            min_ego_speed: 0.0,
+                            max_speed: 40.0,
+                        },
                     },
                 }
             }

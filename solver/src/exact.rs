@@ -35,3 +35,68 @@ pub fn two_car_value(
 pub fn two_car_boundary(v: f64, horizon: f64, ego_min: f64, leader_min: f64, min_gap: f64) -> f64 {
     min_gap - two_car_value(0.0, v, horizon, ego_min, leader_min, 0.0)
 }
+
+/// Accuracy of a computed two-car value against the exact one.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ExactComparison {
+    /// Largest `|V - V_exact|` over nodes in the box where the exact value is at least 1 m above
+    /// the solver's clip level, m.
+    pub max_value_error: f64,
+    /// Mean `|V - V_exact|` over the same nodes, m.
+    pub mean_value_error: f64,
+    /// Largest distance in gap between the computed and exact safe-set boundaries (the first
+    /// sign change along the gap axis, linearly interpolated), over speed nodes in the box, m.
+    pub max_boundary_error: f64,
+}
+
+/// Compares `values` on a two-car `grid` with the exact value over the index box `bx`. The
+/// solver holds values at the grid's lowest constraint value `x_min - min_gap` (the game for
+/// `max(l, floor)`, same safe set), so the reference is clipped there too.
+pub fn two_car_errors(
+    grid: &crate::grid::Grid,
+    values: &[f32],
+    horizon: f64,
+    ego_min: f64,
+    leader_min: f64,
+    min_gap: f64,
+    bx: &crate::trusted::IndexBox,
+) -> ExactComparison {
+    let (xs, vs) = (&grid.axes()[0], &grid.axes()[1]);
+    let floor = xs.min - min_gap;
+    let exact =
+        |x: f64, v: f64| two_car_value(x, v, horizon, ego_min, leader_min, min_gap).max(floor);
+    let (mut max_err, mut sum_err, mut count) = (0f64, 0f64, 0usize);
+    let mut max_boundary = 0f64;
+    for j in bx.lo[1]..=bx.hi[1] {
+        let v = vs.coordinate(j);
+        let mut crossing = None;
+        for i in bx.lo[0]..=bx.hi[0] {
+            let x = xs.coordinate(i);
+            let val = f64::from(values[i * vs.points + j]);
+            let reference = exact(x, v);
+            // Value errors away from the clip (its kink is not part of the game).
+            if reference > floor + 1.0 {
+                let e = (val - reference).abs();
+                max_err = max_err.max(e);
+                sum_err += e;
+                count += 1;
+            }
+            if i > bx.lo[0] && crossing.is_none() {
+                let prev = f64::from(values[(i - 1) * vs.points + j]);
+                if prev <= 0.0 && val > 0.0 {
+                    let xp = xs.coordinate(i - 1);
+                    crossing = Some(xp + (x - xp) * (-prev) / (val - prev));
+                }
+            }
+        }
+        if let Some(xc) = crossing {
+            let xb = two_car_boundary(v, horizon, ego_min, leader_min, min_gap);
+            max_boundary = max_boundary.max((xc - xb).abs());
+        }
+    }
+    ExactComparison {
+        max_value_error: max_err,
+        mean_value_error: sum_err / count.max(1) as f64,
+        max_boundary_error: max_boundary,
+    }
+}

@@ -71,6 +71,50 @@ pub trait Dynamics: Sync {
     fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs;
     /// Whether the ego's optimal input is its maximum acceleration (the table's policy bit).
     fn ego_accelerates(&self, p: &Vector) -> bool;
+
+    /// The Lax-Friedrichs rate `min(0, H(z, pbar) + sum_k alpha_k(z) half_jump_k)` along a row
+    /// of the last axis: `z` holds the row's fixed coordinates, `last[c]` the last one, and
+    /// `pbar[k][c]`, `half_jump[k][c]` the central gradient and `(p+ - p-)/2`. `alpha` is the
+    /// global dissipation, used unless `local`. The games override it with straight-line code
+    /// that the compiler vectorises; this default is the scalar reference.
+    #[allow(clippy::too_many_arguments)]
+    fn lax_friedrichs_row(
+        &self,
+        z: &Vector,
+        last: &[f32],
+        pbar: &[&[f32]],
+        half_jump: &[&[f32]],
+        local: bool,
+        alpha: &Vector,
+        rate: &mut [f32],
+    ) {
+        let d = self.dims();
+        for (c, r) in rate.iter_mut().enumerate() {
+            let mut zz = *z;
+            zz[d - 1] = last[c];
+            let mut a = *alpha;
+            if local {
+                self.dissipation(&zz, &mut a);
+            }
+            let mut p = [0f32; MAX_DIMS];
+            let mut diss = 0.0;
+            for k in 0..d {
+                p[k] = pbar[k][c];
+                diss += a[k] * half_jump[k][c];
+            }
+            *r = (self.hamiltonian(&zz, &p) + diss).min(0.0);
+        }
+    }
+}
+
+/// `min(x, 0)` as one instruction (NaN handling is left to the caller's finiteness check).
+#[inline(always)]
+fn non_positive(x: f32) -> f32 {
+    if x < 0.0 {
+        x
+    } else {
+        0.0
+    }
 }
 
 /// Bounds of one player's acceleration, m/s^2.
@@ -157,6 +201,35 @@ impl Dynamics for TwoCar {
     fn ego_accelerates(&self, p: &Vector) -> bool {
         -p[1] > 0.0
     }
+
+    fn lax_friedrichs_row(
+        &self,
+        _z: &Vector,
+        last: &[f32],
+        pbar: &[&[f32]],
+        half_jump: &[&[f32]],
+        local: bool,
+        alpha: &Vector,
+        rate: &mut [f32],
+    ) {
+        // The last axis is the relative speed v; the row's fixed coordinate is the gap.
+        let n = rate.len();
+        let (v, p0, p1, h0, h1) = (
+            &last[..n],
+            &pbar[0][..n],
+            &pbar[1][..n],
+            &half_jump[0][..n],
+            &half_jump[1][..n],
+        );
+        let a1 = alpha[1];
+        for c in 0..n {
+            let u2 = self.ego.argmax(-p1[c]);
+            let u1 = self.leader.argmin(p1[c]);
+            let a0 = if local { v[c].abs() } else { alpha[0] };
+            let h = p0[c] * v[c] + p1[c] * (u1 - u2) + a0 * h0[c] + a1 * h1[c];
+            rate[c] = non_positive(h);
+        }
+    }
 }
 
 /// The three-car game where the follower's acceleration is any value within bounds (the
@@ -210,6 +283,40 @@ impl Dynamics for ThreeCarBaseline {
 
     fn ego_accelerates(&self, p: &Vector) -> bool {
         p[3] - p[1] > 0.0
+    }
+    fn lax_friedrichs_row(
+        &self,
+        z: &Vector,
+        last: &[f32],
+        pbar: &[&[f32]],
+        half_jump: &[&[f32]],
+        local: bool,
+        alpha: &Vector,
+        rate: &mut [f32],
+    ) {
+        // The last axis is v_g2; x_g1, v_g1 and x_g2 are fixed along the row.
+        let n = rate.len();
+        let v1 = z[1];
+        let v2 = &last[..n];
+        let [p0, p1, p2, p3] = [0, 1, 2, 3].map(|k| &pbar[k][..n]);
+        let [h0, h1, h2, h3] = [0, 1, 2, 3].map(|k| &half_jump[k][..n]);
+        let a0 = if local { v1.abs() } else { alpha[0] };
+        let (a1, a3) = (alpha[1], alpha[3]);
+        for c in 0..n {
+            let u2 = self.ego.argmax(p3[c] - p1[c]);
+            let u1 = self.leader.argmin(p1[c]);
+            let u3 = self.follower.argmin(-p3[c]);
+            let a2 = if local { v2[c].abs() } else { alpha[2] };
+            let h = p0[c] * v1
+                + p2[c] * v2[c]
+                + p1[c] * (u1 - u2)
+                + p3[c] * (u2 - u3)
+                + a0 * h0[c]
+                + a1 * h1[c]
+                + a2 * h2[c]
+                + a3 * h3[c];
+            rate[c] = non_positive(h);
+        }
     }
 }
 
@@ -266,10 +373,14 @@ pub enum FollowerSpeedModel {
         /// Assumed ego speed, m/s.
         ego_speed: f32,
     },
-    /// The sound reading: `v3` is adversarial over all speeds consistent with the state:
-    /// `v3 >= 0`, `v3 <= max_speed`, and the ego's speed `v3 + v_g2` in `[0, max_speed]`, i.e.
-    /// `max(0, -v_g2) <= v3 <= min(max_speed, max_speed - v_g2)`.
+    /// The sound reading: `v3` is adversarial over all speeds consistent with the state and an
+    /// ego speed in `[min_ego_speed, max_speed]`: `v3 >= 0`, `v3 <= max_speed`, and the ego's
+    /// speed `v3 + v_g2` in that band, i.e.
+    /// `max(0, min_ego_speed - v_g2) <= v3 <= min(max_speed, max_speed - v_g2)`.
+    /// `min_ego_speed = 0` assumes nothing; a positive value is an operating-range assumption.
     Adversarial {
+        /// Lowest ego speed assumed, m/s.
+        min_ego_speed: f32,
         /// Largest speed of any vehicle, m/s.
         max_speed: f32,
     },
@@ -284,8 +395,11 @@ impl FollowerSpeedModel {
                 let v3 = (ego_speed - v_g2).max(0.0);
                 (v3, v3)
             }
-            FollowerSpeedModel::Adversarial { max_speed } => {
-                let lo = (-v_g2).max(0.0).min(max_speed);
+            FollowerSpeedModel::Adversarial {
+                min_ego_speed,
+                max_speed,
+            } => {
+                let lo = (min_ego_speed - v_g2).max(0.0).min(max_speed);
                 let hi = max_speed.min(max_speed - v_g2).max(lo);
                 (lo, hi)
             }
@@ -370,6 +484,43 @@ impl Dynamics for ThreeCarIdm {
     fn ego_accelerates(&self, p: &Vector) -> bool {
         p[3] - p[1] > 0.0
     }
+
+    fn lax_friedrichs_row(
+        &self,
+        z: &Vector,
+        last: &[f32],
+        pbar: &[&[f32]],
+        half_jump: &[&[f32]],
+        local: bool,
+        alpha: &Vector,
+        rate: &mut [f32],
+    ) {
+        let n = rate.len();
+        let (v1, x2) = (z[1], z[2]);
+        let v2 = &last[..n];
+        let [p0, p1, p2, p3] = [0, 1, 2, 3].map(|k| &pbar[k][..n]);
+        let [h0, h1, h2, h3] = [0, 1, 2, 3].map(|k| &half_jump[k][..n]);
+        let a0 = if local { v1.abs() } else { alpha[0] };
+        let (a1, a3) = (alpha[1], alpha[3]);
+        for c in 0..n {
+            let mut zz = *z;
+            zz[3] = v2[c];
+            zz[2] = x2;
+            let (u3, _, _) = self.follower(&zz, p3[c] > 0.0);
+            let u2 = self.ego.argmax(p3[c] - p1[c]);
+            let u1 = self.leader.argmin(p1[c]);
+            let a2 = if local { v2[c].abs() } else { alpha[2] };
+            let h = p0[c] * v1
+                + p2[c] * v2[c]
+                + p1[c] * (u1 - u2)
+                + p3[c] * (u2 - u3)
+                + a0 * h0[c]
+                + a1 * h1[c]
+                + a2 * h2[c]
+                + a3 * h3[c];
+            rate[c] = non_positive(h);
+        }
+    }
 }
 
 /// Builds the engine's dynamics from a table header's game description.
@@ -426,9 +577,13 @@ impl AnyGame {
                     table_format::FollowerSpeed::NominalEgoSpeed { ego_speed } => {
                         FollowerSpeedModel::NominalEgoSpeed { ego_speed }
                     }
-                    table_format::FollowerSpeed::Adversarial { max_speed } => {
-                        FollowerSpeedModel::Adversarial { max_speed }
-                    }
+                    table_format::FollowerSpeed::Adversarial {
+                        min_ego_speed,
+                        max_speed,
+                    } => FollowerSpeedModel::Adversarial {
+                        min_ego_speed,
+                        max_speed,
+                    },
                 },
                 min_gap,
             }),
@@ -488,8 +643,10 @@ mod tests {
         assert!((m.acceleration(0.0, 0.0, 1e9, 1.5) - 1.0).abs() < 1e-6);
         // At the desired speed on a free road: zero.
         assert!(m.acceleration(33.3, 0.0, 1e9, 1.5).abs() < 1e-5);
-        // Exactly at the desired gap, standing: -a.
-        assert!((m.acceleration(0.0, 0.0, 2.0, 1.5) + 1.0).abs() < 1e-6);
+        // Standing exactly at the jam distance: equilibrium, zero.
+        assert!(m.acceleration(0.0, 0.0, 2.0, 1.5).abs() < 1e-6);
+        // Standing at half the jam distance: 1 - 4 = -3 a.
+        assert!((m.acceleration(0.0, 0.0, 1.0, 1.5) + 3.0).abs() < 1e-6);
     }
 
     #[test]
@@ -509,7 +666,10 @@ mod tests {
             },
             idm: idm(),
             time_gap: Accel { min: 1.0, max: 2.0 },
-            follower_speed: FollowerSpeedModel::Adversarial { max_speed: 40.0 },
+            follower_speed: FollowerSpeedModel::Adversarial {
+                min_ego_speed: 0.0,
+                max_speed: 40.0,
+            },
             min_gap: 0.0,
         };
         for &(x2, v2) in &[(3.0f32, -4.0f32), (10.0, 2.0), (25.0, -8.0), (40.0, 5.0)] {

@@ -69,8 +69,14 @@ pub enum Dissipation {
 pub enum Boundary {
     /// Linear extrapolation of the last two nodes.
     Extrapolate,
-    /// Linear extrapolation, capped at the lowest constraint value on the grid.
+    /// Lower bounds: beyond an upper face the face value (more gap or relative speed is never
+    /// worse), beyond a lower face the lowest constraint value on the grid ("leaving towards a
+    /// collision is unsafe"). The value is then a lower bound of the true one (sound).
     Pessimistic,
+    /// Upper bounds: beyond an upper face at least the largest constraint value the ghost nodes
+    /// can have (`V <= l`), beyond a lower face the face value. Used to measure the trusted box,
+    /// never for a table.
+    Optimistic,
 }
 
 /// The numerical method.
@@ -166,8 +172,9 @@ struct Context<'g, G> {
     numerics: Numerics,
     /// Global alpha per axis (used with [`Dissipation::Global`]).
     global_alpha: Vector,
-    /// Lowest constraint value on the grid (ghost cap).
-    floor: f32,
+    /// Lowest constraint value on the grid, and an upper bound of the constraint at every ghost
+    /// node (the ghost caps).
+    caps: (f32, f32),
     /// Nodes per plane (the last two axes).
     plane: usize,
     /// Rows (of the last axis) per block.
@@ -193,6 +200,21 @@ struct Scratch {
     padded: Vec<f32>,
     pad_dm: Vec<f32>,
     pad_dp: Vec<f32>,
+    rate: Vec<f32>,
+}
+
+impl Scratch {
+    /// Turns the one-sided derivatives of the first `len` nodes into the central gradient
+    /// `(p- + p+)/2` (in `dm`) and the half jump `(p+ - p-)/2` (in `dp`).
+    fn make_central(&mut self, len: usize) {
+        for (m, p) in self.dm.iter_mut().zip(self.dp.iter_mut()) {
+            for (a, b) in m[..len].iter_mut().zip(p[..len].iter_mut()) {
+                let (lo, hi) = (*a, *b);
+                *a = 0.5 * (lo + hi);
+                *b = 0.5 * (hi - lo);
+            }
+        }
+    }
 }
 
 impl Scratch {
@@ -225,13 +247,25 @@ enum Base<'a> {
     Output,
 }
 
-/// The ghost value `distance` nodes beyond `edge`, whose inner neighbour is `inner`.
+/// The ghost value `|side|` nodes beyond a face (`side < 0`: below the lowest node, `side > 0`:
+/// above the highest), from the face node `edge` and its inner neighbour `inner`.
+///
+/// The capped variants rest on monotonicity: more gap or more relative speed (leader faster
+/// than the ego, ego faster than the follower) is never worse, so `V` is non-decreasing along
+/// every axis (exactly so in the two-car and baseline games, by comparison of trajectories under
+/// the same inputs; assumed for the IDM follower). Then beyond an upper face the face value is
+/// a lower bound and the largest constraint value an upper bound; beyond a lower face the face
+/// value is an upper bound and, for the sign of `V`, the grid's lowest constraint value a lower
+/// one.
 #[inline(always)]
-fn ghost(edge: f32, inner: f32, distance: f32, boundary: Boundary, floor: f32) -> f32 {
-    let v = edge + distance * (edge - inner);
-    match boundary {
-        Boundary::Extrapolate => v,
-        Boundary::Pessimistic => v.min(floor),
+fn ghost(edge: f32, inner: f32, side: f32, boundary: Boundary, caps: (f32, f32)) -> f32 {
+    let extrapolated = edge + side.abs() * (edge - inner);
+    match (boundary, side > 0.0) {
+        (Boundary::Extrapolate, _) => extrapolated,
+        (Boundary::Pessimistic, true) => edge,
+        (Boundary::Pessimistic, false) => extrapolated.min(caps.0).min(edge),
+        (Boundary::Optimistic, true) => extrapolated.max(caps.1),
+        (Boundary::Optimistic, false) => edge,
     }
 }
 
@@ -244,7 +278,7 @@ impl<G: Dynamics> Context<'_, G> {
             .map(|a| (0..a.points).map(|i| a.coordinate(i) as f32).collect())
             .collect();
         // alpha and l are extremal at grid nodes for these games (piecewise linear in z).
-        let (global_alpha, floor) = (0..grid.len())
+        let (global_alpha, floor, top) = (0..grid.len())
             .into_par_iter()
             .map(|node| {
                 let mut z = [0f64; MAX_DIMS];
@@ -252,12 +286,19 @@ impl<G: Dynamics> Context<'_, G> {
                 let zf = z.map(|x| x as f32);
                 let mut alpha = [0f32; MAX_DIMS];
                 game.dissipation(&zf, &mut alpha);
-                (alpha, game.constraint(&zf))
+                let l = game.constraint(&zf);
+                (alpha, l, l)
             })
             .reduce(
-                || ([0f32; MAX_DIMS], f32::INFINITY),
-                |(a, f), (b, g)| (core::array::from_fn(|k| a[k].max(b[k])), f.min(g)),
+                || ([0f32; MAX_DIMS], f32::INFINITY, f32::NEG_INFINITY),
+                |(a, f, t), (b, g, u)| {
+                    (core::array::from_fn(|k| a[k].max(b[k])), f.min(g), t.max(u))
+                },
             );
+        // The constraints here are 1-Lipschitz in the state (min of gaps), so three spacings
+        // beyond the grid they are at most `top + 3 max spacing`.
+        let reach = grid.axes().iter().map(|a| a.spacing()).fold(0.0, f64::max) as f32;
+        let caps = (floor, top + 3.0 * reach);
         let n_rows = grid.axes()[d - 2].points;
         let n_last = grid.axes()[d - 1].points;
         let plane = n_rows * n_last;
@@ -269,7 +310,7 @@ impl<G: Dynamics> Context<'_, G> {
             grid,
             numerics,
             global_alpha,
-            floor,
+            caps,
             plane,
             rows_per_block,
             coords,
@@ -336,7 +377,8 @@ impl<G: Dynamics> Context<'_, G> {
                 let mut scratch = cell.borrow_mut();
                 scratch.ensure(d, out_block.len());
                 self.derivatives(inp, *block, &mut scratch);
-                self.combine(inp, base, out_block, *block, &scratch, a, b, dt)
+                scratch.make_central(out_block.len());
+                self.combine(inp, base, out_block, *block, &mut scratch, a, b, dt)
             })
         })
     }
@@ -354,7 +396,7 @@ impl<G: Dynamics> Context<'_, G> {
         let len = hi - lo;
         let start = plane_start + lo;
         let boundary = self.numerics.boundary;
-        let floor = self.floor;
+        let caps = self.caps;
         let scheme = self.numerics.spatial;
         // The plane's multi-index on the outer axes.
         let mut outer = [0usize; MAX_DIMS];
@@ -370,6 +412,7 @@ impl<G: Dynamics> Context<'_, G> {
             padded,
             pad_dm,
             pad_dp,
+            ..
         } = scratch;
         for k in 0..d {
             let inv_dx = (1.0 / axes[k].spacing()) as f32;
@@ -382,7 +425,7 @@ impl<G: Dynamics> Context<'_, G> {
                     let j = i as isize + o as isize - 3;
                     if j < 0 || j >= n as isize {
                         let (edge, inner, dist) = if j < 0 {
-                            (block_at(0), block_at(1), (-j) as f32)
+                            (block_at(0), block_at(1), j as f32)
                         } else {
                             (
                                 block_at(n - 1),
@@ -391,7 +434,7 @@ impl<G: Dynamics> Context<'_, G> {
                             )
                         };
                         for ((slot, &e), &q) in ghosts[o][..len].iter_mut().zip(edge).zip(inner) {
-                            *slot = ghost(e, q, dist, boundary, floor);
+                            *slot = ghost(e, q, dist, boundary, caps);
                         }
                     }
                 }
@@ -423,7 +466,7 @@ impl<G: Dynamics> Context<'_, G> {
                             padded.extend_from_slice(&plane[j as usize * n_last..][..n_last]);
                         } else {
                             let (e, q, dist) = if j < 0 {
-                                (0, 1, (-j) as f32)
+                                (0, 1, j as f32)
                             } else {
                                 (n_rows - 1, n_rows - 2, (j - n_rows as isize + 1) as f32)
                             };
@@ -432,7 +475,7 @@ impl<G: Dynamics> Context<'_, G> {
                             padded.extend(
                                 edge.iter()
                                     .zip(inner)
-                                    .map(|(&ev, &iv)| ghost(ev, iv, dist, boundary, floor)),
+                                    .map(|(&ev, &iv)| ghost(ev, iv, dist, boundary, caps)),
                             );
                         }
                     }
@@ -451,12 +494,12 @@ impl<G: Dynamics> Context<'_, G> {
                     for line in plane[lo..hi].chunks(n_last) {
                         let (l0, l1) = (line[0], line[1]);
                         let (e0, e1) = (line[n_last - 1], line[n_last - 2]);
-                        for dist in [3.0, 2.0, 1.0] {
-                            padded.push(ghost(l0, l1, dist, boundary, floor));
+                        for dist in [-3.0, -2.0, -1.0] {
+                            padded.push(ghost(l0, l1, dist, boundary, caps));
                         }
                         padded.extend_from_slice(line);
                         for dist in [1.0, 2.0, 3.0] {
-                            padded.push(ghost(e0, e1, dist, boundary, floor));
+                            padded.push(ghost(e0, e1, dist, boundary, caps));
                         }
                     }
                     let span = padded.len() - 6;
@@ -476,8 +519,9 @@ impl<G: Dynamics> Context<'_, G> {
         }
     }
 
-    /// Writes `out = a * base + b * (inp + dt * min(0, H_LF))` over a block. The loop over the
-    /// last axis is straight-line code (the games' optimal inputs are selects), so it vectorises.
+    /// Writes `out = a * base + b * (inp + dt * min(0, H_LF))` over a block, from the central
+    /// gradients and half jumps that [`Self::derivatives`] left in the scratch rows. The games'
+    /// row form of the Hamiltonian is straight-line code, so every loop here vectorises.
     #[allow(clippy::too_many_arguments)]
     fn combine(
         &self,
@@ -485,140 +529,77 @@ impl<G: Dynamics> Context<'_, G> {
         base: Base<'_>,
         out_block: &mut [f32],
         block: Block,
-        scratch: &Scratch,
+        scratch: &mut Scratch,
         a: f32,
         b: f32,
         dt: f32,
     ) {
-        match self.grid.dims() {
-            2 => self.combine_d::<2>(inp, base, out_block, block, scratch, a, b, dt),
-            3 => self.combine_d::<3>(inp, base, out_block, block, scratch, a, b, dt),
-            4 => self.combine_d::<4>(inp, base, out_block, block, scratch, a, b, dt),
-            _ => self.combine_d::<5>(inp, base, out_block, block, scratch, a, b, dt),
-        }
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn combine_d<const D: usize>(
-        &self,
-        inp: &[f32],
-        base: Base<'_>,
-        out_block: &mut [f32],
-        block: Block,
-        scratch: &Scratch,
-        a: f32,
-        b: f32,
-        dt: f32,
-    ) {
+        let d = self.grid.dims();
         let axes = self.grid.axes();
-        let n_last = axes[D - 1].points;
+        let n_last = axes[d - 1].points;
         let start = block.p * self.plane + block.r0 * n_last;
         let len = out_block.len();
         let mut z = [0f32; MAX_DIMS];
         let mut rest = block.p;
-        for k in (0..D - 2).rev() {
+        for k in (0..d - 2).rev() {
             z[k] = self.coords[k][rest % axes[k].points];
             rest /= axes[k].points;
         }
         let local = self.numerics.dissipation == Dissipation::Local;
-        let inp = &inp[start..start + len];
-        let prev: Option<&[f32]> = match base {
-            // a = 0: any finite array serves.
-            Base::Zero => Some(inp),
-            Base::Slice(s) => Some(&s[start..start + len]),
-            Base::Output => None,
-        };
-        let last = &self.coords[D - 1][..n_last];
+        let Scratch { dm, dp, rate, .. } = scratch;
+        rate.resize(len, 0.0);
         for (row, r) in (block.r0..block.r1).enumerate() {
-            z[D - 2] = self.coords[D - 2][r];
+            z[d - 2] = self.coords[d - 2][r];
             let span = row * n_last..(row + 1) * n_last;
-            let dm: [&[f32]; D] = core::array::from_fn(|k| &scratch.dm[k][span.clone()]);
-            let dp: [&[f32]; D] = core::array::from_fn(|k| &scratch.dp[k][span.clone()]);
-            let row_in = &inp[span.clone()];
-            let row_out = &mut out_block[span.clone()];
-            let kernel = RowKernel {
-                game: self.game,
-                z,
-                last,
-                dm,
-                dp,
-                global_alpha: self.global_alpha,
-                a,
-                b,
-                dt,
-            };
-            match (prev.map(|s| &s[span.clone()]), local) {
-                (Some(p), true) => kernel.run::<true>(row_in, Some(p), row_out),
-                (Some(p), false) => kernel.run::<false>(row_in, Some(p), row_out),
-                (None, true) => kernel.run::<true>(row_in, None, row_out),
-                (None, false) => kernel.run::<false>(row_in, None, row_out),
-            }
+            let pbar: [&[f32]; MAX_DIMS] =
+                core::array::from_fn(|k| dm.get(k).map_or(&[][..], |v| &v[span.clone()]));
+            let half_jump: [&[f32]; MAX_DIMS] =
+                core::array::from_fn(|k| dp.get(k).map_or(&[][..], |v| &v[span.clone()]));
+            self.game.lax_friedrichs_row(
+                &z,
+                &self.coords[d - 1],
+                &pbar[..d],
+                &half_jump[..d],
+                local,
+                &self.global_alpha,
+                &mut rate[span],
+            );
         }
-    }
-}
-
-/// The update of one row of the last axis, written so that the compiler vectorises it: every
-/// slice has the row's length, and the branches are hoisted into the const parameter.
-struct RowKernel<'a, G, const D: usize> {
-    game: &'a G,
-    z: Vector,
-    last: &'a [f32],
-    dm: [&'a [f32]; D],
-    dp: [&'a [f32]; D],
-    global_alpha: Vector,
-    a: f32,
-    b: f32,
-    dt: f32,
-}
-
-impl<G: Dynamics, const D: usize> RowKernel<'_, G, D> {
-    #[inline(always)]
-    fn run<const LOCAL: bool>(&self, inp: &[f32], prev: Option<&[f32]>, out: &mut [f32]) {
-        let n = out.len();
-        let (inp, last) = (&inp[..n], &self.last[..n]);
-        let dm: [&[f32]; D] = core::array::from_fn(|k| &self.dm[k][..n]);
-        let dp: [&[f32]; D] = core::array::from_fn(|k| &self.dp[k][..n]);
-        let rate = |c: usize| {
-            let mut z = self.z;
-            z[D - 1] = last[c];
-            let mut alpha = self.global_alpha;
-            if LOCAL {
-                self.game.dissipation(&z, &mut alpha);
-            }
-            let mut pbar = [0f32; MAX_DIMS];
-            let mut diss = 0f32;
-            for k in 0..D {
-                let (m, p) = (dm[k][c], dp[k][c]);
-                pbar[k] = 0.5 * (m + p);
-                diss += 0.5 * alpha[k] * (p - m);
-            }
-            let h = self.game.hamiltonian(&z, &pbar) + diss;
-            // min(h, 0) as one instruction (a NaN is caught after the step).
-            if h < 0.0 {
-                h
-            } else {
-                0.0
-            }
-        };
-        match prev {
-            Some(prev) => {
-                let prev = &prev[..n];
-                for c in 0..n {
-                    out[c] = self.a * prev[c] + self.b * (inp[c] + self.dt * rate(c));
+        let inp = &inp[start..start + len];
+        let rate = &rate[..len];
+        match base {
+            Base::Zero | Base::Slice(_) => {
+                let prev = match base {
+                    Base::Slice(s) => &s[start..start + len],
+                    _ => inp,
+                };
+                for c in 0..len {
+                    out_block[c] = a * prev[c] + b * (inp[c] + dt * rate[c]);
                 }
             }
-            None => {
-                for c in 0..n {
-                    out[c] = self.a * out[c] + self.b * (inp[c] + self.dt * rate(c));
+            Base::Output => {
+                // The last stage of a step: its base is the step's start value, which the exact
+                // combination never exceeds; the `min` removes f32 rounding so that the value is
+                // non-increasing in the horizon to the last bit (the variational inequality's
+                // `V = min(V, ...)`).
+                // It also holds the value at the grid's lowest constraint value `floor`: that
+                // solves the game for `max(l, floor)`, whose value is `max(V, floor)` (max
+                // distributes over the min in time), so the sign of V, and the safe set, are
+                // unchanged, while states hopelessly unsafe stop drifting to minus infinity.
+                let floor = self.caps.0;
+                for c in 0..len {
+                    let v = a * out_block[c] + b * (inp[c] + dt * rate[c]);
+                    let v = if v < out_block[c] { v } else { out_block[c] };
+                    out_block[c] = if v > floor { v } else { floor };
                 }
             }
         }
     }
 }
 
-/// `max |a - b|`, NaN-propagating (lane-wise maxima, so it vectorises).
-fn max_abs_difference(a: &[f32], b: &[f32]) -> f32 {
+/// `max |a - b|` over the nodes where `b > floor` (the others are pinned at the floor),
+/// NaN-propagating (lane-wise maxima, so it vectorises).
+fn max_abs_difference(a: &[f32], b: &[f32], floor: f32) -> f32 {
     a.par_chunks(1 << 14)
         .zip(b.par_chunks(1 << 14))
         .map(|(x, y)| {
@@ -626,8 +607,8 @@ fn max_abs_difference(a: &[f32], b: &[f32]) -> f32 {
             let mut nan = false;
             for (cx, cy) in x.chunks(8).zip(y.chunks(8)) {
                 for ((l, &p), &q) in lanes.iter_mut().zip(cx).zip(cy) {
-                    let d = (p - q).abs();
-                    nan |= d.is_nan();
+                    let d = if q > floor { (p - q).abs() } else { 0.0 };
+                    nan |= p.is_nan();
                     *l = if d > *l { d } else { *l };
                 }
             }
@@ -652,7 +633,7 @@ fn max_abs_difference(a: &[f32], b: &[f32]) -> f32 {
 /// Whether every value is finite.
 fn all_finite(v: &[f32]) -> bool {
     v.par_chunks(1 << 14)
-        .all(|c| c.iter().fold(0f32, |acc, &x| acc + (x - x)) == 0.0)
+        .all(|c| c.iter().all(|x| x.is_finite()))
 }
 
 /// Solves the avoid game on `grid` from `V = l`, reporting `(time, residual, values)` after
@@ -692,9 +673,14 @@ pub fn solve<G: Dynamics>(
         let dtf = dt as f32;
         // After the first stage w = v + dt L(v): the residual max |L(v)| = max |w - v| / dt.
         ctx.stage(&v, Base::Zero, &mut w, 0.0, 1.0, dtf);
-        let rate = max_abs_difference(&w, &v) / dtf;
+        let rate = max_abs_difference(&w, &v, ctx.caps.0) / dtf;
         match numerics.rk {
-            RkOrder::One => std::mem::swap(&mut v, &mut w),
+            RkOrder::One => {
+                let floor = ctx.caps.0;
+                w.par_iter_mut()
+                    .for_each(|x| *x = if *x > floor { *x } else { floor });
+                std::mem::swap(&mut v, &mut w)
+            }
             RkOrder::Two => ctx.stage(&w, Base::Output, &mut v, 0.5, 0.5, dtf),
             RkOrder::Three => {
                 ctx.stage(&w, Base::Slice(&v), &mut u, 0.75, 0.25, dtf);

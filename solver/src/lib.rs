@@ -6,6 +6,8 @@
 //! the grid boundary does not matter) -> [`compile`] (the quantized table and its error bound)
 //! -> [`output`] (files and plots).
 #![warn(missing_docs)]
+// Index loops read best in the numerical kernels, where several arrays share one index.
+#![allow(clippy::needless_range_loop)]
 
 pub mod compile;
 pub mod config;

@@ -36,6 +36,9 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), SolverError> {
     std::fs::write(path, bytes).map_err(|e| io_err(path, e))
 }
 
+/// A curve to draw: legend label, colour, points.
+pub type Curve<'a> = (&'a str, RGBColor, Vec<(f64, f64)>);
+
 /// A named axis of a plot: label and node coordinates.
 pub struct PlotAxis<'a> {
     /// Label with unit.
@@ -57,7 +60,7 @@ pub struct CellMap<'a> {
     /// Label and colour of each category.
     pub legend: &'a [(&'a str, RGBColor)],
     /// Curves drawn on top: label, colour, points.
-    pub curves: &'a [(&'a str, RGBColor, Vec<(f64, f64)>)],
+    pub curves: &'a [Curve<'a>],
     /// An optional dashed rectangle (the trusted box): `(x0, x1, y0, y1)`.
     pub frame: Option<(f64, f64, f64, f64)>,
 }
@@ -162,7 +165,7 @@ pub fn draw_curves(
     title: &str,
     x_label: &str,
     y_label: &str,
-    curves: &[(&str, RGBColor, Vec<(f64, f64)>)],
+    curves: &[Curve<'_>],
 ) -> Result<(), SolverError> {
     let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;

@@ -11,7 +11,7 @@ use table_format::{Horizon, HorizonStatus};
 use crate::compile::{compile, CompileInput, CompileReport};
 use crate::config::{Config, GameKindConfig};
 use crate::error::SolverError;
-use crate::exact;
+use crate::exact::{self, ExactComparison};
 use crate::game::{AnyGame, Vector};
 use crate::grid::{Grid, GridAxis, MAX_DIMS};
 use crate::hji::{self, Boundary, Numerics, Outcome, Solution, Stop};
@@ -71,18 +71,6 @@ pub fn gradient_any(
         AnyGame::Baseline(g) => hji::gradient(g, grid, numerics, values),
         AnyGame::Idm(g) => hji::gradient(g, grid, numerics, values),
     }
-}
-
-/// Accuracy against the exact two-car value.
-#[derive(Debug, Clone, Serialize)]
-pub struct ExactComparison {
-    /// Largest `|V - V_exact|` over nodes in the trusted box, m.
-    pub max_value_error: f64,
-    /// Mean `|V - V_exact|` over the same nodes, m.
-    pub mean_value_error: f64,
-    /// Largest distance in gap between the computed and exact safe-set boundaries, over speed
-    /// nodes in the trusted box, m.
-    pub max_boundary_error: f64,
 }
 
 /// The run's summary, written as `summary.json`.
@@ -159,20 +147,17 @@ pub fn run(
     let solve_seconds = t0.elapsed().as_secs_f64();
     events(Event::SolveFinished);
 
-    // The trusted box: agreement with the other boundary condition over the same time.
+    // The trusted box: where the optimistic solve does not disagree (see `trusted`).
     let trusted = if config.trusted_box.measure {
-        let other = Numerics {
-            boundary: match numerics.boundary {
-                Boundary::Pessimistic => Boundary::Extrapolate,
-                Boundary::Extrapolate => Boundary::Pessimistic,
-            },
+        let optimistic = Numerics {
+            boundary: Boundary::Optimistic,
             ..numerics
         };
         events(Event::SolveStarted("trusted box", solution.time));
-        let alt = solve_any(
+        let upper = solve_any(
             &game,
             &grid,
-            other,
+            optimistic,
             Stop::Horizon(solution.time),
             |t, r, _| events(Event::Step(t, r)),
         )?;
@@ -180,7 +165,7 @@ pub fn run(
         agreement_box(
             &grid,
             &solution.values,
-            &alt.values,
+            &upper.values,
             config.trusted_box.tolerance,
         )
     } else {
@@ -225,6 +210,10 @@ pub fn run(
             trusted: bx,
             table_points: config.table.points.as_deref(),
             bits: config.table.bits,
+            clip_below: constraint_any(&game, &grid)
+                .iter()
+                .copied()
+                .fold(-1.0f32, f32::min),
         })?),
         None => None,
     };
@@ -331,39 +320,7 @@ fn two_car_comparison(
     bx: &IndexBox,
 ) -> ExactComparison {
     let g = &config.game;
-    let (xs, vs) = (&grid.axes()[0], &grid.axes()[1]);
-    let exact =
-        |x: f64, v: f64| exact::two_car_value(x, v, time, g.ego.min, g.leader.min, g.min_gap);
-    let (mut max_err, mut sum_err, mut count) = (0f64, 0f64, 0usize);
-    let mut max_boundary = 0f64;
-    for j in bx.lo[1]..=bx.hi[1] {
-        let v = vs.coordinate(j);
-        let mut crossing = None;
-        for i in bx.lo[0]..=bx.hi[0] {
-            let x = xs.coordinate(i);
-            let val = f64::from(values[i * vs.points + j]);
-            let e = (val - exact(x, v)).abs();
-            max_err = max_err.max(e);
-            sum_err += e;
-            count += 1;
-            if i > bx.lo[0] && crossing.is_none() {
-                let prev = f64::from(values[(i - 1) * vs.points + j]);
-                if prev <= 0.0 && val > 0.0 {
-                    let xp = xs.coordinate(i - 1);
-                    crossing = Some(xp + (x - xp) * (-prev) / (val - prev));
-                }
-            }
-        }
-        if let Some(xc) = crossing {
-            let xb = exact::two_car_boundary(v, time, g.ego.min, g.leader.min, g.min_gap);
-            max_boundary = max_boundary.max((xc - xb).abs());
-        }
-    }
-    ExactComparison {
-        max_value_error: max_err,
-        mean_value_error: sum_err / count.max(1) as f64,
-        max_boundary_error: max_boundary,
-    }
+    exact::two_car_errors(grid, values, time, g.ego.min, g.leader.min, g.min_gap, bx)
 }
 
 const GREEN: RGBColor = RGBColor(140, 210, 140);

@@ -2,10 +2,14 @@
 //!
 //! The value at a node depends on the states the game's trajectories can reach from it. Near a
 //! face that trajectories leave through, that includes ghost nodes whose values are a guess. The
-//! solver therefore solves twice, with a pessimistic and an optimistic (extrapolating) guess,
-//! and trusts only the largest box, shrunk face by face from the grid, in which the two agree
-//! within a tolerance. Inside it the boundary guess is immaterial to that tolerance; outside it
-//! the table still holds the pessimistic value, but the firmware treats the state as unknown.
+//! solver therefore solves twice: with a pessimistic boundary (leaving the grid is unsafe: a
+//! lower bound `V_lo` of the true value) and an optimistic one (leaving is safe: an upper bound
+//! `V_hi`, since the true value never exceeds the constraint). A node is *undecided by the grid*
+//! where `V_lo <= 0 < V_hi` and the two differ by more than a tolerance: there the boundary guess
+//! decides whether it is safe. The trusted box is a box, shrunk face by face from the grid, with
+//! no such node. Tables hold the pessimistic value everywhere, so a state they certify is safe
+//! inside the box or not; outside it they may call safe states unsafe, and the firmware treats
+//! such states as unknown.
 
 use crate::grid::{Grid, MAX_DIMS};
 
@@ -44,36 +48,45 @@ impl IndexBox {
     }
 }
 
-/// The largest box, shrunk greedily from the whole grid, that holds no node where `a` and `b`
-/// differ by more than `tolerance`; `None` if none is left.
+/// A box, shrunk greedily from the whole grid, that holds no node the boundary could flip: the
+/// lower bound `lo` calls it unsafe, the upper bound `hi` safe, and they differ by more than
+/// `tolerance`; `None` if none is left. (Where `lo > 0` the node is safe whatever the ghost
+/// values; where `hi <= 0` it is unsafe whatever they are.)
 ///
-/// Each round shrinks the face that is nearest to the most disagreeing nodes in the box, so a
-/// band polluted from one face costs only that face.
-pub fn agreement_box(grid: &Grid, a: &[f32], b: &[f32], tolerance: f64) -> Option<IndexBox> {
+/// Each round peels one face: the one whose outermost layer holds the most such nodes per safe
+/// node (`lo > 0`) it would give up, so the box keeps as much of the certified safe set as it
+/// can. When no face layer holds any (they are all inside), the face nearest to most of them is
+/// peeled.
+pub fn agreement_box(grid: &Grid, lo: &[f32], hi: &[f32], tolerance: f64) -> Option<IndexBox> {
     let d = grid.dims();
-    let bad: Vec<usize> = a
-        .iter()
-        .zip(b)
-        .enumerate()
-        .filter(|(_, (x, y))| f64::from((**x - **y).abs()) > tolerance)
-        .map(|(i, _)| i)
-        .collect();
+    let undecided = |node: usize| {
+        lo[node] <= 0.0 && hi[node] > 0.0 && f64::from(hi[node] - lo[node]) > tolerance
+    };
+    let bad: Vec<usize> = (0..lo.len()).filter(|&n| undecided(n)).collect();
     let mut bx = IndexBox::full(grid);
     let mut idx = [0usize; MAX_DIMS];
     loop {
-        // For each face (axis k, side s) the number of bad nodes in the box closest to it.
-        let mut votes = vec![[0usize; 2]; d];
-        let mut any = false;
+        let mut inside = 0usize;
+        // Per face (axis, side): bad nodes on its outermost layer, safe nodes on it, and bad
+        // nodes for which it is the nearest face.
+        let mut layer_bad = vec![[0usize; 2]; d];
+        let mut layer_safe = vec![[0usize; 2]; d];
+        let mut nearest = vec![[0usize; 2]; d];
         for &node in &bad {
             grid.multi_index(node, &mut idx[..d]);
             if !bx.contains(&idx[..d]) {
                 continue;
             }
-            any = true;
+            inside += 1;
             let mut best = (usize::MAX, 0, 0);
             for k in 0..d {
-                let to_lo = idx[k] - bx.lo[k];
-                let to_hi = bx.hi[k] - idx[k];
+                let (to_lo, to_hi) = (idx[k] - bx.lo[k], bx.hi[k] - idx[k]);
+                if to_lo == 0 {
+                    layer_bad[k][0] += 1;
+                }
+                if to_hi == 0 {
+                    layer_bad[k][1] += 1;
+                }
                 if to_lo < best.0 {
                     best = (to_lo, k, 0);
                 }
@@ -81,25 +94,50 @@ pub fn agreement_box(grid: &Grid, a: &[f32], b: &[f32], tolerance: f64) -> Optio
                     best = (to_hi, k, 1);
                 }
             }
-            votes[best.1][best.2] += 1;
+            nearest[best.1][best.2] += 1;
         }
-        if !any {
+        if inside == 0 {
             return Some(bx);
         }
-        let (mut k_best, mut s_best, mut most) = (0, 0, 0);
-        for (k, v) in votes.iter().enumerate() {
-            for (s, &count) in v.iter().enumerate() {
-                if count > most {
-                    (k_best, s_best, most) = (k, s, count);
+        if layer_bad.iter().flatten().any(|&c| c > 0) {
+            for (node, &v) in lo.iter().enumerate() {
+                if v <= 0.0 {
+                    continue;
+                }
+                grid.multi_index(node, &mut idx[..d]);
+                if !bx.contains(&idx[..d]) {
+                    continue;
+                }
+                for k in 0..d {
+                    if idx[k] == bx.lo[k] {
+                        layer_safe[k][0] += 1;
+                    }
+                    if idx[k] == bx.hi[k] {
+                        layer_safe[k][1] += 1;
+                    }
                 }
             }
         }
-        if s_best == 0 {
-            bx.lo[k_best] += 1;
-        } else {
-            bx.hi[k_best] = bx.hi[k_best].checked_sub(1)?;
+        let mut pick = (f64::NEG_INFINITY, 0, 0);
+        for k in 0..d {
+            for side in 0..2 {
+                let score = if layer_bad.iter().flatten().any(|&c| c > 0) {
+                    layer_bad[k][side] as f64 / (layer_safe[k][side] as f64 + 1.0)
+                } else {
+                    nearest[k][side] as f64
+                };
+                if score > pick.0 {
+                    pick = (score, k, side);
+                }
+            }
         }
-        if bx.lo[k_best] > bx.hi[k_best] {
+        let (_, k, side) = pick;
+        if side == 0 {
+            bx.lo[k] += 1;
+        } else {
+            bx.hi[k] = bx.hi[k].checked_sub(1)?;
+        }
+        if bx.lo[k] > bx.hi[k] {
             return None;
         }
     }

@@ -93,9 +93,14 @@ pub enum FollowerSpeed {
         /// The assumed ego speed, m/s.
         ego_speed: f32,
     },
-    /// The sound reading: `v3` is one more adversarial input over its feasible range
-    /// `max(0, -v_g2) <= v3 <= max_speed`.
+    /// The sound reading: `v3` is one more adversarial input over every value consistent with
+    /// the state and an ego speed in `[min_ego_speed, max_speed]`:
+    /// `max(0, min_ego_speed - v_g2) <= v3 <= min(max_speed, max_speed - v_g2)`. With
+    /// `min_ego_speed = 0` nothing is assumed; a positive one is an operating-range assumption the
+    /// consumer must check (the table is valid while the ego is at least that fast).
     Adversarial {
+        /// The lowest ego speed the table assumes, m/s.
+        min_ego_speed: f32,
         /// The largest speed any vehicle may have, m/s.
         max_speed: f32,
     },
@@ -198,8 +203,14 @@ impl Game {
             } => {
                 let speed_ok = match follower_speed {
                     FollowerSpeed::NominalEgoSpeed { ego_speed } => ego_speed.is_finite(),
-                    FollowerSpeed::Adversarial { max_speed } => {
-                        max_speed.is_finite() && *max_speed > 0.0
+                    FollowerSpeed::Adversarial {
+                        min_ego_speed,
+                        max_speed,
+                    } => {
+                        min_ego_speed.is_finite()
+                            && max_speed.is_finite()
+                            && *min_ego_speed >= 0.0
+                            && *max_speed > *min_ego_speed
                     }
                 };
                 ego.is_valid()

@@ -26,7 +26,10 @@ fn idm_game() -> Game {
             jam_distance: 0.0,
         },
         time_gap: Bounds::new(1.0, 2.0),
-        follower_speed: FollowerSpeed::Adversarial { max_speed: 40.0 },
+        follower_speed: FollowerSpeed::Adversarial {
+            min_ego_speed: 0.0,
+            max_speed: 40.0,
+        },
     }
 }
 

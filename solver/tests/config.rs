@@ -1,0 +1,87 @@
+//! Configs: the built-in ones parse, bad ones are refused with the field named.
+
+use solver::config::{builtin, Config};
+
+#[test]
+fn builtin_configs_are_valid() {
+    for (name, text) in builtin() {
+        Config::from_toml(text).unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+}
+
+fn idm() -> String {
+    builtin()
+        .into_iter()
+        .find(|(n, _)| *n == "three-car-idm.toml")
+        .map(|(_, t)| t.to_string())
+        .unwrap()
+}
+
+fn refused_field(text: &str) -> String {
+    Config::from_toml(text).unwrap_err().field
+}
+
+#[test]
+fn bad_values_name_their_field() {
+    let base = idm();
+    let cases = [
+        (
+            "time_gap = { min = 1.0, max = 2.0 }",
+            "time_gap = { min = 2.0, max = 1.0 }",
+            "game.time_gap",
+        ),
+        (
+            "time_gap = { min = 1.0, max = 2.0 }",
+            "time_gap = { min = -1.0, max = 2.0 }",
+            "game.time_gap.min",
+        ),
+        (
+            "ego = { min = -2.0, max = 2.0 }",
+            "ego = { min = 1.0, max = 2.0 }",
+            "game.ego",
+        ),
+        (
+            "comfortable_deceleration = 1.5",
+            "comfortable_deceleration = -1.5",
+            "game.idm.comfortable_deceleration",
+        ),
+        ("time = 40.0", "time = 0.0", "horizon.time"),
+        (
+            "converge_tolerance = 0.05",
+            "converge_tolerance = -1.0",
+            "horizon.converge_tolerance",
+        ),
+        (
+            "gap_follower = { min = -5.0, max = 75.0, points = 31 }",
+            "gap_follower = { min = -5.0, max = 75.0, points = 3 }",
+            "grid.gap_follower.points",
+        ),
+        (
+            "follower_speed = { kind = \"nominal_ego_speed\", ego_speed = 20.0 }",
+            "follower_speed = { kind = \"adversarial\", min_ego_speed = 30.0, max_speed = 20.0 }",
+            "game.follower_speed.max_speed",
+        ),
+        ("name = \"three-car-idm\"", "name = \"Three Car\"", "name"),
+    ];
+    for (from, to, field) in cases {
+        assert!(base.contains(from), "{from}");
+        let text = base.replace(from, to);
+        assert_eq!(refused_field(&text), field, "{to}");
+    }
+    let with_numerics = format!("{base}\n[numerics]\ncfl = 1.5\n");
+    assert_eq!(refused_field(&with_numerics), "numerics.cfl");
+    let optimistic = format!("{base}\n[numerics]\nboundary = \"optimistic\"\n");
+    assert_eq!(refused_field(&optimistic), "numerics.boundary");
+    let table = format!("{base}\n[table]\npoints = [16, 16, 16, 17]\n");
+    assert_eq!(refused_field(&table), "table.points");
+}
+
+#[test]
+fn unknown_keys_and_syntax_errors_are_refused_with_a_location() {
+    let base = idm();
+    let err = Config::from_toml(&base.replace("min_gap = 0.0", "min_gapp = 0.0")).unwrap_err();
+    assert!(err.reason.contains("min_gapp"), "{err}");
+    assert!(err.field.starts_with("near byte"), "{err}");
+    let missing = base.replace("time_gap = { min = 1.0, max = 2.0 }\n", "");
+    assert_eq!(refused_field(&missing), "game.time_gap");
+}

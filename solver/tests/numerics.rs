@@ -1,0 +1,256 @@
+//! The engine against things no one here tuned: the exact two-car value, convergence under grid
+//! refinement, monotonicity of the avoid value in the horizon, and the paper's qualitative
+//! results on small 4-D grids.
+
+use solver::exact::{two_car_errors, two_car_value, ExactComparison};
+use solver::game::{Accel, FollowerSpeedModel, Idm, ThreeCarBaseline, ThreeCarIdm, TwoCar};
+use solver::grid::{Grid, GridAxis};
+use solver::hji::{solve, Boundary, Dissipation, Numerics, RkOrder, Stop};
+use solver::scheme::Spatial;
+use solver::trusted::{agreement_box, IndexBox};
+
+const EGO: Accel = Accel {
+    min: -2.0,
+    max: 2.0,
+};
+const HUMAN: Accel = Accel {
+    min: -1.5,
+    max: 1.5,
+};
+
+fn axis(name: &str, min: f64, max: f64, points: usize) -> GridAxis {
+    GridAxis {
+        name: name.into(),
+        unit: String::new(),
+        min,
+        max,
+        points,
+    }
+}
+
+fn numerics(spatial: Spatial, rk: RkOrder) -> Numerics {
+    Numerics {
+        spatial,
+        rk,
+        cfl: 0.75,
+        dissipation: Dissipation::Local,
+        boundary: Boundary::Pessimistic,
+    }
+}
+
+/// The two-car game on x in [-5, 45], v in [-15, 15] with `points` per axis, horizon 3 s;
+/// errors measured over x in [0, 40], v in [-10, 0] (away from every face), where the exact
+/// boundary lies.
+fn two_car_errors_at(points: usize, spatial: Spatial, rk: RkOrder) -> ExactComparison {
+    let grid = Grid::new(vec![
+        axis("gap_leader", -5.0, 45.0, points),
+        axis("rel_speed_leader", -15.0, 15.0, points),
+    ])
+    .unwrap();
+    let game = TwoCar {
+        ego: EGO,
+        leader: HUMAN,
+        min_gap: 0.0,
+    };
+    let s = solve(
+        &game,
+        &grid,
+        numerics(spatial, rk),
+        Stop::Horizon(3.0),
+        |_, _, _| {},
+    )
+    .unwrap();
+    let index = |a: &GridAxis, x: f64| ((x - a.min) / a.spacing()).round() as usize;
+    let (xa, va) = (&grid.axes()[0], &grid.axes()[1]);
+    let bx = IndexBox {
+        lo: vec![index(xa, 0.0), index(va, -10.0)],
+        hi: vec![index(xa, 40.0), index(va, 0.0)],
+    };
+    two_car_errors(&grid, &s.values, 3.0, -2.0, -1.5, 0.0, &bx)
+}
+
+#[test]
+fn two_car_matches_the_exact_value_and_converges() {
+    let coarse = two_car_errors_at(51, Spatial::Weno5, RkOrder::Three);
+    let medium = two_car_errors_at(101, Spatial::Weno5, RkOrder::Three);
+    let fine = two_car_errors_at(201, Spatial::Weno5, RkOrder::Three);
+    println!("WENO5/RK3 51^2: {coarse:?}\n101^2: {medium:?}\n201^2: {fine:?}");
+    // Errors shrink under refinement.
+    assert!(medium.max_value_error < coarse.max_value_error);
+    assert!(fine.max_value_error < medium.max_value_error);
+    assert!(fine.max_boundary_error < medium.max_boundary_error);
+    assert!(medium.max_boundary_error < coarse.max_boundary_error);
+    // The value has kinks (at v = 0, and where t* reaches the horizon), so the order is about
+    // one in the max norm; the safe-set boundary converges faster.
+    let value_order = (coarse.max_value_error / fine.max_value_error).log2() / 2.0;
+    let boundary_order = (coarse.max_boundary_error / fine.max_boundary_error).log2() / 2.0;
+    println!("observed orders: value (max) {value_order:.2}, boundary {boundary_order:.2}");
+    assert!(value_order > 0.8, "observed value order {value_order}");
+    assert!(
+        boundary_order > 1.0,
+        "observed boundary order {boundary_order}"
+    );
+    // Absolute accuracy: the safe-set boundary within 5 cm at 201^2 (the grid has 25 cm cells).
+    assert!(fine.max_boundary_error < 0.05, "{fine:?}");
+    assert!(fine.mean_value_error < 0.01, "{fine:?}");
+}
+
+#[test]
+fn first_order_scheme_converges_too_and_is_less_accurate() {
+    let coarse = two_car_errors_at(51, Spatial::Upwind1, RkOrder::One);
+    let fine = two_car_errors_at(101, Spatial::Upwind1, RkOrder::One);
+    let weno = two_car_errors_at(101, Spatial::Weno5, RkOrder::Three);
+    assert!(fine.max_value_error < coarse.max_value_error);
+    assert!(weno.mean_value_error < fine.mean_value_error);
+    let eno = two_car_errors_at(101, Spatial::Eno2, RkOrder::Two);
+    assert!(eno.mean_value_error < fine.mean_value_error);
+}
+
+#[test]
+fn the_exact_value_is_what_the_formula_says() {
+    // Closing at 4 m/s with a = 0.5: the gap shrinks for 8 s; within 3 s by 4*3 - 0.25*9.
+    assert!((two_car_value(20.0, -4.0, 3.0, -2.0, -1.5, 0.0) - (20.0 - 12.0 + 2.25)).abs() < 1e-12);
+    // Closing at 1 m/s: the gap stops shrinking after 2 s, 1 m lost.
+    assert!((two_car_value(20.0, -1.0, 3.0, -2.0, -1.5, 0.0) - 19.0).abs() < 1e-12);
+    assert_eq!(two_car_value(20.0, 3.0, 3.0, -2.0, -1.5, 1.0), 19.0);
+}
+
+fn small_4d(points: usize, speed: f64) -> Grid {
+    Grid::new(vec![
+        axis("gap_leader", -5.0, 45.0, points),
+        axis("rel_speed_leader", -speed, speed, points),
+        axis("gap_follower", -5.0, 45.0, points),
+        axis("rel_speed_follower", -speed, speed, points),
+    ])
+    .unwrap()
+}
+
+fn share_safe(v: &[f32]) -> f64 {
+    v.iter().filter(|&&x| x > 0.0).count() as f64 / v.len() as f64
+}
+
+#[test]
+fn the_avoid_value_never_increases_with_the_horizon() {
+    let grid = small_4d(15, 10.0);
+    let game = ThreeCarBaseline {
+        ego: EGO,
+        leader: HUMAN,
+        follower: HUMAN,
+        min_gap: 0.0,
+    };
+    let mut previous: Option<Vec<f32>> = None;
+    let mut shares = Vec::new();
+    solve(
+        &game,
+        &grid,
+        numerics(Spatial::Weno5, RkOrder::Three),
+        Stop::Horizon(4.0),
+        |_, _, v| {
+            if let Some(p) = &previous {
+                for (a, b) in p.iter().zip(v) {
+                    assert!(b <= a, "value increased from {a} to {b}");
+                }
+            }
+            previous = Some(v.to_vec());
+            shares.push(share_safe(v));
+        },
+    )
+    .unwrap();
+    assert!(shares.windows(2).all(|w| w[1] <= w[0]));
+    assert!(shares.last().unwrap() < shares.first().unwrap());
+}
+
+#[test]
+fn baseline_safe_set_vanishes_while_the_idm_one_does_not() {
+    // The paper's result on a small grid: after 20 s no state is certified against a follower
+    // free to accelerate (the leader-to-follower gap closes at up to 3 m/s^2 whatever the ego
+    // does), while an IDM follower leaves a large safe set.
+    let grid = Grid::new(vec![
+        axis("gap_leader", -5.0, 75.0, 17),
+        axis("rel_speed_leader", -15.0, 15.0, 17),
+        axis("gap_follower", -5.0, 75.0, 17),
+        axis("rel_speed_follower", -15.0, 15.0, 17),
+    ])
+    .unwrap();
+    let n = numerics(Spatial::Weno5, RkOrder::Three);
+    let baseline = ThreeCarBaseline {
+        ego: EGO,
+        leader: HUMAN,
+        follower: HUMAN,
+        min_gap: 0.0,
+    };
+    let idm = ThreeCarIdm {
+        ego: EGO,
+        leader: HUMAN,
+        follower_clip: HUMAN,
+        idm: Idm {
+            max_acceleration: 1.0,
+            comfortable_deceleration: 1.5,
+            desired_speed: 33.3,
+            exponent: 4,
+            jam_distance: 0.0,
+        },
+        time_gap: Accel { min: 1.0, max: 2.0 },
+        follower_speed: FollowerSpeedModel::NominalEgoSpeed { ego_speed: 20.0 },
+        min_gap: 0.0,
+    };
+    // Whatever the ego does, the leader-to-follower gap G = x_g1 + x_g2 obeys G'' = u1 - u3,
+    // -3 m/s^2 at worst: from G <= 150 m closing at up to 30 m/s it is gone within 24 s.
+    let horizon = Stop::Horizon(25.0);
+    let mut baseline_history = Vec::new();
+    let b = solve(&baseline, &grid, n, horizon, |_, _, v| {
+        baseline_history.push(share_safe(v))
+    })
+    .unwrap();
+    let i = solve(&idm, &grid, n, horizon, |_, _, _| {}).unwrap();
+    let (sb, si) = (share_safe(&b.values), share_safe(&i.values));
+    println!("25 s: baseline {sb:.4}, IDM {si:.4}");
+    assert_eq!(sb, 0.0, "baseline keeps {sb}");
+    assert!(
+        baseline_history[baseline_history.len() / 4] > 0.1,
+        "the baseline set is not empty at first"
+    );
+    assert!(si > 0.2, "IDM safe share {si}");
+}
+
+#[test]
+fn trusted_box_excludes_the_band_the_boundary_decides() {
+    let grid = Grid::new(vec![
+        axis("gap_leader", -5.0, 45.0, 101),
+        axis("rel_speed_leader", -10.0, 10.0, 101),
+    ])
+    .unwrap();
+    let game = TwoCar {
+        ego: EGO,
+        leader: HUMAN,
+        min_gap: 0.0,
+    };
+    let n = numerics(Spatial::Weno5, RkOrder::Three);
+    let lo = solve(&game, &grid, n, Stop::Horizon(3.0), |_, _, _| {}).unwrap();
+    let hi = solve(
+        &game,
+        &grid,
+        Numerics {
+            boundary: Boundary::Optimistic,
+            ..n
+        },
+        Stop::Horizon(3.0),
+        |_, _, _| {},
+    )
+    .unwrap();
+    // The lower bound is below the upper bound (up to the scheme's non-monotone WENO weights,
+    // a few millimetres) wherever the upper bound is within 1 m of the safe set.
+    for (l, h) in lo.values.iter().zip(&hi.values) {
+        if *h > -1.0 {
+            assert!(*l <= h + 0.005, "{l} > {h}");
+        }
+    }
+    let bx = agreement_box(&grid, &lo.values, &hi.values, 0.05).unwrap();
+    let bounds = bx.bounds(&grid);
+    // Worst-case trajectories from v = -10 reach v = -10 - 0.5 * 3 within the horizon: the
+    // lowest speeds are decided by the ghost nodes and must be excluded.
+    assert!(bounds[1].0 > -10.0, "trusted box {bounds:?}");
+    // Inside the box the exact boundary is met to within half a cell (0.25 m).
+    let e = two_car_errors(&grid, &lo.values, 3.0, -2.0, -1.5, 0.0, &bx);
+    assert!(e.max_boundary_error < 0.25, "{e:?}");
+}
