@@ -1,9 +1,87 @@
-//! The ACC safety controller that runs the solver's table on a microcontroller.
+//! hjacc's ACC safety controller: keeps the ego car between a human leader and a human follower
+//! using a safety table compiled by the hjacc solver from a Hamilton-Jacobi-Isaacs analysis
+//! (Bahati, Gibson & Bayen, arXiv:2112.14344).
 //!
-//! Not written yet: this crate only reserves its place in the workspace and proves that it
-//! cross-builds for `thumbv7em-none-eabihf` together with `table-format`. The control loop is
-//! tracked in its own issue.
-#![no_std]
+//! Why it is built this way:
+//! - `#![no_std]`, no heap: it runs on a Cortex-M4F with a fixed memory budget. The table is
+//!   read in place (`table_format::Table` borrows the bytes, e.g. from `include_bytes!`), the event
+//!   log is a `heapless::HistoryBuf`.
+//! - No panics on the control path: no `unwrap`, no indexing that can fail, no float-to-index
+//!   cast without a range check (the lints below enforce it). Every bad input is a typed
+//!   [`Fault`] with a documented reaction (see [`controller`]).
+//! - One math module ([`math`]) so that host tests run the target's arithmetic.
+//! - Hardware behind traits ([`Sensors`], [`Actuator`], [`Clock`], [`Watchdog`]), with a CAN
+//!   driver over `embedded-can` ([`can`]).
+//!
+//! The default table (`tables/default.bin`, 139 KiB) comes from
+//! `cargo run -p solver --release -- --config solver/configs/firmware-default.toml`; copy
+//! `out/firmware-default/table.bin` over it to regenerate it.
+#![cfg_attr(not(test), no_std)]
 #![warn(missing_docs)]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing,
+        clippy::unreachable,
+        clippy::cast_possible_truncation
+    )
+)]
 
+mod fmt;
+
+pub mod can;
+pub mod controller;
+pub mod inputs;
+pub mod math;
+
+pub use controller::{Command, Config, Controller, Event, Fault, Mode};
+pub use inputs::{Actuator, Clock, Inputs, Measurement, Sensors, Track, Watchdog};
 pub use table_format;
+
+/// The default table: the IDM game with the follower's speed adversarial for ego speeds in
+/// [15, 40] m/s, 16^4 nodes of 16 bits.
+pub static DEFAULT_TABLE: &[u8] = include_bytes!("../tables/default.bin");
+
+/// Runs one control period: reads the sensors, steps the controller, sends the command and
+/// feeds the watchdog. A sensor read error yields the minimum-risk manoeuvre (the controller is
+/// stepped with the last inputs marked invalid), an actuator error is returned after the
+/// watchdog is fed, so that the caller decides.
+pub fn run_period<S: Sensors, A: Actuator, C: Clock, W: Watchdog>(
+    controller: &mut Controller<'_>,
+    sensors: &mut S,
+    actuator: &mut A,
+    clock: &mut C,
+    watchdog: &mut W,
+) -> Result<Command, A::Error> {
+    let now = clock.now_us();
+    let inputs = match sensors.read(now) {
+        Ok(inputs) => inputs,
+        Err(_) => {
+            let invalid = Measurement {
+                value: Track {
+                    gap: f32::NAN,
+                    rel_speed: f32::NAN,
+                },
+                timestamp_us: now,
+                valid: false,
+            };
+            Inputs {
+                leader: invalid,
+                follower: invalid,
+                ego_speed: Measurement {
+                    value: f32::NAN,
+                    timestamp_us: now,
+                    valid: false,
+                },
+                now_us: now,
+            }
+        }
+    };
+    let command = controller.step(&inputs);
+    let sent = actuator.request(&command);
+    watchdog.feed();
+    sent.map(|()| command)
+}

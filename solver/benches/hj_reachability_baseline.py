@@ -50,12 +50,12 @@ def main():
         l = jnp.minimum(grid.states[..., 0], grid.states[..., 2])
         dyn = Baseline()
         t0 = time.perf_counter()
-        hj.step(settings, dyn, grid, 0.0, l, -0.1).block_until_ready()
+        hj.step(settings, dyn, grid, 0.0, l, -0.1, progress_bar=False).block_until_ready()
         compile_s = time.perf_counter() - t0
         runs = []
         for _ in range(repeat):
             t0 = time.perf_counter()
-            v = hj.step(settings, dyn, grid, 0.0, l, -3.0).block_until_ready()
+            v = hj.step(settings, dyn, grid, 0.0, l, -3.0, progress_bar=False).block_until_ready()
             runs.append(time.perf_counter() - t0)
         share = float(jnp.mean(v > 1e-3))
         print(f"| {n}^4 | {sorted(runs)[len(runs) // 2]:.2f} | {' '.join(f'{r:.2f}' for r in runs)} | {compile_s:.1f} | {share:.3f} |")

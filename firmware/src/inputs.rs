@@ -1,0 +1,85 @@
+//! What the control loop reads: radar tracks and the ego speed, each with its time stamp and
+//! validity, and the traits the hardware implements to deliver them and to take commands.
+
+/// A measured value with the time it was taken and the sensor's own validity flag.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Measurement<T> {
+    /// The value.
+    pub value: T,
+    /// When it was measured, on the controller's monotonic clock, microseconds.
+    pub timestamp_us: u64,
+    /// The sensor's validity flag (false: the sensor says the value is not usable).
+    pub valid: bool,
+}
+
+impl<T> Measurement<T> {
+    /// A valid measurement taken at `timestamp_us`.
+    pub const fn new(value: T, timestamp_us: u64) -> Self {
+        Measurement {
+            value,
+            timestamp_us,
+            valid: true,
+        }
+    }
+}
+
+/// A radar track of the vehicle ahead or behind.
+///
+/// Sign conventions are the table's: for the leader `rel_speed = v_leader - v_ego`, for the
+/// follower `rel_speed = v_ego - v_follower`; positive means the gap is opening. A sensor that
+/// sees no vehicle reports `gap = f32::INFINITY`, `rel_speed = 0` and `valid = true`: the
+/// controller treats that as a vehicle at the edge of the table's grid, which is conservative
+/// because more gap is never worse.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Track {
+    /// Bumper-to-bumper gap, m.
+    pub gap: f32,
+    /// Relative speed, m/s (positive: the gap opens).
+    pub rel_speed: f32,
+}
+
+/// One control period's inputs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Inputs {
+    /// The vehicle ahead.
+    pub leader: Measurement<Track>,
+    /// The vehicle behind.
+    pub follower: Measurement<Track>,
+    /// The ego's own speed over ground, m/s.
+    pub ego_speed: Measurement<f32>,
+    /// The time of this control step, microseconds.
+    pub now_us: u64,
+}
+
+/// The source of the front and rear radar tracks and the ego speed (a radar fusion ECU on CAN,
+/// or a simulation).
+pub trait Sensors {
+    /// The transport's error.
+    type Error;
+    /// The latest inputs as of `now_us`. Measurements not refreshed keep their old time stamps;
+    /// the controller judges their age.
+    fn read(&mut self, now_us: u64) -> Result<Inputs, Self::Error>;
+}
+
+/// The longitudinal acceleration request to the powertrain and brakes.
+pub trait Actuator {
+    /// The transport's error.
+    type Error;
+    /// Requests `acceleration` m/s^2 (negative: braking).
+    fn request(&mut self, command: &crate::Command) -> Result<(), Self::Error>;
+}
+
+/// A monotonic clock.
+pub trait Clock {
+    /// Microseconds since an arbitrary start; never decreasing.
+    fn now_us(&mut self) -> u64;
+}
+
+/// A watchdog that resets the controller unless fed every period.
+pub trait Watchdog {
+    /// Feeds the watchdog.
+    fn feed(&mut self);
+}

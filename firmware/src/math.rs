@@ -1,0 +1,60 @@
+//! The firmware's float arithmetic, in one place, so that host tests run exactly the code the
+//! target runs. On a host, `x.abs()` or `x.sqrt()` would silently pick std's methods over
+//! micromath's; everything here calls micromath (or plain IEEE operations) explicitly.
+//!
+//! The controller needs only comparisons, products and sums, plus `abs`; nothing here uses
+//! micromath's approximate `powf` or `sqrt`.
+
+use micromath::F32Ext;
+
+/// `|x|` (exact: micromath clears the sign bit).
+#[inline]
+pub fn abs(x: f32) -> f32 {
+    F32Ext::abs(x)
+}
+
+/// `x` limited to `[lo, hi]`; NaN maps to `lo` (the callers pass finite values; this keeps a
+/// slip from becoming a NaN command).
+#[inline]
+pub fn clamp(x: f32, lo: f32, hi: f32) -> f32 {
+    if x >= lo {
+        if x <= hi {
+            x
+        } else {
+            hi
+        }
+    } else {
+        lo
+    }
+}
+
+/// The smaller of two values (the first if either is NaN).
+#[inline]
+pub fn min(a: f32, b: f32) -> f32 {
+    if b < a {
+        b
+    } else {
+        a
+    }
+}
+
+/// Whether `x` is neither NaN nor infinite.
+#[inline]
+pub fn is_finite(x: f32) -> bool {
+    x.is_finite()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn helpers_handle_nan_and_infinities() {
+        assert_eq!(clamp(f32::NAN, -2.0, 2.0), -2.0);
+        assert_eq!(clamp(5.0, -2.0, 2.0), 2.0);
+        assert_eq!(clamp(-5.0, -2.0, 2.0), -2.0);
+        assert!(!is_finite(f32::NAN) && !is_finite(f32::INFINITY) && is_finite(-3.0));
+        assert_eq!(abs(-0.5), 0.5);
+        assert_eq!(min(1.0, 2.0), 1.0);
+    }
+}
