@@ -40,7 +40,7 @@
 //! needlessly so: the controller stays in [`Mode::Override`] there and never runs the nominal
 //! law on its word.
 
-use heapless::HistoryBuf;
+use heapless::Deque;
 use table_format::{Bounds, EgoAction, FollowerSpeed, Game, Table};
 
 use crate::fmt::{log_info, log_warn};
@@ -171,8 +171,8 @@ pub enum Event {
         /// The fault, for the minimum-risk manoeuvre.
         fault: Option<Fault>,
     },
-    /// Even the table's input could not certify the next period (the state is at the edge of
-    /// the safe set or beyond): logged once per episode.
+    /// The state is no longer certified safe (its table value is within the error bound of
+    /// zero, or below): logged once per episode.
     MarginLost {
         /// Time, microseconds.
         at_us: u64,
@@ -199,7 +199,7 @@ pub struct Controller<'t> {
     mode: Mode,
     last_now_us: u64,
     margin_lost: bool,
-    events: HistoryBuf<Event, 32>,
+    events: Deque<Event, 32>,
 }
 
 fn model_of(table: &Table<'_>) -> Result<Model, Fault> {
@@ -258,7 +258,7 @@ impl<'t> Controller<'t> {
             mode: Mode::MinimumRisk,
             last_now_us: 0,
             margin_lost: false,
-            events: HistoryBuf::new(),
+            events: Deque::new(),
         }
     }
 
@@ -277,16 +277,28 @@ impl<'t> Controller<'t> {
         self.mode
     }
 
-    /// Recent events, oldest first.
+    /// Recent events (the last 32), oldest first.
     pub fn events(&self) -> impl Iterator<Item = &Event> {
-        self.events.oldest_ordered()
+        self.events.iter()
     }
 
-    /// One control step.
+    /// Appends to the event log, dropping the oldest entry when it is full. (`heapless::Deque`
+    /// rather than `HistoryBuf`: its ring arithmetic has no bounds check the optimiser cannot
+    /// remove, so the control step keeps no panic path; see the `no-panic` binary.)
+    fn log(&mut self, event: Event) {
+        if self.events.is_full() {
+            self.events.pop_front();
+        }
+        let _ = self.events.push_back(event);
+    }
+
+    /// One control step. Never inlined: it is the unit the target's cost figures (stack,
+    /// instructions per step) are measured on.
+    #[inline(never)]
     pub fn step(&mut self, inputs: &Inputs) -> Command {
         let command = self.decide(inputs);
         if command.mode != self.mode {
-            self.events.write(Event::ModeChanged {
+            self.log(Event::ModeChanged {
                 at_us: inputs.now_us,
                 to: command.mode,
                 fault: command.fault,
@@ -411,34 +423,31 @@ impl<'t> Controller<'t> {
         };
         let nominal = self.nominal(leader, ego_speed, model.ego);
         let h = self.config.period_us as f32 * 1e-6;
-        let certified = |u: f32| -> bool {
-            let corner = lowest_corner(&state, u, model.leader_min, model.follower_max, h);
-            match onto_grid(table, corner) {
-                Ok(z) => table
-                    .value_at(&z)
-                    .map(|v| v - model.error_bound > self.config.switch_margin)
-                    .unwrap_or(false),
-                Err(_) => false,
-            }
-        };
         let trusted = table.in_trusted_box(&state);
-        let (acceleration, mode) = if trusted && certified(nominal) {
-            self.margin_lost = false;
+        // The look-ahead (module docs): the lowest corner reachable in one period under the
+        // nominal law must keep a certified value; below the grid it cannot.
+        let certified = trusted
+            && onto_grid(
+                table,
+                lowest_corner(&state, nominal, model.leader_min, model.follower_max, h),
+            )
+            .ok()
+            .and_then(|corner| table.value_at(&corner).ok())
+            .is_some_and(|v| v - model.error_bound > self.config.switch_margin);
+        let (acceleration, mode) = if certified {
             (nominal, Mode::Nominal)
         } else {
-            if !certified(u_star) {
-                if !self.margin_lost {
-                    self.events.write(Event::MarginLost {
-                        at_us: now,
-                        value: here.value,
-                    });
-                }
-                self.margin_lost = true;
-            } else {
-                self.margin_lost = false;
-            }
             (u_star, Mode::Override)
         };
+        // Diagnostics: the state itself is no longer certified (logged once per episode).
+        let outside = here.value - model.error_bound <= 0.0;
+        if outside && !self.margin_lost {
+            self.log(Event::MarginLost {
+                at_us: now,
+                value: here.value,
+            });
+        }
+        self.margin_lost = outside;
         Command {
             acceleration: math::clamp(acceleration, model.ego.min, model.ego.max),
             mode,
@@ -489,13 +498,14 @@ fn lowest_corner(z: &[f32; 4], u: f32, leader_min: f32, follower_max: f32, h: f3
 /// is conservative) and refuses it below the grid.
 fn onto_grid(table: &Table<'_>, z: [f32; 4]) -> Result<[f32; 4], Fault> {
     let mut out = z;
-    for (k, (x, axis)) in out.iter_mut().zip(table.header().axes.iter()).enumerate() {
-        let axis_id = u8::try_from(k).unwrap_or(u8::MAX);
-        if x.is_nan() || *x < axis.min {
-            return Err(Fault::OutsideGrid { axis: axis_id });
+    for (k, x) in out.iter_mut().enumerate() {
+        let axis = u8::try_from(k).unwrap_or(u8::MAX);
+        let bounds = table.axis_bounds(k).ok_or(Fault::OutsideGrid { axis })?;
+        if x.is_nan() || *x < bounds.min {
+            return Err(Fault::OutsideGrid { axis });
         }
-        if *x > axis.max {
-            *x = axis.max;
+        if *x > bounds.max {
+            *x = bounds.max;
         }
     }
     Ok(out)

@@ -5,7 +5,7 @@
 //! Why it is built this way:
 //! - `#![no_std]`, no heap: it runs on a Cortex-M4F with a fixed memory budget. The table is
 //!   read in place (`table_format::Table` borrows the bytes, e.g. from `include_bytes!`), the event
-//!   log is a `heapless::HistoryBuf`.
+//!   log is a `heapless::Deque`.
 //! - No panics on the control path: no `unwrap`, no indexing that can fail, no float-to-index
 //!   cast without a range check (the lints below enforce it). Every bad input is a typed
 //!   [`Fault`] with a documented reaction (see [`controller`]).

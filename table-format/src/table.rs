@@ -33,9 +33,23 @@ pub struct Table<'a> {
     header: Header<'a>,
     values: &'a [u8],
     policy: &'a [u8],
+    nodes: usize,
     dims: usize,
-    strides: [usize; MAX_DIMS],
-    inv_spacing: [f32; MAX_DIMS],
+    geometry: [AxisGeometry; MAX_DIMS],
+}
+
+/// Per axis, what a lookup needs, unpacked from the header once at parse time.
+#[derive(Debug, Clone, Copy, Default)]
+struct AxisGeometry {
+    min: f32,
+    max: f32,
+    inv_spacing: f32,
+    /// `points - 1`, as a float.
+    last: f32,
+    /// The index of the last cell, `points - 2`.
+    last_cell: u32,
+    stride: usize,
+    trusted: (f32, f32),
 }
 
 fn le_u16(bytes: &[u8], at: usize) -> Option<u16> {
@@ -113,26 +127,41 @@ impl<'a> Table<'a> {
         }
         let n = header.node_count()?;
         let value_len = n * header.quantization.bytes_per_value();
-        let (values, policy) = payload.split_at(value_len);
+        let (values, policy) = payload
+            .split_at_checked(value_len)
+            .ok_or(Error::PayloadSize {
+                expected: expected + CRC_LEN,
+                found: payload.len() + CRC_LEN,
+            })?;
         let dims = header.axes.len();
-        let mut strides = [0usize; MAX_DIMS];
-        let mut inv_spacing = [0f32; MAX_DIMS];
+        let mut geometry = [AxisGeometry::default(); MAX_DIMS];
         let mut stride = 1usize;
         for k in (0..dims).rev() {
-            let axis = header.axes.get(k).ok_or(Error::HeaderDecode)?;
-            if let (Some(s), Some(inv)) = (strides.get_mut(k), inv_spacing.get_mut(k)) {
-                *s = stride;
-                *inv = 1.0 / axis.spacing();
-            }
-            stride *= axis.points as usize;
+            let (Some(slot), Some(axis), Some(trusted)) = (
+                geometry.get_mut(k),
+                header.axes.get(k),
+                header.trusted_box.get(k),
+            ) else {
+                return Err(Error::HeaderDecode);
+            };
+            *slot = AxisGeometry {
+                min: axis.min,
+                max: axis.max,
+                inv_spacing: 1.0 / axis.spacing(),
+                last: axis.points.saturating_sub(1) as f32,
+                last_cell: axis.points.saturating_sub(2),
+                stride,
+                trusted: (trusted.min, trusted.max),
+            };
+            stride = stride.saturating_mul(axis.points as usize);
         }
         Ok(Table {
             header,
             values,
             policy,
+            nodes: n,
             dims,
-            strides,
-            inv_spacing,
+            geometry,
         })
     }
 
@@ -148,11 +177,7 @@ impl<'a> Table<'a> {
 
     /// The number of grid nodes.
     pub fn node_count(&self) -> usize {
-        self.policy_len_nodes()
-    }
-
-    fn policy_len_nodes(&self) -> usize {
-        self.values.len() / self.header.quantization.bytes_per_value()
+        self.nodes
     }
 
     /// The stored integer at a flat (C-order) node index.
@@ -188,8 +213,8 @@ impl<'a> Table<'a> {
         state.len() == self.dims
             && state
                 .iter()
-                .zip(self.header.axes.iter())
-                .all(|(x, a)| a.min <= *x && *x <= a.max)
+                .zip(self.geometry.iter())
+                .all(|(x, g)| g.min <= *x && *x <= g.max)
     }
 
     /// Whether every coordinate of `state` is finite and inside the trusted box.
@@ -197,8 +222,16 @@ impl<'a> Table<'a> {
         state.len() == self.dims
             && state
                 .iter()
-                .zip(self.header.trusted_box.iter())
-                .all(|(x, b)| b.contains(*x))
+                .zip(self.geometry.iter())
+                .all(|(x, g)| g.trusted.0 <= *x && *x <= g.trusted.1)
+    }
+
+    /// The grid's extent on `axis` (`None` past the last axis).
+    pub fn axis_bounds(&self, axis: usize) -> Option<crate::Bounds> {
+        self.geometry
+            .get(axis)
+            .filter(|_| axis < self.dims)
+            .map(|g| crate::Bounds::new(g.min, g.max))
     }
 
     /// Locates `state` in the grid. The cast of each scaled coordinate to an index happens only
@@ -214,48 +247,105 @@ impl<'a> Table<'a> {
             base: 0,
             frac: [0.0; MAX_DIMS],
         };
-        for (k, (&x, axis)) in state.iter().zip(self.header.axes.iter()).enumerate() {
+        for (k, ((&x, g), f)) in state
+            .iter()
+            .zip(self.geometry.iter())
+            .zip(cell.frac.iter_mut())
+            .enumerate()
+        {
             if !x.is_finite() {
                 return Err(Error::NonFiniteState { axis: k });
             }
-            if x < axis.min || x > axis.max {
+            if x < g.min || x > g.max {
                 return Err(Error::OutOfDomain { axis: k });
             }
-            let inv = self.inv_spacing.get(k).copied().unwrap_or(0.0);
-            let last = axis.points - 1;
-            let s = ((x - axis.min) * inv).clamp(0.0, last as f32);
-            // `s` is finite and in [0, last]: truncation is floor and fits in u32.
-            let i = (s as u32).min(last - 1);
-            let t = s - i as f32;
-            if let Some(f) = cell.frac.get_mut(k) {
-                *f = t;
-            }
-            cell.base += i as usize * self.strides.get(k).copied().unwrap_or(0);
+            // `s` is finite and in [0, last] up to rounding: clamp, then truncation is floor
+            // and fits in u32.
+            // (Not `f32::clamp`: it asserts its bounds are ordered, a panic path.)
+            let s = (x - g.min) * g.inv_spacing;
+            let s = if s > 0.0 { s } else { 0.0 };
+            let s = if s < g.last { s } else { g.last };
+            let i = (s as u32).min(g.last_cell);
+            *f = s - i as f32;
+            cell.base += i as usize * g.stride;
         }
         Ok(cell)
     }
 
-    /// Visits the `2^dims` corners of a cell with their multilinear weights.
+    /// Visits the `2^dims` corners of a cell in corner order (corner `c` is offset by
+    /// `(c >> k) & 1` nodes along axis `k`) with their multilinear weights. The axes are split
+    /// into a low half (the first `ceil(dims / 2)`) and a high half; each half's at most eight
+    /// partial weights and offsets are built by doubling, and every corner then costs one
+    /// product and one sum. Nothing is indexed that can fail.
+    #[inline(always)]
     fn for_each_corner(&self, cell: &Cell, mut visit: impl FnMut(usize, f32)) {
-        for corner in 0u32..(1 << self.dims) {
-            let mut weight = 1.0f32;
-            let mut node = cell.base;
-            for k in 0..self.dims {
-                let t = cell.frac.get(k).copied().unwrap_or(0.0);
-                if corner >> k & 1 == 1 {
-                    weight *= t;
-                    node += self.strides.get(k).copied().unwrap_or(0);
-                } else {
-                    weight *= 1.0 - t;
+        let low_axes = self.dims.div_ceil(2);
+        let half = |axes: core::ops::Range<usize>| {
+            let mut weight = [0f32; 8];
+            let mut offset = [0usize; 8];
+            weight[0] = 1.0;
+            let mut len = 1usize;
+            for k in axes {
+                let (Some(g), Some(&t)) = (self.geometry.get(k), cell.frac.get(k)) else {
+                    continue;
+                };
+                let (Some((w_lo, w_hi)), Some((o_lo, o_hi))) = (
+                    weight.split_at_mut_checked(len),
+                    offset.split_at_mut_checked(len),
+                ) else {
+                    break;
+                };
+                for (((wl, wh), ol), oh) in w_lo
+                    .iter_mut()
+                    .zip(w_hi.iter_mut())
+                    .zip(o_lo.iter())
+                    .zip(o_hi.iter_mut())
+                {
+                    *wh = *wl * t;
+                    *wl *= 1.0 - t;
+                    *oh = *ol + g.stride;
                 }
+                len *= 2;
             }
-            visit(node, weight);
+            (weight, offset, len.min(8))
+        };
+        let (wa, oa, na) = half(0..low_axes);
+        let (wb, ob, nb) = half(low_axes..self.dims);
+        for (&w_high, &o_high) in wb.iter().zip(ob.iter()).take(nb) {
+            for (&w_low, &o_low) in wa.iter().zip(oa.iter()).take(na) {
+                visit(cell.base + o_low + o_high, w_low * w_high);
+            }
         }
+    }
+
+    /// The stored integer of a node, as a float (0 past the end).
+    #[inline(always)]
+    fn stored(&self, node: usize) -> f32 {
+        if self.header.quantization.bits == 8 {
+            f32::from(self.values.get(node).copied().unwrap_or(0))
+        } else {
+            match self.values.get(2 * node..2 * node + 2) {
+                Some(&[lo, hi]) => f32::from(u16::from_le_bytes([lo, hi])),
+                _ => 0.0,
+            }
+        }
+    }
+
+    /// The policy bit of a node (false past the end).
+    #[inline(always)]
+    fn bit(&self, node: usize) -> bool {
+        self.policy
+            .get(node >> 3)
+            .is_some_and(|byte| byte >> (node & 7) & 1 == 1)
     }
 
     /// The multilinear interpolation of the dequantized values at `state`.
     pub fn value_at(&self, state: &[f32]) -> Result<f32, Error> {
-        Ok(self.lookup(state)?.value)
+        let cell = self.cell(state)?;
+        let mut sum = 0.0f32;
+        self.for_each_corner(&cell, |node, w| sum += w * self.stored(node));
+        let q = &self.header.quantization;
+        Ok(q.offset + q.scale * sum)
     }
 
     /// The ego's bang-bang input at `state` ([`crate::PolicyEncoding::SignBitWeightedVote`]).
@@ -266,31 +356,27 @@ impl<'a> Table<'a> {
     /// Value and action at `state` from one cell search.
     pub fn lookup(&self, state: &[f32]) -> Result<Lookup, Error> {
         let cell = self.cell(state)?;
-        let mut q_sum = 0.0f32;
+        let mut sum = 0.0f32;
         let mut vote = 0.0f32;
-        let mut heaviest = (-1.0f32, EgoAction::Brake);
-        self.for_each_corner(&cell, |node, weight| {
-            q_sum += weight * f32::from(self.raw_value(node).unwrap_or(0));
-            let action = self.action_at_node(node).unwrap_or(EgoAction::Brake);
-            vote += match action {
-                EgoAction::Accelerate => weight,
-                EgoAction::Brake => -weight,
-            };
-            if weight > heaviest.0 {
-                heaviest = (weight, action);
+        // The first corner of largest weight, for an exact tie of the vote.
+        let mut heaviest = (-1.0f32, false);
+        self.for_each_corner(&cell, |node, w| {
+            sum += w * self.stored(node);
+            let bit = self.bit(node);
+            vote += if bit { w } else { -w };
+            if w > heaviest.0 {
+                heaviest = (w, bit);
             }
         });
+        let accelerate = if vote != 0.0 { vote > 0.0 } else { heaviest.1 };
         let q = &self.header.quantization;
-        let action = if vote > 0.0 {
-            EgoAction::Accelerate
-        } else if vote < 0.0 {
-            EgoAction::Brake
-        } else {
-            heaviest.1
-        };
         Ok(Lookup {
-            value: q.offset + q.scale * q_sum,
-            action,
+            value: q.offset + q.scale * sum,
+            action: if accelerate {
+                EgoAction::Accelerate
+            } else {
+                EgoAction::Brake
+            },
         })
     }
 }

@@ -1,0 +1,39 @@
+"""Counts the instructions executed per control step on the emulated Cortex-M4F.
+
+Reads QEMU's `-d exec,nochain` log in single-step mode (one instruction per translation block,
+so one log line per executed instruction) from a file or FIFO, and counts the lines between
+each entry into `hjacc_step_begin` and the next entry into `hjacc_step_end` (the markers the
+qemu-scenario binary calls around `Controller::step`). Prints the worst, median and mean.
+Usage: count_instructions.py ELF LOG"""
+import re
+import statistics
+import subprocess
+import sys
+
+elf, log = sys.argv[1], sys.argv[2]
+symbols = {}
+for line in subprocess.run(["nm", elf], capture_output=True, text=True, check=True).stdout.splitlines():
+    parts = line.split()
+    if len(parts) == 3 and parts[2] in ("hjacc_step_begin", "hjacc_step_end"):
+        symbols[parts[2]] = int(parts[0], 16) & ~1
+begin, end = symbols["hjacc_step_begin"], symbols["hjacc_step_end"]
+pc_re = re.compile(r"\[[0-9a-f]+/([0-9a-f]+)/")
+counts, counting, n = [], False, 0
+with open(log, errors="replace") as f:
+    for line in f:
+        m = pc_re.search(line)
+        if not m:
+            continue
+        pc = int(m.group(1), 16)
+        if pc == begin:
+            counting, n = True, 0
+        elif pc == end and counting:
+            counts.append(n)
+            counting = False
+        if counting:
+            n += 1
+if not counts:
+    sys.exit("no control step found between the markers")
+print(f"instructions per control step over {len(counts)} steps: worst {max(counts)}, "
+      f"median {int(statistics.median(counts))}, mean {statistics.mean(counts):.0f} "
+      f"(from the begin marker's entry to the end marker's entry)")

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Builds the firmware's bare-metal binaries for thumbv7em-none-eabihf with Debian's Rust
+# toolchain, proves no panic is reachable from the control step (the no-panic binary only links
+# if none is), runs the closed-loop scenario on QEMU's emulated Cortex-M4F (failing on a
+# non-zero exit), and prints sizes, stack and instructions per control step.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+export RUSTC=/usr/bin/rustc RUSTDOC=/usr/bin/rustdoc RUSTC_BOOTSTRAP=1 CARGO_TARGET_DIR=target/thumbv7em
+build() {
+  /usr/bin/cargo build --release --target thumbv7em-none-eabihf \
+    -Zbuild-std=core,compiler_builtins -Zbuild-std-features=compiler-builtins-mem \
+    --config 'target.thumbv7em-none-eabihf.linker="ld.lld-22"' "$@"
+}
+
+build -p firmware --features qemu --bins
+build -p firmware --features qemu,board-stm32f407 --bin no-panic
+dir=target/thumbv7em/thumbv7em-none-eabihf/release
+elf=$dir/qemu-scenario
+
+echo "--- qemu-scenario on mps2-an386 (Cortex-M4F)"
+timeout 300 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
+  -semihosting-config enable=on,target=native -kernel "$elf"
+
+echo "--- sections of the scenario binary (bytes; the table is in .rodata)"
+size -A "$elf" | awk '$1 ~ /^\.(vector_table|text|rodata|data|bss|uninit)$/ {printf "%-14s %8d\n", $1, $2}'
+echo "default table: $(stat -c %s firmware/tables/default.bin) bytes"
+
+echo "--- instructions per control step (QEMU single-step trace)"
+fifo=$(mktemp -u)
+mkfifo "$fifo"
+python3 .ci/count_instructions.py "$elf" "$fifo" > "$fifo.out" &
+counter=$!
+if [ "$(qemu-system-arm --version | grep -oE 'version [0-9]+' | grep -oE '[0-9]+')" -ge 8 ]; then
+  step=(-accel tcg,one-insn-per-tb=on)
+else
+  step=(-singlestep)
+fi
+timeout 600 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
+  -semihosting-config enable=on,target=native "${step[@]}" -d exec,nochain -D "$fifo" \
+  -kernel "$elf" > /dev/null
+wait "$counter"
+cat "$fifo.out"
+rm -f "$fifo" "$fifo.out"

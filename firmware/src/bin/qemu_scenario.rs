@@ -1,0 +1,248 @@
+//! A closed-loop scenario on the emulated Cortex-M4F (`qemu-system-arm -machine mps2-an386`):
+//! three cars on a lane for 30 s of simulated time, the ego driven by the firmware's
+//! `Controller` on the default table at 50 Hz, a small plant model integrated exactly between
+//! samples. Prints a summary over semihosting and exits with status 0 when no gap closed, no
+//! fault occurred and the nominal law drove part of the time; 1 otherwise.
+//!
+//! It also measures the stack one control step uses (the stack below the caller is painted
+//! before the first step and scanned after the last), and brackets every step with two marker
+//! functions whose addresses the CI's instruction counter looks for.
+#![no_std]
+#![no_main]
+// The bare-metal entry point, the markers' unmangled names and the stack painting are the only
+// unsafe code in the project; the controller itself has none.
+#![allow(unsafe_code)]
+
+use core::hint::black_box;
+use core::panic::PanicInfo;
+
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use firmware::{Config, Controller, Inputs, Measurement, Mode, Track, DEFAULT_TABLE};
+
+/// Marks the start of a control step for the instruction counter.
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn hjacc_step_begin() {
+    black_box(0x5eed_0001u32);
+}
+
+/// Marks the end of a control step for the instruction counter.
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn hjacc_step_end() {
+    black_box(0x5eed_0002u32);
+}
+
+#[panic_handler]
+fn panic(_: &PanicInfo) -> ! {
+    debug::exit(debug::EXIT_FAILURE);
+    loop {}
+}
+
+const PAINT: u32 = 0xDEAD_BEEF;
+const PAINT_WORDS: usize = 2048; // 8 KiB below the caller's stack pointer
+
+/// One vehicle: position of its front bumper (m) and speed (m/s).
+#[derive(Clone, Copy)]
+struct Car {
+    x: f32,
+    v: f32,
+}
+
+impl Car {
+    /// Exact motion under constant acceleration `a` for `h` seconds, stopping at zero speed.
+    fn advance(&mut self, a: f32, h: f32) {
+        let a = if self.v <= 0.0 && a < 0.0 { 0.0 } else { a };
+        let t_stop = if a < 0.0 { -self.v / a } else { h };
+        let t = if t_stop < h { t_stop } else { h };
+        self.x += self.v * t + 0.5 * a * t * t;
+        self.v += a * t;
+        if self.v < 0.0 {
+            self.v = 0.0;
+        }
+    }
+}
+
+/// Lowest value over `[0, h]` of `g + dv t + da t^2 / 2` (a gap between two samples).
+fn lowest_gap(g: f32, dv: f32, da: f32, h: f32) -> f32 {
+    let end = g + dv * h + 0.5 * da * h * h;
+    let mut low = if end < g { end } else { g };
+    if da > 0.0 {
+        let t = -dv / da;
+        if t > 0.0 && t < h {
+            let inner = g + dv * t + 0.5 * da * t * t;
+            if inner < low {
+                low = inner;
+            }
+        }
+    }
+    low
+}
+
+/// The leader's acceleration programme: cruise, brake, recover, a slow wave, brake again.
+fn leader_acceleration(t: f32, v: f32) -> f32 {
+    let a = if t < 5.0 {
+        0.0
+    } else if t < 8.0 {
+        -1.5
+    } else if t < 12.0 {
+        1.0
+    } else if t < 20.0 {
+        // A triangle wave of period 6 s between -1 and 1 (no trigonometry needed).
+        let phase = (t - 12.0) / 6.0;
+        let frac = phase - (phase as u32) as f32;
+        if frac < 0.5 {
+            4.0 * frac - 1.0
+        } else {
+            3.0 - 4.0 * frac
+        }
+    } else if t < 24.0 {
+        -1.5
+    } else {
+        0.8
+    };
+    // The leader keeps to a highway speed band.
+    if (v <= 17.0 && a < 0.0) || (v >= 34.0 && a > 0.0) {
+        0.0
+    } else {
+        a
+    }
+}
+
+/// The follower: the IDM (a = 1, b = 1.5, v0 = 33.3 m/s, s0 = 2 m, T = 1.2 s), clipped to the
+/// game's bounds.
+fn follower_acceleration(follower: Car, ego: Car) -> f32 {
+    let gap = ego.x - follower.x;
+    let v = follower.v;
+    let two_sqrt_ab = 2.449_489_8; // 2 sqrt(1.0 * 1.5)
+    let dynamic = v * 1.2 + v * (v - ego.v) / two_sqrt_ab;
+    let desired = 2.0 + if dynamic > 0.0 { dynamic } else { 0.0 };
+    let r = v / 33.3;
+    let free = r * r * r * r;
+    let interaction = if gap > 0.1 {
+        (desired / gap) * (desired / gap)
+    } else {
+        100.0
+    };
+    let a = 1.0 - free - interaction;
+    if a < -1.5 {
+        -1.5
+    } else if a > 1.5 {
+        1.5
+    } else {
+        a
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let config = Config::default();
+    let mut controller = Controller::new(DEFAULT_TABLE, config);
+    let h = config.period_us as f32 * 1e-6;
+    let steps = 1500u32; // 30 s
+    let mut leader = Car { x: 100.0, v: 25.0 };
+    let mut ego = Car { x: 50.0, v: 25.0 };
+    let mut follower = Car { x: 20.0, v: 25.0 };
+    let (mut nominal, mut overridden, mut minimum_risk) = (0u32, 0u32, 0u32);
+    let (mut min_front, mut min_rear) = (f32::INFINITY, f32::INFINITY);
+    let mut max_brake = 0.0f32;
+
+    // Paint the stack below us.
+    let sp = cortex_m::register::msp::read() as usize;
+    let bottom = (sp - 64 - PAINT_WORDS * 4) & !3;
+    for i in 0..PAINT_WORDS {
+        unsafe { core::ptr::write_volatile((bottom + 4 * i) as *mut u32, PAINT) };
+    }
+
+    for k in 0..steps {
+        let now_us = u64::from(k) * u64::from(config.period_us);
+        let t = k as f32 * h;
+        let inputs = Inputs {
+            leader: Measurement::new(
+                Track {
+                    gap: leader.x - ego.x,
+                    rel_speed: leader.v - ego.v,
+                },
+                now_us,
+            ),
+            follower: Measurement::new(
+                Track {
+                    gap: ego.x - follower.x,
+                    rel_speed: ego.v - follower.v,
+                },
+                now_us,
+            ),
+            ego_speed: Measurement::new(ego.v, now_us),
+            now_us,
+        };
+        hjacc_step_begin();
+        let command = controller.step(black_box(&inputs));
+        hjacc_step_end();
+        match command.mode {
+            Mode::Nominal => nominal += 1,
+            Mode::Override => overridden += 1,
+            Mode::MinimumRisk => minimum_risk += 1,
+        }
+        if -command.acceleration > max_brake {
+            max_brake = -command.acceleration;
+        }
+        let a_leader = leader_acceleration(t, leader.v);
+        let a_follower = follower_acceleration(follower, ego);
+        let a_ego = command.acceleration;
+        min_front = min_front.min(lowest_gap(
+            leader.x - ego.x,
+            leader.v - ego.v,
+            a_leader - a_ego,
+            h,
+        ));
+        min_rear = min_rear.min(lowest_gap(
+            ego.x - follower.x,
+            ego.v - follower.v,
+            a_ego - a_follower,
+            h,
+        ));
+        leader.advance(a_leader, h);
+        ego.advance(a_ego, h);
+        follower.advance(a_follower, h);
+    }
+
+    let mut used_words = 0;
+    for i in 0..PAINT_WORDS {
+        if unsafe { core::ptr::read_volatile((bottom + 4 * i) as *const u32) } != PAINT {
+            used_words = PAINT_WORDS - i;
+            break;
+        }
+    }
+    let stack_bytes = used_words * 4;
+
+    hprintln!(
+        "hjacc qemu scenario: {} steps ({} s), nominal {}, override {}, minimum-risk {}",
+        steps,
+        steps as f32 * h,
+        nominal,
+        overridden,
+        minimum_risk
+    );
+    hprintln!(
+        "min gap front {} m, rear {} m, max braking {} m/s^2, final speeds {} {} {} m/s",
+        min_front,
+        min_rear,
+        max_brake,
+        leader.v,
+        ego.v,
+        follower.v
+    );
+    hprintln!(
+        "stack used by the control loop (painted, 8 KiB window): {} bytes",
+        stack_bytes
+    );
+    let ok = min_front > 0.0 && min_rear > 0.0 && minimum_risk == 0 && nominal > 0;
+    hprintln!("result: {}", if ok { "PASS" } else { "FAIL" });
+    debug::exit(if ok {
+        debug::EXIT_SUCCESS
+    } else {
+        debug::EXIT_FAILURE
+    });
+    loop {}
+}
