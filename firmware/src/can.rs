@@ -7,7 +7,7 @@
 //! | `0x120` | front track (leader) | 0-1 gap `u16` 0.01 m (`0xFFFF`: no vehicle), 2-3 relative speed `i16` 0.01 m/s (`v_leader - v_ego`), 4 flags (bit 0: valid), 5 rolling counter |
 //! | `0x121` | rear track (follower) | as `0x120`, relative speed `v_ego - v_follower` |
 //! | `0x130` | ego speed | 0-1 speed `u16` 0.01 m/s, 2 flags (bit 0: valid), 3 rolling counter |
-//! | `0x200` | acceleration request (sent) | 0-1 acceleration `i16` 0.001 m/s^2, 2 mode (0 nominal, 1 override, 2 minimum risk), 3 rolling counter |
+//! | `0x200` | acceleration request (sent) | 0-1 acceleration `i16` 0.001 m/s^2, 2 mode (0 nominal, 1 override, 2 minimum risk, 3 uncertified), 3 rolling counter |
 //!
 //! A received frame is time-stamped with the clock value of the `read` that drained it; a frame
 //! with a wrong length is counted and ignored, so the old measurement ages until it is stale.
@@ -126,6 +126,7 @@ pub fn encode_command(command: &Command, counter: u8) -> [u8; 4] {
         Mode::Nominal => 0,
         Mode::Override => 1,
         Mode::MinimumRisk => 2,
+        Mode::Uncertified => 3,
     };
     [a0, a1, mode, counter]
 }

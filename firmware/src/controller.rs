@@ -30,15 +30,17 @@
 //! A table that does not parse or is not a three-car table, a measurement the sensor flags
 //! invalid, a non-finite or physically impossible value, a measurement older than
 //! `stale_periods` periods, a state below the grid (a gap below the grid's lowest gap or a
-//! closing speed beyond it), an ego speed below the table's assumed operating range, or a clock
-//! that went backwards: each is a [`Fault`], reported in the command and logged, and the
+//! closing speed beyond it), or a clock that went backwards: each is a [`Fault`], reported in
+//! the command and logged, and the
 //! command is the minimum-risk manoeuvre: a controlled deceleration of
 //! `mrm_deceleration` (default 2 m/s^2, at most 4), softened to `mrm_gentle_deceleration`
 //! when the follower is known, close and closing, so as not to provoke a rear-end collision.
 //! States above the grid (more gap, more opening speed) are clamped onto it, which is
-//! conservative. Outside the table's trusted box the table is conservative but may be
-//! needlessly so: the controller stays in [`Mode::Override`] there and never runs the nominal
-//! law on its word.
+//! conservative; so is clamping them onto the table's trusted box from above. Below the trusted
+//! box the table is conservative but may be needlessly so: the controller stays in
+//! [`Mode::Override`] there and never runs the nominal law on its word. An ego slower than the
+//! table assumes is not a fault of the inputs: the controller runs the nominal law uncertified
+//! ([`Mode::Uncertified`]).
 
 use heapless::Deque;
 use table_format::{Bounds, EgoAction, FollowerSpeed, Game, Table};
@@ -109,6 +111,9 @@ pub enum Mode {
     Override,
     /// The minimum-risk manoeuvre after a fault.
     MinimumRisk,
+    /// The nominal law without a certificate: the ego is slower than the speed the table
+    /// assumes for the follower, so the table cannot speak (see [`Fault::BelowAssumedSpeed`]).
+    Uncertified,
 }
 
 /// Why the controller is in the minimum-risk manoeuvre.
@@ -138,7 +143,10 @@ pub enum Fault {
         /// The axis.
         axis: u8,
     },
-    /// The ego is slower than the speed the table assumes for the follower's IDM.
+    /// The ego is slower than the speed the table assumes for the follower's IDM. Not a sensor
+    /// fault: the controller runs the nominal law uncertified ([`Mode::Uncertified`]), as a
+    /// conventional ACC would below its certified range, rather than braking (a hard
+    /// minimum-risk braking there invites the follower into the ego's rear).
     BelowAssumedSpeed,
     /// The clock went backwards.
     ClockWentBackwards,
@@ -398,18 +406,29 @@ impl<'t> Controller<'t> {
         }
         let ego_speed = ego.value;
         if ego_speed < model.min_ego_speed {
-            return self.minimum_risk(inputs, Fault::BelowAssumedSpeed);
+            return Command {
+                acceleration: self.nominal(leader, ego_speed, model.ego),
+                mode: Mode::Uncertified,
+                fault: Some(Fault::BelowAssumedSpeed),
+                value: None,
+            };
         }
 
-        let state = match onto_grid(
-            table,
-            [
-                leader.gap,
-                leader.rel_speed,
-                follower.gap,
-                follower.rel_speed,
-            ],
-        ) {
+        let measured = [
+            leader.gap,
+            leader.rel_speed,
+            follower.gap,
+            follower.rel_speed,
+        ];
+        // Below the trusted box on any axis the table may be needlessly conservative there;
+        // above it (more gap, more opening speed) the state is clamped onto it, conservatively.
+        let trusted = (0..4).all(|k| {
+            table
+                .trusted_bounds(k)
+                .zip(measured.get(k))
+                .is_some_and(|(b, x)| *x >= b.min)
+        });
+        let state = match onto_grid(table, measured) {
             Ok(z) => z,
             Err(f) => return self.minimum_risk(inputs, f),
         };
@@ -423,7 +442,6 @@ impl<'t> Controller<'t> {
         };
         let nominal = self.nominal(leader, ego_speed, model.ego);
         let h = self.config.period_us as f32 * 1e-6;
-        let trusted = table.in_trusted_box(&state);
         // The look-ahead (module docs): the lowest corner reachable in one period under the
         // nominal law must keep a certified value; below the grid it cannot.
         let certified = trusted
@@ -494,18 +512,19 @@ fn lowest_corner(z: &[f32; 4], u: f32, leader_min: f32, follower_max: f32, h: f3
     ]
 }
 
-/// Clamps a state onto the grid from above (more gap or relative speed is never worse, so this
-/// is conservative) and refuses it below the grid.
+/// Clamps a state from above onto the trusted box (more gap or relative speed is never worse,
+/// so this is conservative) and refuses it below the grid.
 fn onto_grid(table: &Table<'_>, z: [f32; 4]) -> Result<[f32; 4], Fault> {
     let mut out = z;
     for (k, x) in out.iter_mut().enumerate() {
         let axis = u8::try_from(k).unwrap_or(u8::MAX);
-        let bounds = table.axis_bounds(k).ok_or(Fault::OutsideGrid { axis })?;
-        if x.is_nan() || *x < bounds.min {
+        let grid = table.axis_bounds(k).ok_or(Fault::OutsideGrid { axis })?;
+        let trusted = table.trusted_bounds(k).ok_or(Fault::OutsideGrid { axis })?;
+        if x.is_nan() || *x < grid.min {
             return Err(Fault::OutsideGrid { axis });
         }
-        if *x > bounds.max {
-            *x = bounds.max;
+        if *x > trusted.max {
+            *x = trusted.max;
         }
     }
     Ok(out)

@@ -612,5 +612,13 @@ pub fn builtin() -> Vec<(&'static str, &'static str)> {
             "three-car-idm.toml",
             include_str!("../configs/three-car-idm.toml"),
         ),
+        (
+            "three-car-idm-adversarial-speed.toml",
+            include_str!("../configs/three-car-idm-adversarial-speed.toml"),
+        ),
+        (
+            "firmware-default.toml",
+            include_str!("../configs/firmware-default.toml"),
+        ),
     ]
 }

@@ -4,6 +4,16 @@ use solver::config::{builtin, Config};
 
 #[test]
 fn builtin_configs_are_valid() {
+    let names: Vec<&str> = builtin().iter().map(|(n, _)| *n).collect();
+    // Every file under solver/configs/ is built in, so `cargo run -p solver` runs them all.
+    let mut files: Vec<String> = std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/configs"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    let mut sorted = names.clone();
+    sorted.sort();
+    assert_eq!(sorted, files);
     for (name, text) in builtin() {
         Config::from_toml(text).unwrap_or_else(|e| panic!("{name}: {e}"));
     }

@@ -226,6 +226,14 @@ impl<'a> Table<'a> {
                 .all(|(x, g)| g.trusted.0 <= *x && *x <= g.trusted.1)
     }
 
+    /// The trusted box's extent on `axis` (`None` past the last axis).
+    pub fn trusted_bounds(&self, axis: usize) -> Option<crate::Bounds> {
+        self.geometry
+            .get(axis)
+            .filter(|_| axis < self.dims)
+            .map(|g| crate::Bounds::new(g.trusted.0, g.trusted.1))
+    }
+
     /// The grid's extent on `axis` (`None` past the last axis).
     pub fn axis_bounds(&self, axis: usize) -> Option<crate::Bounds> {
         self.geometry

@@ -182,7 +182,7 @@ fn main() -> ! {
         match command.mode {
             Mode::Nominal => nominal += 1,
             Mode::Override => overridden += 1,
-            Mode::MinimumRisk => minimum_risk += 1,
+            Mode::MinimumRisk | Mode::Uncertified => minimum_risk += 1,
         }
         if -command.acceleration > max_brake {
             max_brake = -command.acceleration;
