@@ -38,6 +38,16 @@ pub enum Follower {
     Unbounded,
 }
 
+/// The follower's IDM when the table's game has none (baseline and two-car tables): Treiber &
+/// Kesting's highway values with the paper's zero jam distance.
+const FALLBACK_IDM: IdmParameters = IdmParameters {
+    max_acceleration: 1.0,
+    comfortable_deceleration: 1.5,
+    desired_speed: 33.3,
+    exponent: 4,
+    jam_distance: 0.0,
+};
+
 /// The two human accelerations per period.
 pub struct Humans<'t> {
     table: &'t Table<'t>,
@@ -107,25 +117,13 @@ impl<'t> Humans<'t> {
             } => (
                 leader,
                 follower,
-                IdmParameters {
-                    max_acceleration: 1.0,
-                    comfortable_deceleration: 1.5,
-                    desired_speed: 33.3,
-                    exponent: 4,
-                    jam_distance: 0.0,
-                },
+                FALLBACK_IDM,
                 table_format::Bounds::new(1.0, 2.0),
             ),
             Game::TwoCar { leader, .. } => (
                 leader,
                 leader,
-                IdmParameters {
-                    max_acceleration: 1.0,
-                    comfortable_deceleration: 1.5,
-                    desired_speed: 33.3,
-                    exponent: 4,
-                    jam_distance: 0.0,
-                },
+                FALLBACK_IDM,
                 table_format::Bounds::new(1.0, 2.0),
             ),
         };

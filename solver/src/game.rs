@@ -295,28 +295,59 @@ impl Dynamics for ThreeCarBaseline {
         rate: &mut [f32],
     ) {
         // The last axis is v_g2; x_g1, v_g1 and x_g2 are fixed along the row.
-        let n = rate.len();
-        let v1 = z[1];
-        let v2 = &last[..n];
-        let [p0, p1, p2, p3] = [0, 1, 2, 3].map(|k| &pbar[k][..n]);
-        let [h0, h1, h2, h3] = [0, 1, 2, 3].map(|k| &half_jump[k][..n]);
-        let a0 = if local { v1.abs() } else { alpha[0] };
-        let (a1, a3) = (alpha[1], alpha[3]);
-        for c in 0..n {
-            let u2 = self.ego.argmax(p3[c] - p1[c]);
-            let u1 = self.leader.argmin(p1[c]);
-            let u3 = self.follower.argmin(-p3[c]);
-            let a2 = if local { v2[c].abs() } else { alpha[2] };
-            let h = p0[c] * v1
-                + p2[c] * v2[c]
-                + p1[c] * (u1 - u2)
-                + p3[c] * (u2 - u3)
-                + a0 * h0[c]
-                + a1 * h1[c]
-                + a2 * h2[c]
-                + a3 * h3[c];
-            rate[c] = non_positive(h);
-        }
+        let follower = self.follower;
+        three_car_row(
+            self.ego,
+            self.leader,
+            z,
+            last,
+            pbar,
+            half_jump,
+            local,
+            alpha,
+            rate,
+            |_, p4| follower.argmin(-p4),
+        );
+    }
+}
+
+/// The row form of the three-car Lax-Friedrichs rate, shared by both follower models:
+/// `follower(v_g2, p4)` is the follower's worst-case acceleration.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn three_car_row(
+    ego: Accel,
+    leader: Accel,
+    z: &Vector,
+    last: &[f32],
+    pbar: &[&[f32]],
+    half_jump: &[&[f32]],
+    local: bool,
+    alpha: &Vector,
+    rate: &mut [f32],
+    follower: impl Fn(f32, f32) -> f32,
+) {
+    let n = rate.len();
+    let v1 = z[1];
+    let v2 = &last[..n];
+    let [p0, p1, p2, p3] = [0, 1, 2, 3].map(|k| &pbar[k][..n]);
+    let [h0, h1, h2, h3] = [0, 1, 2, 3].map(|k| &half_jump[k][..n]);
+    let a0 = if local { v1.abs() } else { alpha[0] };
+    let (a1, a3) = (alpha[1], alpha[3]);
+    for c in 0..n {
+        let u2 = ego.argmax(p3[c] - p1[c]);
+        let u1 = leader.argmin(p1[c]);
+        let u3 = follower(v2[c], p3[c]);
+        let a2 = if local { v2[c].abs() } else { alpha[2] };
+        let h = p0[c] * v1
+            + p2[c] * v2[c]
+            + p1[c] * (u1 - u2)
+            + p3[c] * (u2 - u3)
+            + a0 * h0[c]
+            + a1 * h1[c]
+            + a2 * h2[c]
+            + a3 * h3[c];
+        rate[c] = non_positive(h);
     }
 }
 
@@ -495,31 +526,22 @@ impl Dynamics for ThreeCarIdm {
         alpha: &Vector,
         rate: &mut [f32],
     ) {
-        let n = rate.len();
-        let (v1, x2) = (z[1], z[2]);
-        let v2 = &last[..n];
-        let [p0, p1, p2, p3] = [0, 1, 2, 3].map(|k| &pbar[k][..n]);
-        let [h0, h1, h2, h3] = [0, 1, 2, 3].map(|k| &half_jump[k][..n]);
-        let a0 = if local { v1.abs() } else { alpha[0] };
-        let (a1, a3) = (alpha[1], alpha[3]);
-        for c in 0..n {
-            let mut zz = *z;
-            zz[3] = v2[c];
-            zz[2] = x2;
-            let (u3, _, _) = self.follower(&zz, p3[c] > 0.0);
-            let u2 = self.ego.argmax(p3[c] - p1[c]);
-            let u1 = self.leader.argmin(p1[c]);
-            let a2 = if local { v2[c].abs() } else { alpha[2] };
-            let h = p0[c] * v1
-                + p2[c] * v2[c]
-                + p1[c] * (u1 - u2)
-                + p3[c] * (u2 - u3)
-                + a0 * h0[c]
-                + a1 * h1[c]
-                + a2 * h2[c]
-                + a3 * h3[c];
-            rate[c] = non_positive(h);
-        }
+        three_car_row(
+            self.ego,
+            self.leader,
+            z,
+            last,
+            pbar,
+            half_jump,
+            local,
+            alpha,
+            rate,
+            |v2, p4| {
+                let mut zz = *z;
+                zz[3] = v2;
+                self.follower(&zz, p4 > 0.0).0
+            },
+        );
     }
 }
 
