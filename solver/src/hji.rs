@@ -10,8 +10,9 @@
 //!
 //! The `min(0, .)` is the variational inequality `V = min(l, ...)` written as a freezing of the
 //! Hamiltonian: `V` never increases in `tau`, so `V <= l` at all times, and a state once unsafe
-//! stays so. The engine keeps this monotonicity exactly (every RK stage is a convex combination
-//! of values that did not increase).
+//! stays so. The engine keeps this monotonicity to the last bit: each RK stage is a convex
+//! combination of values that did not increase, and the last stage takes the minimum with the
+//! step's start value to absorb f32 rounding.
 //!
 //! # The scheme
 //! `dV/dtau = min(0, H(z, (p- + p+)/2) + sum_i alpha_i(z) (p+_i - p-_i) / 2)`: the Lax-Friedrichs
@@ -23,13 +24,19 @@
 //! depends on the state only; TVD RK1/2/3 are those of Shu & Osher (1988).
 //!
 //! # The boundary
-//! Derivatives at the grid's faces need up to three ghost nodes beyond them. They are linear
-//! extrapolations of the last two nodes ([`Boundary::Extrapolate`], hj_reachability's and
-//! ToolboxLS's choice), optionally capped at the lowest constraint value on the grid
-//! ([`Boundary::Pessimistic`]): "leaving the grid is unsafe". Extrapolation is optimistic where
-//! worst-case trajectories leave the grid (the value is concave across the speed faces, so a line
-//! overestimates it); the cap makes the boundary err only towards calling states unsafe.
-//! [`crate::trusted`] measures where the choice matters.
+//! Derivatives at the grid's faces need up to three ghost nodes beyond them. Linear
+//! extrapolation of the last two nodes ([`Boundary::Extrapolate`]) is hj_reachability's and
+//! ToolboxLS's choice; it is optimistic where worst-case trajectories leave the grid (the value
+//! is concave across the low-speed faces, so a line overestimates it). [`Boundary::Pessimistic`]
+//! and [`Boundary::Optimistic`] put lower and upper bounds of the true ghost values there
+//! instead (see the `ghost` function); the two solves bracket the true value, [`crate::trusted`] keeps the
+//! box where the bracket is tight, and tables are compiled from the pessimistic solve.
+//!
+//! # The floor
+//! Values are held at the grid's lowest constraint value `floor = min l`: that solves the game
+//! for `max(l, floor)`, whose value is `max(V, floor)` (max distributes over the min in time),
+//! so the sign of `V` and the safe set are unchanged, while hopeless states stop drifting
+//! towards minus infinity and the residual measures what matters.
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
