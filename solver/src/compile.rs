@@ -121,18 +121,12 @@ pub fn compile(input: &CompileInput<'_>) -> Result<(Vec<u8>, CompileReport), Sol
     }
 
     // The exact interpolation error over the trusted box (see the module docs).
-    let interpolation_error = (0..grid.len())
-        .into_par_iter()
-        .filter_map(|node| {
-            let mut idx = [0usize; MAX_DIMS];
-            grid.multi_index(node, &mut idx[..d]);
-            if !input.trusted.contains(&idx[..d]) {
-                return None;
-            }
-            let mut z = [0f64; MAX_DIMS];
-            grid.node_coordinates(node, &mut z[..d]);
+    let interpolation_error = input
+        .trusted
+        .par_nodes(grid)
+        .map(|(node, z)| {
             let i = table_grid.interpolate(&values, &z[..d]);
-            Some((i - f64::from(input.values[node].max(input.clip_below))).abs())
+            (i - f64::from(input.values[node].max(input.clip_below))).abs()
         })
         .reduce(|| 0.0, f64::max);
     // Round the bound up past f32 rounding of the interpolation arithmetic.
@@ -193,16 +187,10 @@ fn measure(
     let d = grid.dims();
     let table = Table::parse(bytes)?;
     let margin = table.header().error_bound.total();
-    let (solver_safe, certified, unsound) = (0..grid.len())
-        .into_par_iter()
-        .filter_map(|node| {
-            let mut idx = [0usize; MAX_DIMS];
-            grid.multi_index(node, &mut idx[..d]);
-            if !input.trusted.contains(&idx[..d]) {
-                return None;
-            }
-            let mut z = [0f64; MAX_DIMS];
-            grid.node_coordinates(node, &mut z[..d]);
+    let (solver_safe, certified, unsound) = input
+        .trusted
+        .par_nodes(grid)
+        .filter_map(|(node, z)| {
             let zf: Vec<f32> = z[..d].iter().map(|&x| x as f32).collect();
             let v_table = table.value_at(&zf).ok()?;
             let safe = input.values[node] > 0.0;

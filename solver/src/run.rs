@@ -233,15 +233,11 @@ pub fn run(
     let share_above_1mm = solution.values.iter().filter(|&&v| v > 1e-3).count() as f64 / n;
     let safe_fraction_trusted = match &trusted {
         Some(bx) => {
-            let mut idx = [0usize; MAX_DIMS];
-            let (mut inside, mut safe) = (0usize, 0usize);
-            for (node, &v) in solution.values.iter().enumerate() {
-                grid.multi_index(node, &mut idx[..d]);
-                if bx.contains(&idx[..d]) {
-                    inside += 1;
-                    safe += usize::from(v > 0.0);
-                }
-            }
+            use rayon::prelude::*;
+            let (inside, safe) = bx
+                .par_nodes(&grid)
+                .map(|(node, _)| (1usize, usize::from(solution.values[node] > 0.0)))
+                .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
             safe as f64 / inside.max(1) as f64
         }
         None => 0.0,

@@ -38,6 +38,25 @@ impl IndexBox {
             .all(|(i, (lo, hi))| lo <= i && i <= hi)
     }
 
+    /// The grid nodes inside the box, in parallel: flat index and coordinates.
+    pub fn par_nodes<'g>(
+        &'g self,
+        grid: &'g Grid,
+    ) -> impl rayon::iter::ParallelIterator<Item = (usize, [f64; MAX_DIMS])> + 'g {
+        use rayon::prelude::*;
+        let d = grid.dims();
+        (0..grid.len()).into_par_iter().filter_map(move |node| {
+            let mut idx = [0usize; MAX_DIMS];
+            grid.multi_index(node, &mut idx[..d]);
+            if !self.contains(&idx[..d]) {
+                return None;
+            }
+            let mut z = [0f64; MAX_DIMS];
+            grid.node_coordinates(node, &mut z[..d]);
+            Some((node, z))
+        })
+    }
+
     /// The box in state coordinates, per axis `(min, max)`.
     pub fn bounds(&self, grid: &Grid) -> Vec<(f64, f64)> {
         grid.axes()
