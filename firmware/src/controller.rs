@@ -37,8 +37,9 @@
 //! when the follower is known, close and closing, so as not to provoke a rear-end collision.
 //! States above the grid (more gap, more opening speed) are clamped onto it, which is
 //! conservative; so is clamping them onto the table's trusted box from above. Below the trusted
-//! box the table is conservative but may be needlessly so: the controller stays in
-//! [`Mode::Override`] there and never runs the nominal law on its word. An ego slower than the
+//! box the table is still a lower bound of the value (it is compiled from the pessimistic
+//! solve), but how close a bound is not established there: the look-ahead then demands a
+//! further `untrusted_margin` (default 2 m) before the nominal law may drive. An ego slower than the
 //! table assumes is not a fault of the inputs: the controller runs the nominal law uncertified
 //! ([`Mode::Uncertified`]).
 
@@ -71,6 +72,9 @@ pub struct Config {
     pub speed_gain: f32,
     /// Extra value margin (m) the look-ahead must keep before the nominal law may drive.
     pub switch_margin: f32,
+    /// Further margin (m) below the table's trusted box, where the table is a sound lower
+    /// bound but its accuracy is not established.
+    pub untrusted_margin: f32,
     /// Minimum-risk deceleration, m/s^2 (positive, at most 4).
     pub mrm_deceleration: f32,
     /// Minimum-risk deceleration when the follower is close and closing, m/s^2 (positive).
@@ -91,6 +95,7 @@ impl Default for Config {
             rel_speed_gain: 0.7,
             speed_gain: 0.3,
             switch_margin: 0.5,
+            untrusted_margin: 2.0,
             mrm_deceleration: 2.0,
             mrm_gentle_deceleration: 1.0,
             follower_close_gap: 15.0,
@@ -444,14 +449,18 @@ impl<'t> Controller<'t> {
         let h = self.config.period_us as f32 * 1e-6;
         // The look-ahead (module docs): the lowest corner reachable in one period under the
         // nominal law must keep a certified value; below the grid it cannot.
-        let certified = trusted
-            && onto_grid(
-                table,
-                lowest_corner(&state, nominal, model.leader_min, model.follower_max, h),
-            )
-            .ok()
-            .and_then(|corner| table.value_at(&corner).ok())
-            .is_some_and(|v| v - model.error_bound > self.config.switch_margin);
+        let margin = if trusted {
+            self.config.switch_margin
+        } else {
+            self.config.switch_margin + self.config.untrusted_margin
+        };
+        let certified = onto_grid(
+            table,
+            lowest_corner(&state, nominal, model.leader_min, model.follower_max, h),
+        )
+        .ok()
+        .and_then(|corner| table.value_at(&corner).ok())
+        .is_some_and(|v| v - model.error_bound > margin);
         let (acceleration, mode) = if certified {
             (nominal, Mode::Nominal)
         } else {

@@ -80,6 +80,28 @@ fn near_the_boundary_the_table_input_takes_over() {
 }
 
 #[test]
+fn below_the_trusted_box_the_nominal_law_needs_a_larger_margin() {
+    let table = Table::parse(DEFAULT_TABLE).unwrap();
+    let below = table.trusted_bounds(1).unwrap().min - 1.0; // the leader slower than the box
+    let err = table.header().error_bound.total();
+    let value = table.value_at(&[60.0, below, 40.0, 0.0]).unwrap();
+    assert!(
+        value - err > 2.5 + 1.0,
+        "choose a state deep inside the safe set ({value})"
+    );
+    let cmd = controller().step(&inputs((60.0, below), (40.0, 0.0), 25.0));
+    assert_eq!(cmd.mode, Mode::Nominal, "{cmd:?}");
+    // With a margin larger than the value, the same state is overridden.
+    let strict = Config {
+        untrusted_margin: value,
+        ..Config::default()
+    };
+    let cmd =
+        Controller::new(DEFAULT_TABLE, strict).step(&inputs((60.0, below), (40.0, 0.0), 25.0));
+    assert_eq!(cmd.mode, Mode::Override, "{cmd:?}");
+}
+
+#[test]
 fn every_bad_input_has_its_fault() {
     let good = inputs((40.0, 0.0), (30.0, 0.0), 25.0);
     let mut c = controller();

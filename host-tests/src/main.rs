@@ -46,6 +46,9 @@ enum Command {
         /// Output folder.
         #[arg(long, default_value = "out/campaign")]
         out: PathBuf,
+        /// A table file to run instead of the firmware's default table.
+        #[arg(long, value_name = "FILE")]
+        table: Option<PathBuf>,
     },
 }
 
@@ -133,9 +136,16 @@ fn main() -> Result<()> {
         latency,
         dropout,
         out,
+        table,
     } = Args::parse().command;
-    let bytes = firmware::DEFAULT_TABLE;
-    let table = Table::parse(bytes).context("the default table")?;
+    let bytes: &'static [u8] = match &table {
+        Some(path) => std::fs::read(path)
+            .with_context(|| format!("reading {}", path.display()))?
+            .leak(),
+        None => firmware::DEFAULT_TABLE,
+    };
+    let table =
+        Table::parse(bytes).map_err(|e| anyhow::anyhow!("the table does not parse: {e}"))?;
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     let sensors = SensorModel {
         gap_noise: noise,
