@@ -154,7 +154,13 @@ impl<'t> Humans<'t> {
             ego.x - follower.x,
             ego.v - follower.v,
         ];
-        let gradient = || clamp_into(self.table, z).and_then(|z| speed_gradient(self.table, z));
+        // The table's gradient, four lookups, computed once and only when a worst case needs it.
+        let mut cached: Option<Option<(f32, f32)>> = None;
+        let mut gradient = || {
+            *cached.get_or_insert_with(|| {
+                clamp_into(self.table, z).and_then(|z| speed_gradient(self.table, z))
+            })
+        };
         let (lmin, lmax) = self.leader_bounds;
         let a_leader = match self.leader {
             Leader::HardBrake => {

@@ -73,13 +73,7 @@ fn main() {
     );
     println!("|---|---|---|---|---|---|");
     for n in points {
-        let axis = |name: &str, lo: f64, hi: f64| GridAxis {
-            name: name.into(),
-            unit: String::new(),
-            min: lo,
-            max: hi,
-            points: n,
-        };
+        let axis = |name: &str, lo: f64, hi: f64| GridAxis::new(name, lo, hi, n);
         let grid = Grid::new(vec![
             axis("gap_leader", -5.0, 45.0),
             axis("rel_speed_leader", -10.0, 10.0),

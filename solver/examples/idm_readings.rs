@@ -9,13 +9,7 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let points: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(21);
     let horizon: f64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(10.0);
-    let axis = |name: &str, lo: f64, hi: f64| GridAxis {
-        name: name.into(),
-        unit: String::new(),
-        min: lo,
-        max: hi,
-        points,
-    };
+    let axis = |name: &str, lo: f64, hi: f64| GridAxis::new(name, lo, hi, points);
     let grid = Grid::new(vec![
         axis("gap_leader", -5.0, 75.0),
         axis("rel_speed_leader", -15.0, 15.0),

@@ -28,13 +28,7 @@ fn main() {
     );
     println!("|---|---|---|---|---|");
     for n in [51, 101, 201, 401] {
-        let axis = |name: &str, min: f64, max: f64| GridAxis {
-            name: name.into(),
-            unit: String::new(),
-            min,
-            max,
-            points: n,
-        };
+        let axis = |name: &str, min: f64, max: f64| GridAxis::new(name, min, max, n);
         let grid = Grid::new(vec![
             axis("gap_leader", -5.0, 45.0),
             axis("rel_speed_leader", -10.0, 10.0),

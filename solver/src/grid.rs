@@ -21,6 +21,17 @@ pub struct GridAxis {
 }
 
 impl GridAxis {
+    /// An axis named `name` (unit from the name: `m` for gaps, `m/s` otherwise).
+    pub fn new(name: &str, min: f64, max: f64, points: usize) -> Self {
+        GridAxis {
+            name: name.to_string(),
+            unit: if name.starts_with("gap") { "m" } else { "m/s" }.to_string(),
+            min,
+            max,
+            points,
+        }
+    }
+
     /// Distance between neighbouring nodes.
     pub fn spacing(&self) -> f64 {
         (self.max - self.min) / (self.points - 1) as f64

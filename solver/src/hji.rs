@@ -184,8 +184,8 @@ struct Context<'g, G> {
     caps: (f32, f32),
     /// Nodes per plane (the last two axes).
     plane: usize,
-    /// Rows (of the last axis) per block.
-    rows_per_block: usize,
+    /// The units of work, in memory order (fixed for a grid, so made once).
+    blocks: Vec<Block>,
     /// Coordinates per axis.
     coords: Vec<Vec<f32>>,
 }
@@ -312,6 +312,15 @@ impl<G: Dynamics> Context<'_, G> {
         // Blocks of about 2k nodes: the scratch rows of all axes stay in the L2 cache, and there
         // are enough blocks to share out between threads.
         let rows_per_block = (2048 / n_last).clamp(1, n_rows);
+        let mut blocks = Vec::new();
+        for p in 0..grid.len() / plane {
+            let mut r0 = 0;
+            while r0 < n_rows {
+                let r1 = (r0 + rows_per_block).min(n_rows);
+                blocks.push(Block { p, r0, r1 });
+                r0 = r1;
+            }
+        }
         Context {
             game,
             grid,
@@ -319,24 +328,9 @@ impl<G: Dynamics> Context<'_, G> {
             global_alpha,
             caps,
             plane,
-            rows_per_block,
+            blocks,
             coords,
         }
-    }
-
-    /// The blocks in memory order.
-    fn blocks(&self) -> Vec<Block> {
-        let n_rows = self.grid.axes()[self.grid.dims() - 2].points;
-        let mut v = Vec::new();
-        for p in 0..self.grid.len() / self.plane {
-            let mut r0 = 0;
-            while r0 < n_rows {
-                let r1 = (r0 + self.rows_per_block).min(n_rows);
-                v.push(Block { p, r0, r1 });
-                r0 = r1;
-            }
-        }
-        v
     }
 
     /// The output split into the blocks' slices.
@@ -376,18 +370,20 @@ impl<G: Dynamics> Context<'_, G> {
     /// One RK stage over the whole grid: `out = a * base + b * (inp + dt * L(inp))`, where
     /// `L = min(0, numerical Hamiltonian)`.
     fn stage(&self, inp: &[f32], base: Base<'_>, out: &mut [f32], a: f32, b: f32, dt: f32) {
-        let blocks = self.blocks();
-        let parts = self.split(out, &blocks);
+        let parts = self.split(out, &self.blocks);
         let d = self.grid.dims();
-        blocks.par_iter().zip(parts).for_each(|(block, out_block)| {
-            SCRATCH.with(|cell| {
-                let mut scratch = cell.borrow_mut();
-                scratch.ensure(d, out_block.len());
-                self.derivatives(inp, *block, &mut scratch);
-                scratch.make_central(out_block.len());
-                self.combine(inp, base, out_block, *block, &mut scratch, a, b, dt)
+        self.blocks
+            .par_iter()
+            .zip(parts)
+            .for_each(|(block, out_block)| {
+                SCRATCH.with(|cell| {
+                    let mut scratch = cell.borrow_mut();
+                    scratch.ensure(d, out_block.len());
+                    self.derivatives(inp, *block, &mut scratch);
+                    scratch.make_central(out_block.len());
+                    self.combine(inp, base, out_block, *block, &mut scratch, a, b, dt)
+                })
             })
-        })
     }
 
     /// Fills `scratch.dm[k]`, `scratch.dp[k]` with the one-sided derivatives along every axis
@@ -729,11 +725,11 @@ pub fn gradient<G: Dynamics>(
 ) -> Vec<Vec<f32>> {
     let ctx = Context::new(game, grid, numerics);
     let d = grid.dims();
-    let blocks = ctx.blocks();
+    let blocks = &ctx.blocks;
     let mut grads = vec![vec![0f32; values.len()]; d];
     let mut parts: Vec<Vec<&mut [f32]>> = Vec::new();
     for g in grads.iter_mut() {
-        parts.push(ctx.split(g, &blocks));
+        parts.push(ctx.split(g, blocks));
     }
     // Regroup per block: the k-th axis slice of every block.
     let mut per_block: Vec<Vec<&mut [f32]>> = (0..blocks.len()).map(|_| Vec::new()).collect();

@@ -33,13 +33,7 @@ pub fn grid_of(config: &Config) -> Result<Grid, SolverError> {
     let axes = config
         .axes()
         .into_iter()
-        .map(|(name, a)| GridAxis {
-            name: name.to_string(),
-            unit: if name.starts_with("gap") { "m" } else { "m/s" }.to_string(),
-            min: a.min,
-            max: a.max,
-            points: a.points,
-        })
+        .map(|(name, a)| GridAxis::new(name, a.min, a.max, a.points))
         .collect();
     Ok(Grid::new(axes)?)
 }

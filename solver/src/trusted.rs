@@ -168,13 +168,7 @@ mod tests {
     use crate::grid::GridAxis;
 
     fn grid() -> Grid {
-        let axis = |name: &str| GridAxis {
-            name: name.into(),
-            unit: "m".into(),
-            min: 0.0,
-            max: 10.0,
-            points: 11,
-        };
+        let axis = |name: &str| GridAxis::new(name, 0.0, 10.0, 11);
         Grid::new(vec![axis("a"), axis("b")]).unwrap()
     }
 

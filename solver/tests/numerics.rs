@@ -18,16 +18,6 @@ const HUMAN: Accel = Accel {
     max: 1.5,
 };
 
-fn axis(name: &str, min: f64, max: f64, points: usize) -> GridAxis {
-    GridAxis {
-        name: name.into(),
-        unit: String::new(),
-        min,
-        max,
-        points,
-    }
-}
-
 fn numerics(spatial: Spatial, rk: RkOrder) -> Numerics {
     Numerics {
         spatial,
@@ -43,8 +33,8 @@ fn numerics(spatial: Spatial, rk: RkOrder) -> Numerics {
 /// boundary lies.
 fn two_car_errors_at(points: usize, spatial: Spatial, rk: RkOrder) -> ExactComparison {
     let grid = Grid::new(vec![
-        axis("gap_leader", -5.0, 45.0, points),
-        axis("rel_speed_leader", -15.0, 15.0, points),
+        GridAxis::new("gap_leader", -5.0, 45.0, points),
+        GridAxis::new("rel_speed_leader", -15.0, 15.0, points),
     ])
     .unwrap();
     let game = TwoCar {
@@ -117,10 +107,10 @@ fn the_exact_value_is_what_the_formula_says() {
 
 fn small_4d(points: usize, speed: f64) -> Grid {
     Grid::new(vec![
-        axis("gap_leader", -5.0, 45.0, points),
-        axis("rel_speed_leader", -speed, speed, points),
-        axis("gap_follower", -5.0, 45.0, points),
-        axis("rel_speed_follower", -speed, speed, points),
+        GridAxis::new("gap_leader", -5.0, 45.0, points),
+        GridAxis::new("rel_speed_leader", -speed, speed, points),
+        GridAxis::new("gap_follower", -5.0, 45.0, points),
+        GridAxis::new("rel_speed_follower", -speed, speed, points),
     ])
     .unwrap()
 }
@@ -166,10 +156,10 @@ fn baseline_safe_set_vanishes_while_the_idm_one_does_not() {
     // free to accelerate (the leader-to-follower gap closes at up to 3 m/s^2 whatever the ego
     // does), while an IDM follower leaves a large safe set.
     let grid = Grid::new(vec![
-        axis("gap_leader", -5.0, 75.0, 17),
-        axis("rel_speed_leader", -15.0, 15.0, 17),
-        axis("gap_follower", -5.0, 75.0, 17),
-        axis("rel_speed_follower", -15.0, 15.0, 17),
+        GridAxis::new("gap_leader", -5.0, 75.0, 17),
+        GridAxis::new("rel_speed_leader", -15.0, 15.0, 17),
+        GridAxis::new("gap_follower", -5.0, 75.0, 17),
+        GridAxis::new("rel_speed_follower", -15.0, 15.0, 17),
     ])
     .unwrap();
     let n = numerics(Spatial::Weno5, RkOrder::Three);
@@ -216,8 +206,8 @@ fn baseline_safe_set_vanishes_while_the_idm_one_does_not() {
 #[test]
 fn trusted_box_excludes_the_band_the_boundary_decides() {
     let grid = Grid::new(vec![
-        axis("gap_leader", -5.0, 45.0, 101),
-        axis("rel_speed_leader", -10.0, 10.0, 101),
+        GridAxis::new("gap_leader", -5.0, 45.0, 101),
+        GridAxis::new("rel_speed_leader", -10.0, 10.0, 101),
     ])
     .unwrap();
     let game = TwoCar {
