@@ -127,7 +127,8 @@ pub fn run(
 
     // The main solve, recording the safe fraction every half second of horizon: V is
     // non-increasing in the horizon, so this curve must be non-increasing too.
-    let mut safe_fraction_history = vec![(0.0, share_positive(&constraint_any(&game, &grid)))];
+    let constraint = constraint_any(&game, &grid);
+    let mut safe_fraction_history = vec![(0.0, share_positive(&constraint))];
     let mut next_mark = 0.5;
     events(Event::SolveStarted("solve", limit));
     let t0 = Instant::now();
@@ -204,10 +205,7 @@ pub fn run(
             trusted: bx,
             table_points: config.table.points.as_deref(),
             bits: config.table.bits,
-            clip_below: constraint_any(&game, &grid)
-                .iter()
-                .copied()
-                .fold(-1.0f32, f32::min),
+            clip_below: constraint.iter().copied().fold(-1.0f32, f32::min),
         })?),
         None => None,
     };
