@@ -111,6 +111,13 @@ impl<'t> Humans<'t> {
                 idm,
                 time_gap,
                 ..
+            }
+            | Game::ThreeCarIdmSpeeds {
+                leader,
+                follower_clip,
+                idm,
+                time_gap,
+                ..
             } => (leader, follower_clip, idm, time_gap),
             Game::ThreeCarBaseline {
                 leader, follower, ..

@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use solver::game::{Accel, ThreeCarBaseline};
 use solver::grid::{Grid, GridAxis};
-use solver::hji::{solve, Boundary, Dissipation, Numerics, RkOrder, Stop};
+use solver::hji::{solve, Boundary, Dissipation, Numerics, Obstacle, RkOrder, Stop};
 use solver::scheme::Spatial;
 
 fn peak_rss_mb() -> f64 {
@@ -66,6 +66,7 @@ fn main() {
         cfl: 0.75,
         dissipation: Dissipation::Global,
         boundary: Boundary::Extrapolate,
+        obstacle: Obstacle::Freeze,
     };
     println!("threads: {}", rayon::current_num_threads());
     println!(

@@ -9,7 +9,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::ConfigError;
-use crate::hji::{Boundary, Dissipation, Numerics, RkOrder, Stop};
+use crate::hji::{Boundary, Dissipation, Numerics, Obstacle, RkOrder, Stop};
 use crate::scheme::Spatial;
 
 /// Bounds `[min, max]`.
@@ -44,6 +44,8 @@ pub enum GameKindConfig {
     ThreeCarBaseline,
     /// 4-D, IDM follower with adversarial time gap.
     ThreeCarIdm,
+    /// 5-D in absolute speeds, IDM follower with adversarial time gap (the firmware's game).
+    ThreeCarIdmSpeeds,
 }
 
 /// IDM parameters.
@@ -115,9 +117,12 @@ pub struct GameConfig {
     /// IDM desired time gap range, s (IDM game).
     #[serde(default)]
     pub time_gap: Option<Range>,
-    /// Follower speed model (IDM game).
+    /// Follower speed model (4-D IDM game).
     #[serde(default)]
     pub follower_speed: Option<FollowerSpeedConfig>,
+    /// Largest speed of any vehicle, m/s (5-D IDM game: the speed axes span `[0, max_speed]`).
+    #[serde(default)]
+    pub max_speed: Option<f64>,
 }
 
 /// The grid section: one entry per state axis, by name.
@@ -126,14 +131,24 @@ pub struct GameConfig {
 pub struct GridConfig {
     /// Gap to the leader, m.
     pub gap_leader: AxisConfig,
-    /// `v_leader - v_ego`, m/s.
-    pub rel_speed_leader: AxisConfig,
+    /// `v_leader - v_ego`, m/s (two-car and 4-D games).
+    #[serde(default)]
+    pub rel_speed_leader: Option<AxisConfig>,
     /// Gap to the follower, m (three-car games).
     #[serde(default)]
     pub gap_follower: Option<AxisConfig>,
-    /// `v_ego - v_follower`, m/s (three-car games).
+    /// `v_ego - v_follower`, m/s (4-D three-car games).
     #[serde(default)]
     pub rel_speed_follower: Option<AxisConfig>,
+    /// The leader's speed, m/s (5-D game).
+    #[serde(default)]
+    pub leader_speed: Option<AxisConfig>,
+    /// The follower's speed, m/s (5-D game).
+    #[serde(default)]
+    pub follower_speed: Option<AxisConfig>,
+    /// The ego's speed, m/s (5-D game).
+    #[serde(default)]
+    pub ego_speed: Option<AxisConfig>,
 }
 
 /// The numerics section.
@@ -155,6 +170,10 @@ pub struct NumericsConfig {
     /// `pessimistic` (default, sound) or `extrapolate` (hj_reachability's behaviour).
     #[serde(default = "default_boundary")]
     pub boundary: Boundary,
+    /// `freeze` (default: `min(0, H)`, monotone in the horizon) or `constraint`
+    /// (`min(l, ...)`, for values solved to convergence); see [`Obstacle`].
+    #[serde(default)]
+    pub obstacle: Obstacle,
 }
 
 fn default_spatial() -> Spatial {
@@ -181,6 +200,7 @@ impl Default for NumericsConfig {
             cfl: default_cfl(),
             dissipation: default_dissipation(),
             boundary: default_boundary(),
+            obstacle: Obstacle::default(),
         }
     }
 }
@@ -252,14 +272,55 @@ impl Default for TrustedConfig {
     }
 }
 
-/// A slice to plot: values of the two axes held fixed (the others are the plot's axes).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// A slice to plot: the speed axes held fixed (the two gaps are the plot's axes). 4-D games
+/// use the relative speeds, the 5-D game the three absolute speeds; missing ones are 0 (4-D)
+/// or the ego's speed (5-D: leader and follower at the ego's speed).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SliceConfig {
-    /// `rel_speed_leader`, m/s.
+    /// `rel_speed_leader`, m/s (4-D).
+    #[serde(default)]
     pub rel_speed_leader: f64,
-    /// `rel_speed_follower`, m/s.
+    /// `rel_speed_follower`, m/s (4-D).
+    #[serde(default)]
     pub rel_speed_follower: f64,
+    /// `ego_speed`, m/s (5-D).
+    #[serde(default)]
+    pub ego_speed: Option<f64>,
+    /// `leader_speed`, m/s (5-D).
+    #[serde(default)]
+    pub leader_speed: Option<f64>,
+    /// `follower_speed`, m/s (5-D).
+    #[serde(default)]
+    pub follower_speed: Option<f64>,
+}
+
+impl SliceConfig {
+    /// The slice's fixed speeds as a point of the state space, with the gaps at `(x1, x2)`.
+    pub fn point(&self, five_d: bool, x1: f64, x2: f64) -> Vec<f64> {
+        if five_d {
+            let ve = self.ego_speed.unwrap_or(20.0);
+            vec![
+                x1,
+                self.leader_speed.unwrap_or(ve),
+                x2,
+                self.follower_speed.unwrap_or(ve),
+                ve,
+            ]
+        } else {
+            vec![x1, self.rel_speed_leader, x2, self.rel_speed_follower]
+        }
+    }
+
+    /// A file-name tag for the slice.
+    pub fn tag(&self, five_d: bool) -> String {
+        let p = self.point(five_d, 0.0, 0.0);
+        if five_d {
+            format!("v1_{:.1}_v3_{:.1}_ve_{:.1}", p[1], p[3], p[4])
+        } else {
+            format!("vg1_{:+.1}_vg2_{:+.1}", p[1], p[3])
+        }
+    }
 }
 
 /// A whole run.
@@ -350,6 +411,54 @@ impl Config {
             "must be finite and >= 0",
         )?;
         let three = g.kind != GameKindConfig::TwoCar;
+        let five = g.kind == GameKindConfig::ThreeCarIdmSpeeds;
+        let need = |present: bool, field: &str| {
+            check(
+                present,
+                field,
+                if five {
+                    "required for the 5-D game (gap_leader, leader_speed, gap_follower, \
+                     follower_speed, ego_speed)"
+                } else {
+                    "required for this game"
+                },
+            )
+        };
+        let refuse = |absent: bool, field: &str| check(absent, field, "this game has no such axis");
+        let gr = &self.grid;
+        if five {
+            need(gr.leader_speed.is_some(), "grid.leader_speed")?;
+            need(gr.follower_speed.is_some(), "grid.follower_speed")?;
+            need(gr.ego_speed.is_some(), "grid.ego_speed")?;
+            refuse(gr.rel_speed_leader.is_none(), "grid.rel_speed_leader")?;
+            refuse(gr.rel_speed_follower.is_none(), "grid.rel_speed_follower")?;
+            let vmax = g
+                .max_speed
+                .ok_or_else(|| ConfigError::new("game.max_speed", "required for the 5-D game"))?;
+            check(
+                vmax.is_finite() && vmax > 0.0,
+                "game.max_speed",
+                "must be > 0",
+            )?;
+            for (field, a) in [
+                ("grid.leader_speed", gr.leader_speed),
+                ("grid.follower_speed", gr.follower_speed),
+                ("grid.ego_speed", gr.ego_speed),
+            ] {
+                if let Some(a) = a {
+                    check(
+                        a.min == 0.0 && a.max == vmax,
+                        field,
+                        "must span [0, game.max_speed] (speeds are held in that range)",
+                    )?;
+                }
+            }
+        } else {
+            need(gr.rel_speed_leader.is_some(), "grid.rel_speed_leader")?;
+            refuse(gr.leader_speed.is_none(), "grid.leader_speed")?;
+            refuse(gr.follower_speed.is_none(), "grid.follower_speed")?;
+            refuse(gr.ego_speed.is_none(), "grid.ego_speed")?;
+        }
         if three {
             let f = g
                 .follower
@@ -360,11 +469,9 @@ impl Config {
                 "grid.gap_follower",
                 "required for three-car games",
             )?;
-            check(
-                self.grid.rel_speed_follower.is_some(),
-                "grid.rel_speed_follower",
-                "required for three-car games",
-            )?;
+            if !five {
+                need(gr.rel_speed_follower.is_some(), "grid.rel_speed_follower")?;
+            }
         } else {
             check(
                 self.grid.gap_follower.is_none() && self.grid.rel_speed_follower.is_none(),
@@ -372,7 +479,7 @@ impl Config {
                 "the two-car game has no follower axes",
             )?;
         }
-        if g.kind == GameKindConfig::ThreeCarIdm {
+        if g.kind == GameKindConfig::ThreeCarIdm || five {
             let idm = g.idm.unwrap_or_default();
             check(
                 idm.max_acceleration.is_finite() && idm.max_acceleration > 0.0,
@@ -405,6 +512,13 @@ impl Config {
             check_range(&t, "game.time_gap")?;
             check(t.min >= 0.0, "game.time_gap.min", "must be >= 0")?;
             match g.follower_speed {
+                None if five => {}
+                Some(_) if five => {
+                    return Err(ConfigError::new(
+                        "game.follower_speed",
+                        "the 5-D game has the follower's speed as a state; remove this field",
+                    ))
+                }
                 None => return Err(ConfigError::new(
                     "game.follower_speed",
                     "required for the IDM game: kind = \"adversarial\" or \"nominal_ego_speed\"",
@@ -508,15 +622,20 @@ impl Config {
 
     /// The grid axes in state order, with their names.
     pub fn axes(&self) -> Vec<(&'static str, AxisConfig)> {
-        let mut v = vec![
-            ("gap_leader", self.grid.gap_leader),
-            ("rel_speed_leader", self.grid.rel_speed_leader),
+        let gr = &self.grid;
+        let named = [
+            ("gap_leader", Some(gr.gap_leader)),
+            ("rel_speed_leader", gr.rel_speed_leader),
+            ("leader_speed", gr.leader_speed),
+            ("gap_follower", gr.gap_follower),
+            ("rel_speed_follower", gr.rel_speed_follower),
+            ("follower_speed", gr.follower_speed),
+            ("ego_speed", gr.ego_speed),
         ];
-        if let (Some(g), Some(r)) = (self.grid.gap_follower, self.grid.rel_speed_follower) {
-            v.push(("gap_follower", g));
-            v.push(("rel_speed_follower", r));
-        }
-        v
+        named
+            .into_iter()
+            .filter_map(|(name, a)| a.map(|a| (name, a)))
+            .collect()
     }
 
     /// The engine's numerics.
@@ -531,6 +650,7 @@ impl Config {
             cfl: self.numerics.cfl,
             dissipation: self.numerics.dissipation,
             boundary: self.numerics.boundary,
+            obstacle: self.numerics.obstacle,
         }
     }
 
@@ -560,19 +680,21 @@ impl Config {
                 leader: b(g.leader),
                 follower: b(follower),
             },
+            GameKindConfig::ThreeCarIdmSpeeds => table_format::Game::ThreeCarIdmSpeeds {
+                ego: b(g.ego),
+                leader: b(g.leader),
+                follower_clip: b(follower),
+                idm: idm_parameters(g.idm.unwrap_or_default()),
+                time_gap: b(g.time_gap.unwrap_or(Range { min: 1.0, max: 2.0 })),
+                max_speed: g.max_speed.unwrap_or(35.0) as f32,
+            },
             GameKindConfig::ThreeCarIdm => {
                 let idm = g.idm.unwrap_or_default();
                 table_format::Game::ThreeCarIdm {
                     ego: b(g.ego),
                     leader: b(g.leader),
                     follower_clip: b(follower),
-                    idm: table_format::IdmParameters {
-                        max_acceleration: idm.max_acceleration as f32,
-                        comfortable_deceleration: idm.comfortable_deceleration as f32,
-                        desired_speed: idm.desired_speed as f32,
-                        exponent: idm.exponent,
-                        jam_distance: idm.jam_distance as f32,
-                    },
+                    idm: idm_parameters(idm),
                     time_gap: b(g.time_gap.unwrap_or(Range { min: 1.0, max: 2.0 })),
                     follower_speed: match g.follower_speed {
                         Some(FollowerSpeedConfig::NominalEgoSpeed { ego_speed }) => {
@@ -599,6 +721,16 @@ impl Config {
     }
 }
 
+fn idm_parameters(idm: IdmConfig) -> table_format::IdmParameters {
+    table_format::IdmParameters {
+        max_acceleration: idm.max_acceleration as f32,
+        comfortable_deceleration: idm.comfortable_deceleration as f32,
+        desired_speed: idm.desired_speed as f32,
+        exponent: idm.exponent,
+        jam_distance: idm.jam_distance as f32,
+    }
+}
+
 /// The built-in configs that `cargo run -p solver` runs with no `--config`: the paper's three
 /// results and the firmware's default table. The same files are under `solver/configs/`.
 pub fn builtin() -> Vec<(&'static str, &'static str)> {
@@ -615,6 +747,10 @@ pub fn builtin() -> Vec<(&'static str, &'static str)> {
         (
             "three-car-idm-adversarial-speed.toml",
             include_str!("../configs/three-car-idm-adversarial-speed.toml"),
+        ),
+        (
+            "three-car-idm-speeds.toml",
+            include_str!("../configs/three-car-idm-speeds.toml"),
         ),
         (
             "firmware-default.toml",

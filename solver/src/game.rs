@@ -71,8 +71,14 @@ pub trait Dynamics: Sync {
     fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs;
     /// Whether the ego's optimal input is its maximum acceleration (the table's policy bit).
     fn ego_accelerates(&self, p: &Vector) -> bool;
+    /// Whether `V` is non-decreasing along `axis`, so that the pessimistic and optimistic ghost
+    /// values of [`crate::hji::Boundary`] bound the true ones there. Axes where it is not (or
+    /// where nothing leaves the grid) take extrapolated ghosts. Default: every axis.
+    fn monotone_axis(&self, _axis: usize) -> bool {
+        true
+    }
 
-    /// The Lax-Friedrichs rate `min(0, H(z, pbar) + sum_k alpha_k(z) half_jump_k)` along a row
+    /// The Lax-Friedrichs numerical Hamiltonian `H(z, pbar) + sum_k alpha_k(z) half_jump_k` along a row
     /// of the last axis: `z` holds the row's fixed coordinates, `last[c]` the last one, and
     /// `pbar[k][c]`, `half_jump[k][c]` the central gradient and `(p+ - p-)/2`. `alpha` is the
     /// global dissipation, used unless `local`. The games override it with straight-line code
@@ -102,18 +108,8 @@ pub trait Dynamics: Sync {
                 p[k] = pbar[k][c];
                 diss += a[k] * half_jump[k][c];
             }
-            *r = (self.hamiltonian(&zz, &p) + diss).min(0.0);
+            *r = self.hamiltonian(&zz, &p) + diss;
         }
-    }
-}
-
-/// `min(x, 0)` as one instruction (NaN handling is left to the caller's finiteness check).
-#[inline(always)]
-fn non_positive(x: f32) -> f32 {
-    if x < 0.0 {
-        x
-    } else {
-        0.0
     }
 }
 
@@ -227,7 +223,7 @@ impl Dynamics for TwoCar {
             let u1 = self.leader.argmin(p1[c]);
             let a0 = if local { v[c].abs() } else { alpha[0] };
             let h = p0[c] * v[c] + p1[c] * (u1 - u2) + a0 * h0[c] + a1 * h1[c];
-            rate[c] = non_positive(h);
+            rate[c] = h;
         }
     }
 }
@@ -347,7 +343,7 @@ fn three_car_row(
             + a1 * h1[c]
             + a2 * h2[c]
             + a3 * h3[c];
-        rate[c] = non_positive(h);
+        rate[c] = h;
     }
 }
 
@@ -393,6 +389,18 @@ impl Idm {
             0.0
         };
         a * (1.0 - (speed / self.desired_speed).powi(self.exponent) - interaction)
+    }
+}
+
+impl From<table_format::IdmParameters> for Idm {
+    fn from(idm: table_format::IdmParameters) -> Self {
+        Idm {
+            max_acceleration: idm.max_acceleration,
+            comfortable_deceleration: idm.comfortable_deceleration,
+            desired_speed: idm.desired_speed,
+            exponent: i32::from(idm.exponent),
+            jam_distance: idm.jam_distance,
+        }
     }
 }
 
@@ -545,6 +553,204 @@ impl Dynamics for ThreeCarIdm {
     }
 }
 
+/// The three-car IDM game in absolute speeds, `z = (x_g1, v1, x_g2, v3, v_ego)` (five axes).
+///
+/// # Why a fifth axis
+/// The IDM follower's acceleration depends on its own speed `v3`, which the paper's 4-D relative
+/// state does not contain: any fixed reading of `v3` is an assumption (the table is wrong when the
+/// ego's speed differs), and the sound 4-D reading (`v3` adversarial over everything consistent
+/// with `v_g2`) lets `v3` jump and empties the safe set. With the three absolute speeds as
+/// states, the follower's model is exact, and speeds can be kept physical: every speed lies in
+/// `[0, v_max]`, so a braking leader stops instead of braking for ever. The game then has a
+/// stationary value (all three cars can come to rest), which a receding-horizon controller
+/// needs: a finite-horizon value certifies only as far as its horizon.
+///
+/// # Dynamics and Hamiltonian
+/// `x_g1' = v1 - v_ego`, `v1' = u1`, `x_g2' = v_ego - v3`, `v3' = u3`, `v_ego' = u2`, so with
+/// `p = (p1, p2, p3, p4, p5)`:
+///
+/// `p . f = p1 (v1 - v_ego) + p3 (v_ego - v3) + p2 u1 + p4 u3 + p5 u2`.
+///
+/// Speed limits are input constraints: a car at rest cannot brake, one at `v_max` cannot speed
+/// up, so at `v = 0` the input set is `[max(0, a_min), a_max]` and at `v = v_max` it is
+/// `[a_min, min(0, a_max)]` (exact at the grid faces, where these speeds live; no smoothing,
+/// which would let a "stopped" leader creep backwards or forwards).
+/// - Ego (maximises `p5 u2`): `u2* = a_max` if `p5 > 0`, else `a_min` (within the speed
+///   limits). By the chain rule this is the paper's eq. 6: with `v_g1 = v1 - v_ego` and
+///   `v_g2 = v_ego - v3`, `dV/dv_ego` at fixed `v1, v3` is `dV/dv_g2 - dV/dv_g1`.
+/// - Leader (minimises `p2 u1`): `u1* = a_min` if `p2 > 0`, else `a_max`.
+/// - Follower: `u3 = clip(g(v3, v3 - v_ego, x_g2, T))`, `T` adversarial in `[T_min, T_max]`.
+///   The adversary minimises `p4 u3`; `g` is non-increasing in `T` and clipping is monotone,
+///   so `T* = T_max` (least acceleration) where `p4 > 0` and `T_min` where `p4 <= 0`. Here
+///   `v3` is the true follower speed, so no other choice is left to the adversary.
+///
+/// # Boundary
+/// Nothing leaves the grid through a speed face (the input constraints above point the flow
+/// inwards or along it), so those faces take extrapolated ghosts whatever the configured
+/// boundary; the gap axes keep the configured (pessimistic or optimistic) ghosts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ThreeCarIdmSpeeds {
+    /// Ego acceleration bounds.
+    pub ego: Accel,
+    /// Leader acceleration bounds.
+    pub leader: Accel,
+    /// The follower's IDM output is clipped to these bounds.
+    pub follower_clip: Accel,
+    /// The follower's IDM.
+    pub idm: Idm,
+    /// `[T_min, T_max]`, s.
+    pub time_gap: Accel,
+    /// The largest speed of any vehicle, m/s.
+    pub max_speed: f32,
+    /// `l(z) = min(x_g1, x_g2) - min_gap`.
+    pub min_gap: f32,
+}
+
+impl Accel {
+    /// The bounds a car at `speed` can really apply inside `[0, max_speed]`.
+    #[inline(always)]
+    fn at_speed(self, speed: f32, max_speed: f32) -> Accel {
+        Accel {
+            min: if speed <= 0.0 {
+                self.min.max(0.0)
+            } else {
+                self.min
+            },
+            max: if speed >= max_speed {
+                self.max.min(0.0)
+            } else {
+                self.max
+            },
+        }
+    }
+
+    /// The largest magnitude in the bounds.
+    #[inline(always)]
+    fn magnitude(self) -> f32 {
+        self.min.abs().max(self.max.abs())
+    }
+}
+
+impl ThreeCarIdmSpeeds {
+    /// The follower's clipped IDM acceleration, within its speed limits, at follower speed
+    /// `v3`, ego speed `ve` and gap `gap`, for time gap `t`.
+    #[inline(always)]
+    pub fn follower_acceleration(&self, v3: f32, ve: f32, gap: f32, t: f32) -> f32 {
+        let g = self.idm.acceleration(v3.max(0.0), v3 - ve, gap, t);
+        let clip = self.follower_clip.at_speed(v3, self.max_speed);
+        g.clamp(clip.min, clip.max)
+    }
+
+    /// The adversary's time gap for co-state component `p4` (on `v3`).
+    #[inline(always)]
+    pub fn adversarial_time_gap(&self, p4: f32) -> f32 {
+        if p4 > 0.0 {
+            self.time_gap.max
+        } else {
+            self.time_gap.min
+        }
+    }
+}
+
+impl Dynamics for ThreeCarIdmSpeeds {
+    fn dims(&self) -> usize {
+        5
+    }
+
+    fn constraint(&self, z: &Vector) -> f32 {
+        z[0].min(z[2]) - self.min_gap
+    }
+
+    fn monotone_axis(&self, axis: usize) -> bool {
+        axis == 0 || axis == 2
+    }
+
+    #[inline(always)]
+    fn hamiltonian(&self, z: &Vector, p: &Vector) -> f32 {
+        let vm = self.max_speed;
+        let u1 = self.leader.at_speed(z[1], vm).argmin(p[1]);
+        let u2 = self.ego.at_speed(z[4], vm).argmax(p[4]);
+        let u3 = self.follower_acceleration(z[3], z[4], z[2], self.adversarial_time_gap(p[3]));
+        p[0] * (z[1] - z[4]) + p[2] * (z[4] - z[3]) + p[1] * u1 + p[3] * u3 + p[4] * u2
+    }
+
+    #[inline(always)]
+    fn dissipation(&self, z: &Vector, alpha: &mut Vector) {
+        let vm = self.max_speed;
+        alpha[0] = (z[1] - z[4]).abs();
+        alpha[1] = self.leader.at_speed(z[1], vm).magnitude();
+        alpha[2] = (z[4] - z[3]).abs();
+        alpha[3] = self.follower_clip.at_speed(z[3], vm).magnitude();
+        alpha[4] = self.ego.at_speed(z[4], vm).magnitude();
+    }
+
+    fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs {
+        let vm = self.max_speed;
+        let t = self.adversarial_time_gap(p[3]);
+        OptimalInputs {
+            ego: self.ego.at_speed(z[4], vm).argmax(p[4]),
+            leader: self.leader.at_speed(z[1], vm).argmin(p[1]),
+            follower: Some(self.follower_acceleration(z[3], z[4], z[2], t)),
+            time_gap: Some(t),
+            follower_speed: Some(z[3]),
+        }
+    }
+
+    fn ego_accelerates(&self, p: &Vector) -> bool {
+        p[4] > 0.0
+    }
+
+    fn lax_friedrichs_row(
+        &self,
+        z: &Vector,
+        last: &[f32],
+        pbar: &[&[f32]],
+        half_jump: &[&[f32]],
+        local: bool,
+        alpha: &Vector,
+        rate: &mut [f32],
+    ) {
+        let n = rate.len();
+        let vm = self.max_speed;
+        let (x2, v1, v3) = (z[2], z[1], z[3]);
+        let ve = &last[..n];
+        let [p0, p1, p2, p3, p4] = [0, 1, 2, 3, 4].map(|k| &pbar[k][..n]);
+        let [h0, h1, h2, h3, h4] = [0, 1, 2, 3, 4].map(|k| &half_jump[k][..n]);
+        let leader = self.leader.at_speed(v1, vm);
+        let (a1, a3) = if local {
+            (
+                leader.magnitude(),
+                self.follower_clip.at_speed(v3, vm).magnitude(),
+            )
+        } else {
+            (alpha[1], alpha[3])
+        };
+        for c in 0..n {
+            let ego = self.ego.at_speed(ve[c], vm);
+            let u2 = ego.argmax(p4[c]);
+            let u1 = leader.argmin(p1[c]);
+            let t = self.adversarial_time_gap(p3[c]);
+            let u3 = self.follower_acceleration(v3, ve[c], x2, t);
+            let (a0, a2, a4) = if local {
+                ((v1 - ve[c]).abs(), (ve[c] - v3).abs(), ego.magnitude())
+            } else {
+                (alpha[0], alpha[2], alpha[4])
+            };
+            let h = p0[c] * (v1 - ve[c])
+                + p2[c] * (ve[c] - v3)
+                + p1[c] * u1
+                + p3[c] * u3
+                + p4[c] * u2
+                + a0 * h0[c]
+                + a1 * h1[c]
+                + a2 * h2[c]
+                + a3 * h3[c]
+                + a4 * h4[c];
+            rate[c] = h;
+        }
+    }
+}
+
 /// Builds the engine's dynamics from a table header's game description.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum AnyGame {
@@ -554,6 +760,8 @@ pub enum AnyGame {
     Baseline(ThreeCarBaseline),
     /// See [`ThreeCarIdm`].
     Idm(ThreeCarIdm),
+    /// See [`ThreeCarIdmSpeeds`].
+    IdmSpeeds(ThreeCarIdmSpeeds),
 }
 
 impl AnyGame {
@@ -587,13 +795,7 @@ impl AnyGame {
                 ego: Accel::from(ego),
                 leader: Accel::from(leader),
                 follower_clip: Accel::from(follower_clip),
-                idm: Idm {
-                    max_acceleration: idm.max_acceleration,
-                    comfortable_deceleration: idm.comfortable_deceleration,
-                    desired_speed: idm.desired_speed,
-                    exponent: i32::from(idm.exponent),
-                    jam_distance: idm.jam_distance,
-                },
+                idm: Idm::from(idm),
                 time_gap: Accel::from(time_gap),
                 follower_speed: match follower_speed {
                     table_format::FollowerSpeed::NominalEgoSpeed { ego_speed } => {
@@ -609,6 +811,22 @@ impl AnyGame {
                 },
                 min_gap,
             }),
+            G::ThreeCarIdmSpeeds {
+                ego,
+                leader,
+                follower_clip,
+                idm,
+                time_gap,
+                max_speed,
+            } => AnyGame::IdmSpeeds(ThreeCarIdmSpeeds {
+                ego: Accel::from(ego),
+                leader: Accel::from(leader),
+                follower_clip: Accel::from(follower_clip),
+                idm: Idm::from(idm),
+                time_gap: Accel::from(time_gap),
+                max_speed,
+                min_gap,
+            }),
         }
     }
 
@@ -618,6 +836,7 @@ impl AnyGame {
             AnyGame::TwoCar(g) => g,
             AnyGame::Baseline(g) => g,
             AnyGame::Idm(g) => g,
+            AnyGame::IdmSpeeds(g) => g,
         }
     }
 }
@@ -714,6 +933,80 @@ mod tests {
                     }
                 }
                 assert!((h - best).abs() < 1e-4, "H {h} vs brute force {best}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_five_d_game_is_exact_over_a_brute_force_sweep_and_keeps_speeds_physical() {
+        let human = Accel {
+            min: -1.5,
+            max: 1.5,
+        };
+        let game = ThreeCarIdmSpeeds {
+            ego: Accel {
+                min: -2.0,
+                max: 2.0,
+            },
+            leader: human,
+            follower_clip: human,
+            idm: Idm {
+                jam_distance: 2.0,
+                ..idm()
+            },
+            time_gap: Accel { min: 1.0, max: 2.0 },
+            max_speed: 35.0,
+            min_gap: 0.0,
+        };
+        // (x_g1, v1, x_g2, v3, v_ego), including speeds at both faces.
+        let states = [
+            [20.0f32, 10.0, 12.0, 14.0, 10.0],
+            [5.0, 0.0, 30.0, 0.0, 3.0],
+            [40.0, 35.0, 8.0, 20.0, 0.0],
+            [15.0, 12.0, 25.0, 35.0, 35.0],
+        ];
+        for z in states {
+            for p in [[0.1f32, 0.2, 0.3, -0.8, 0.5], [0.4, -0.2, 0.1, 0.7, -0.5]] {
+                let h = game.hamiltonian(&z, &p);
+                // Brute force over every player's real input set: the ego maximises, the
+                // humans minimise, inputs that would push a speed out of [0, 35] excluded.
+                let feasible = |a: f32, v: f32| (v > 0.0 || a >= 0.0) && (v < 35.0 || a <= 0.0);
+                let sweep =
+                    |b: Accel| (0..=60).map(move |i| b.min + (b.max - b.min) * i as f32 / 60.0);
+                let ego_best = sweep(game.ego)
+                    .filter(|&u| feasible(u, z[4]))
+                    .map(|u| p[4] * u)
+                    .fold(f32::NEG_INFINITY, f32::max);
+                let leader_worst = sweep(human)
+                    .filter(|&u| feasible(u, z[1]))
+                    .map(|u| p[1] * u)
+                    .fold(f32::INFINITY, f32::min);
+                let follower_worst = (0..=100)
+                    .map(|i| {
+                        let t = 1.0 + i as f32 / 100.0;
+                        let g = game.idm.acceleration(z[3], z[3] - z[4], z[2], t);
+                        let g = g.clamp(-1.5, 1.5);
+                        let g = if z[3] <= 0.0 { g.max(0.0) } else { g };
+                        let g = if z[3] >= 35.0 { g.min(0.0) } else { g };
+                        p[3] * g
+                    })
+                    .fold(f32::INFINITY, f32::min);
+                let brute = p[0] * (z[1] - z[4])
+                    + p[2] * (z[4] - z[3])
+                    + ego_best
+                    + leader_worst
+                    + follower_worst;
+                assert!((h - brute).abs() < 1e-4, "z {z:?} p {p:?}: {h} vs {brute}");
+                let inputs = game.optimal_inputs(&z, &p);
+                assert!(
+                    z[1] > 0.0 || inputs.leader >= 0.0,
+                    "a stopped leader brakes"
+                );
+                assert!(z[4] > 0.0 || inputs.ego >= 0.0, "a stopped ego brakes");
+                assert!(
+                    z[4] < 35.0 || inputs.ego <= 0.0,
+                    "the ego speeds up past v_max"
+                );
             }
         }
     }

@@ -32,6 +32,11 @@
 //! instead (see the `ghost` function); the two solves bracket the true value, [`crate::trusted`] keeps the
 //! box where the bracket is tight, and tables are compiled from the pessimistic solve.
 //!
+//! # The obstacle
+//! [`Obstacle::Freeze`] (the default) is the `min(0, .)` above. For values solved to
+//! convergence, [`Obstacle::Constraint`] steps `V_tau = H_LF` and caps each step at `l`
+//! instead: the same equation, but its discrete steady state exists (see [`Obstacle`]).
+//!
 //! # The floor
 //! Values are held at the grid's lowest constraint value `floor = min l`: that solves the game
 //! for `max(l, floor)`, whose value is `max(V, floor)` (max distributes over the min in time),
@@ -86,6 +91,28 @@ pub enum Boundary {
     Optimistic,
 }
 
+/// How the obstacle `V <= l` of the avoid problem enters the time steps.
+///
+/// Both are consistent discretisations of `min(l - V, V_tau - H) = 0` with `V(., 0) = l`; they
+/// differ in what the *discrete* value does on long horizons.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Obstacle {
+    /// `dV/dtau = min(0, H_LF)`, each step also `min` with its start value: non-increasing in
+    /// the horizon to the last bit. But the Lax-Friedrichs viscosity then acts one way only:
+    /// where `V` is concave it lowers `V`, where convex the `min(0, .)` stops it from rising, so
+    /// on a coarse grid the value keeps eroding after the true value has become stationary.
+    /// Right for fixed horizons on fine grids.
+    #[default]
+    Freeze,
+    /// `V <- min(l, V + dt H_LF)` per step (Fisac et al. 2015's variational inequality): the
+    /// viscosity acts both ways, so the discrete value has a steady state (`H_LF = 0` where
+    /// `V < l`) and a solve to convergence stops eroding. The value is then not monotone in the
+    /// horizon node by node (the viscosity may lift it, never above `l`). Right for converged
+    /// (stationary) values.
+    Constraint,
+}
+
 /// The numerical method.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Numerics {
@@ -99,6 +126,8 @@ pub struct Numerics {
     pub dissipation: Dissipation,
     /// Ghost nodes.
     pub boundary: Boundary,
+    /// How `V <= l` is imposed.
+    pub obstacle: Obstacle,
 }
 
 impl Default for Numerics {
@@ -109,6 +138,7 @@ impl Default for Numerics {
             cfl: 0.75,
             dissipation: Dissipation::Local,
             boundary: Boundary::Pessimistic,
+            obstacle: Obstacle::Freeze,
         }
     }
 }
@@ -188,6 +218,8 @@ struct Context<'g, G> {
     blocks: Vec<Block>,
     /// Coordinates per axis.
     coords: Vec<Vec<f32>>,
+    /// The constraint at every node ([`Obstacle::Constraint`] only).
+    constraint: Vec<f32>,
 }
 
 /// One unit of work: rows `r0..r1` of plane `p`.
@@ -321,6 +353,10 @@ impl<G: Dynamics> Context<'_, G> {
                 r0 = r1;
             }
         }
+        let constraint = match numerics.obstacle {
+            Obstacle::Freeze => Vec::new(),
+            Obstacle::Constraint => constraint_values(game, grid),
+        };
         Context {
             game,
             grid,
@@ -330,6 +366,7 @@ impl<G: Dynamics> Context<'_, G> {
             plane,
             blocks,
             coords,
+            constraint,
         }
     }
 
@@ -418,6 +455,11 @@ impl<G: Dynamics> Context<'_, G> {
             ..
         } = scratch;
         for k in 0..d {
+            let boundary = if self.game.monotone_axis(k) {
+                boundary
+            } else {
+                Boundary::Extrapolate
+            };
             let inv_dx = (1.0 / axes[k].spacing()) as f32;
             let n = axes[k].points;
             if k < d - 2 {
@@ -569,7 +611,13 @@ impl<G: Dynamics> Context<'_, G> {
             );
         }
         let inp = &inp[start..start + len];
-        let rate = &rate[..len];
+        let rate = &mut rate[..len];
+        if self.numerics.obstacle == Obstacle::Freeze {
+            for r in rate.iter_mut() {
+                *r = if *r < 0.0 { *r } else { 0.0 };
+            }
+        }
+        let rate = &*rate;
         match base {
             Base::Zero | Base::Slice(_) => {
                 let prev = match base {
@@ -589,11 +637,21 @@ impl<G: Dynamics> Context<'_, G> {
                 // solves the game for `max(l, floor)`, whose value is `max(V, floor)` (max
                 // distributes over the min in time), so the sign of V, and the safe set, are
                 // unchanged, while states hopelessly unsafe stop drifting to minus infinity.
+                // With `Obstacle::Constraint` the cap is the constraint instead.
                 let floor = self.caps.0;
-                for c in 0..len {
-                    let v = a * out_block[c] + b * (inp[c] + dt * rate[c]);
-                    let v = if v < out_block[c] { v } else { out_block[c] };
-                    out_block[c] = if v > floor { v } else { floor };
+                if self.numerics.obstacle == Obstacle::Freeze {
+                    for c in 0..len {
+                        let v = a * out_block[c] + b * (inp[c] + dt * rate[c]);
+                        let v = if v < out_block[c] { v } else { out_block[c] };
+                        out_block[c] = if v > floor { v } else { floor };
+                    }
+                } else {
+                    let l = &self.constraint[start..start + len];
+                    for c in 0..len {
+                        let v = a * out_block[c] + b * (inp[c] + dt * rate[c]);
+                        let v = if v < l[c] { v } else { l[c] };
+                        out_block[c] = if v > floor { v } else { floor };
+                    }
                 }
             }
         }

@@ -50,6 +50,7 @@ pub fn solve_any(
         AnyGame::TwoCar(g) => hji::solve(g, grid, numerics, stop, progress),
         AnyGame::Baseline(g) => hji::solve(g, grid, numerics, stop, progress),
         AnyGame::Idm(g) => hji::solve(g, grid, numerics, stop, progress),
+        AnyGame::IdmSpeeds(g) => hji::solve(g, grid, numerics, stop, progress),
     }
 }
 
@@ -64,6 +65,7 @@ pub fn gradient_any(
         AnyGame::TwoCar(g) => hji::gradient(g, grid, numerics, values),
         AnyGame::Baseline(g) => hji::gradient(g, grid, numerics, values),
         AnyGame::Idm(g) => hji::gradient(g, grid, numerics, values),
+        AnyGame::IdmSpeeds(g) => hji::gradient(g, grid, numerics, values),
     }
 }
 
@@ -297,6 +299,7 @@ fn constraint_any(game: &AnyGame, grid: &Grid) -> Vec<f32> {
         AnyGame::TwoCar(g) => hji::constraint_values(g, grid),
         AnyGame::Baseline(g) => hji::constraint_values(g, grid),
         AnyGame::Idm(g) => hji::constraint_values(g, grid),
+        AnyGame::IdmSpeeds(g) => hji::constraint_values(g, grid),
     }
 }
 
@@ -399,36 +402,30 @@ fn plots(
         )?;
     } else {
         let slices = if config.slices.is_empty() {
-            vec![crate::config::SliceConfig {
-                rel_speed_leader: 0.0,
-                rel_speed_follower: 0.0,
-            }]
+            vec![crate::config::SliceConfig::default()]
         } else {
             config.slices.clone()
         };
         let min_gap = config.game.min_gap;
+        let five = grid.dims() == 5;
         for s in &slices {
             let at = |i: usize, j: usize| -> f64 {
-                grid.interpolate(
-                    values,
-                    &[
-                        coords[0][i],
-                        s.rel_speed_leader,
-                        coords[2][j],
-                        s.rel_speed_follower,
-                    ],
-                )
+                grid.interpolate(values, &s.point(five, coords[0][i], coords[2][j]))
             };
+            let speeds = s.point(five, 0.0, 0.0);
             let policy_at = |i: usize, j: usize| -> bool {
                 // The policy of the nearest node in speed.
                 let nearest = |k: usize, x: f64| -> usize {
                     let a = &grid.axes()[k];
                     (((x - a.min) / a.spacing()).round().max(0.0) as usize).min(a.points - 1)
                 };
-                let node = i * grid.strides()[0]
-                    + nearest(1, s.rel_speed_leader) * grid.strides()[1]
-                    + j * grid.strides()[2]
-                    + nearest(3, s.rel_speed_follower);
+                let st = grid.strides();
+                let mut node = i * st[0] + j * st[2];
+                for k in [1, 3, 4] {
+                    if let Some(&x) = speeds.get(k) {
+                        node += nearest(k, x) * st[k];
+                    }
+                }
                 accelerate[node]
             };
             let sets = |i: usize, j: usize| {
@@ -440,10 +437,15 @@ fn plots(
                     None
                 }
             };
-            let tag = format!(
-                "vg1_{:+.1}_vg2_{:+.1}",
-                s.rel_speed_leader, s.rel_speed_follower
-            );
+            let tag = s.tag(five);
+            let speeds_text = if five {
+                format!(
+                    "v1 = {:.1}, v3 = {:.1}, v_ego = {:.1} m/s",
+                    speeds[1], speeds[3], speeds[4]
+                )
+            } else {
+                format!("v_g1 = {:.1}, v_g2 = {:.1} m/s", speeds[1], speeds[3])
+            };
             let frame = bounds.as_ref().map(|b| (b[0].0, b[0].1, b[2].0, b[2].1));
             let kind = match config.game.kind {
                 GameKindConfig::ThreeCarBaseline => "baseline follower",
@@ -453,11 +455,16 @@ fn plots(
                 &dir.join(format!("safe_set_{tag}.png")),
                 &CellMap {
                     title: &format!(
-                        "Three cars, {kind}: slice v_g1 = {:.1}, v_g2 = {:.1} m/s, horizon {horizon_text}",
-                        s.rel_speed_leader, s.rel_speed_follower
+                        "Three cars, {kind}: slice {speeds_text}, horizon {horizon_text}"
                     ),
-                    x: PlotAxis { label: "gap_leader x_g1 [m]", coords: &coords[0] },
-                    y: PlotAxis { label: "gap_follower x_g2 [m]", coords: &coords[2] },
+                    x: PlotAxis {
+                        label: "gap_leader x_g1 [m]",
+                        coords: &coords[0],
+                    },
+                    y: PlotAxis {
+                        label: "gap_follower x_g2 [m]",
+                        coords: &coords[2],
+                    },
                     cell: &sets,
                     legend: &[("constraint set l >= 0", GREEN), ("safe set V > 0", BLUE)],
                     curves: &[],
@@ -468,10 +475,7 @@ fn plots(
             output::draw_cell_map(
                 &dir.join(format!("policy_{tag}.png")),
                 &CellMap {
-                    title: &format!(
-                        "Three cars, {kind}: ego input u2*, v_g1 = {:.1}, v_g2 = {:.1} m/s",
-                        s.rel_speed_leader, s.rel_speed_follower
-                    ),
+                    title: &format!("Three cars, {kind}: ego input u2*, {speeds_text}"),
                     x: PlotAxis {
                         label: "gap_leader x_g1 [m]",
                         coords: &coords[0],

@@ -87,6 +87,50 @@ fn bad_values_name_their_field() {
 }
 
 #[test]
+fn the_five_d_game_names_its_axes_and_speed_limit() {
+    let text = include_str!("../configs/three-car-idm-speeds.toml");
+    let config = Config::from_toml(text).unwrap();
+    let names: Vec<_> = config.axes().iter().map(|(n, _)| *n).collect();
+    assert_eq!(
+        names,
+        [
+            "gap_leader",
+            "leader_speed",
+            "gap_follower",
+            "follower_speed",
+            "ego_speed"
+        ]
+    );
+    let cases = [
+        ("max_speed = 35.0\n", "", "game.max_speed"),
+        (
+            "ego_speed = { min = 0.0, max = 35.0, points = 9 }\n",
+            "",
+            "grid.ego_speed",
+        ),
+        (
+            "leader_speed = { min = 0.0,",
+            "leader_speed = { min = -5.0,",
+            "grid.leader_speed",
+        ),
+        (
+            "[grid]\n",
+            "[grid]\nrel_speed_leader = { min = -5.0, max = 5.0, points = 5 }\n",
+            "grid.rel_speed_leader",
+        ),
+        (
+            "max_speed = 35.0\n",
+            "max_speed = 35.0\nfollower_speed = { kind = \"adversarial\", max_speed = 35.0 }\n",
+            "game.follower_speed",
+        ),
+    ];
+    for (from, to, field) in cases {
+        assert!(text.contains(from), "{from}");
+        assert_eq!(refused_field(&text.replacen(from, to, 1)), field, "{to}");
+    }
+}
+
+#[test]
 fn unknown_keys_and_syntax_errors_are_refused_with_a_location() {
     let base = idm();
     let err = Config::from_toml(&base.replace("min_gap = 0.0", "min_gapp = 0.0")).unwrap_err();

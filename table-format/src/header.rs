@@ -82,6 +82,20 @@ pub struct IdmParameters {
     pub jam_distance: f32,
 }
 
+impl IdmParameters {
+    fn is_valid(&self) -> bool {
+        self.max_acceleration.is_finite()
+            && self.max_acceleration > 0.0
+            && self.comfortable_deceleration.is_finite()
+            && self.comfortable_deceleration > 0.0
+            && self.desired_speed.is_finite()
+            && self.desired_speed > 0.0
+            && self.exponent >= 1
+            && self.jam_distance.is_finite()
+            && self.jam_distance >= 0.0
+    }
+}
+
 /// How the IDM game obtains the follower's absolute speed `v3 = v_ego - v_g2`, which the 4-D
 /// state does not contain.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -144,6 +158,26 @@ pub enum Game {
         /// How the follower's absolute speed is obtained.
         follower_speed: FollowerSpeed,
     },
+    /// Three cars, IDM follower with an adversarial time gap, in *absolute speeds*: state
+    /// `(gap_leader, leader_speed, gap_follower, follower_speed, ego_speed)`, five axes.
+    /// `x_g1' = v1 - v_ego`, `v1' = u1`, `x_g2' = v_ego - v3`, `v3' = clip(IDM)`, `v_ego' = u2`,
+    /// every speed held in `[0, max_speed]` (a car at rest does not brake further, one at
+    /// `max_speed` does not speed up). The follower's IDM sees its true speed, so nothing is
+    /// assumed about the ego's speed, and the game has a stationary value (everyone can stop).
+    ThreeCarIdmSpeeds {
+        /// Bounds on the ego's acceleration `u2`.
+        ego: Bounds,
+        /// Bounds on the leader's acceleration `u1`.
+        leader: Bounds,
+        /// The follower's IDM acceleration is clipped to these bounds.
+        follower_clip: Bounds,
+        /// The follower's IDM parameters.
+        idm: IdmParameters,
+        /// The range of the IDM desired time gap `T`, s.
+        time_gap: Bounds,
+        /// The largest speed of any vehicle, m/s.
+        max_speed: f32,
+    },
 }
 
 /// The game without its parameters, for checks such as "the firmware expects a three-car table".
@@ -156,6 +190,8 @@ pub enum GameKind {
     ThreeCarBaseline,
     /// [`Game::ThreeCarIdm`].
     ThreeCarIdm,
+    /// [`Game::ThreeCarIdmSpeeds`].
+    ThreeCarIdmSpeeds,
 }
 
 impl Game {
@@ -165,13 +201,16 @@ impl Game {
             Game::TwoCar { .. } => GameKind::TwoCar,
             Game::ThreeCarBaseline { .. } => GameKind::ThreeCarBaseline,
             Game::ThreeCarIdm { .. } => GameKind::ThreeCarIdm,
+            Game::ThreeCarIdmSpeeds { .. } => GameKind::ThreeCarIdmSpeeds,
         }
     }
 
-    /// The number of state axes: 2 for the two-car game, 4 for the three-car games.
+    /// The number of state axes: 2 for the two-car game, 4 for the three-car games in
+    /// relative speeds, 5 in absolute speeds.
     pub fn dims(&self) -> usize {
         match self {
             Game::TwoCar { .. } => 2,
+            Game::ThreeCarIdmSpeeds { .. } => 5,
             _ => 4,
         }
     }
@@ -181,7 +220,8 @@ impl Game {
         match self {
             Game::TwoCar { ego, .. }
             | Game::ThreeCarBaseline { ego, .. }
-            | Game::ThreeCarIdm { ego, .. } => *ego,
+            | Game::ThreeCarIdm { ego, .. }
+            | Game::ThreeCarIdmSpeeds { ego, .. } => *ego,
         }
     }
 
@@ -218,16 +258,25 @@ impl Game {
                     && follower_clip.is_valid()
                     && time_gap.is_valid()
                     && time_gap.min >= 0.0
-                    && idm.max_acceleration.is_finite()
-                    && idm.max_acceleration > 0.0
-                    && idm.comfortable_deceleration.is_finite()
-                    && idm.comfortable_deceleration > 0.0
-                    && idm.desired_speed.is_finite()
-                    && idm.desired_speed > 0.0
-                    && idm.exponent >= 1
-                    && idm.jam_distance.is_finite()
-                    && idm.jam_distance >= 0.0
+                    && idm.is_valid()
                     && speed_ok
+            }
+            Game::ThreeCarIdmSpeeds {
+                ego,
+                leader,
+                follower_clip,
+                idm,
+                time_gap,
+                max_speed,
+            } => {
+                ego.is_valid()
+                    && leader.is_valid()
+                    && follower_clip.is_valid()
+                    && time_gap.is_valid()
+                    && time_gap.min >= 0.0
+                    && idm.is_valid()
+                    && max_speed.is_finite()
+                    && *max_speed > 0.0
             }
         };
         if ok {
