@@ -53,6 +53,8 @@ pub struct Outcome {
     pub override_share: f32,
     /// Share of the time in the minimum-risk manoeuvre.
     pub minimum_risk_share: f32,
+    /// Share of the time the ego was slower than the table assumes (nominal law, uncertified).
+    pub uncertified_share: f32,
     /// Largest |jerk| of the ego's command, m/s^3.
     pub max_jerk: f32,
     /// The initial state `(gap_leader, rel_speed_leader, gap_follower, rel_speed_follower)`
@@ -136,7 +138,7 @@ pub fn run_episode(
     let h = config.period_us as f32 * 1e-6;
     let steps = (episode.seconds / h).round() as u64;
     let (mut min_front, mut min_rear) = (f32::INFINITY, f32::INFINITY);
-    let (mut overrides, mut mrm) = (0u64, 0u64);
+    let (mut overrides, mut mrm, mut uncertified) = (0u64, 0u64, 0u64);
     let mut max_jerk = 0f32;
     let mut last_accel: Option<f32> = None;
     let mut collision_time = None;
@@ -149,7 +151,8 @@ pub fn run_episode(
         match command.mode {
             Mode::Override => overrides += 1,
             Mode::MinimumRisk => mrm += 1,
-            Mode::Nominal | Mode::Uncertified => {}
+            Mode::Uncertified => uncertified += 1,
+            Mode::Nominal => {}
         }
         let a_ego = command.acceleration;
         if let Some(prev) = last_accel {
@@ -186,6 +189,7 @@ pub fn run_episode(
         min_gap_follower: min_rear,
         override_share: overrides as f32 / n,
         minimum_risk_share: mrm as f32 / n,
+        uncertified_share: uncertified as f32 / n,
         max_jerk,
         initial,
         initial_value,
@@ -215,6 +219,9 @@ pub struct GroupSummary {
     pub mean_override_share: f32,
     /// Mean share of time in the minimum-risk manoeuvre.
     pub mean_minimum_risk_share: f32,
+    /// Share of episodes in which the ego ran uncertified (slower than the table assumes) at
+    /// some point.
+    pub uncertified_episodes: f64,
     /// Largest |jerk|, m/s^3.
     pub max_jerk: f32,
     /// Seed of the episode with the smallest gap (to replay it).
@@ -272,6 +279,11 @@ pub fn run_group(
             .map(|(_, o)| o.minimum_risk_share)
             .sum::<f32>()
             / n as f32,
+        uncertified_episodes: outcomes
+            .iter()
+            .filter(|(_, o)| o.uncertified_share > 0.0)
+            .count() as f64
+            / n as f64,
         max_jerk: outcomes.iter().map(|(_, o)| o.max_jerk).fold(0.0, f32::max),
         worst_seed: worst,
     };

@@ -33,8 +33,11 @@ pub enum Follower {
     IdmSwitching,
     /// IDM with the game's worst-case time gap: `T_min` where `dV/dv_g2 > 0`, else `T_max`.
     IdmWorstCase,
-    /// Breaks the model: any acceleration within the bounds, chosen adversarially
-    /// (`a_max` where `dV/dv_g2 > 0`): the paper's baseline follower.
+    /// Breaks the model: any acceleration within the bounds, chosen adversarially: the paper's
+    /// baseline follower playing its worst case `u3* = a_max` where `dV/dv_g2 > 0` (eq. 8).
+    /// The baseline value is non-decreasing in `v_g2` (an ego faster than its follower is
+    /// never worse off), so `dV/dv_g2 >= 0` and the worst case is full acceleration throughout:
+    /// the follower closes in on the ego as hard as the bounds allow.
     Unbounded,
 }
 
@@ -212,11 +215,7 @@ impl<'t> Humans<'t> {
                 Some((_, p4)) if p4 > 0.0 => idm_with(tmin),
                 _ => idm_with(tmax),
             },
-            Follower::Unbounded => match gradient() {
-                Some((_, p4)) if p4 > 0.0 => fmax,
-                Some(_) => fmin,
-                None => fmax,
-            },
+            Follower::Unbounded => fmax,
         };
         (a_leader, a_follower)
     }

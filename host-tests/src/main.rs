@@ -168,9 +168,9 @@ fn main() -> Result<()> {
     );
     let mut summaries = Vec::new();
     println!(
-        "| start | leader | follower | episodes | collisions | fraction | min gap front | min gap rear | override | min-risk | max jerk |"
+        "| start | leader | follower | episodes | collisions | fraction | min gap front | min gap rear | override | min-risk | uncertified episodes | max jerk |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (i, (start, leader, follower)) in groups.iter().enumerate() {
         let template = Episode {
             start: *start,
@@ -183,7 +183,7 @@ fn main() -> Result<()> {
         let (summary, _) = run_group(&table, bytes, template, episodes, &|| bar.inc(1));
         bar.suspend(|| {
             println!(
-                "| {:?} | {:?} | {:?} | {} | {} | {:.4} | {:.2} | {:.2} | {:.3} | {:.3} | {:.0} |",
+                "| {:?} | {:?} | {:?} | {} | {} | {:.4} | {:.2} | {:.2} | {:.3} | {:.3} | {:.3} | {:.0} |",
                 summary.start,
                 summary.leader,
                 summary.follower,
@@ -194,6 +194,7 @@ fn main() -> Result<()> {
                 summary.min_gap_follower,
                 summary.mean_override_share,
                 summary.mean_minimum_risk_share,
+                summary.uncertified_episodes,
                 summary.max_jerk
             )
         });
