@@ -41,7 +41,9 @@
 //! solve), but how close a bound is not established there: the look-ahead then demands a
 //! further `untrusted_margin` (default 2 m) before the nominal law may drive. An ego slower than the
 //! table assumes is not a fault of the inputs: the controller runs the nominal law uncertified
-//! ([`Mode::Uncertified`]).
+//! ([`Mode::Uncertified`]), braking no harder than the follower can unless the leader's
+//! stopping point demands it (`spare_the_follower`): at low speed the sandwich is lost by
+//! rear-end collisions.
 
 use heapless::Deque;
 use table_format::{Bounds, EgoAction, FollowerSpeed, Game, Table};
@@ -116,8 +118,9 @@ pub enum Mode {
     Override,
     /// The minimum-risk manoeuvre after a fault.
     MinimumRisk,
-    /// The nominal law without a certificate: the ego is slower than the speed the table
-    /// assumes for the follower, so the table cannot speak (see [`Fault::BelowAssumedSpeed`]).
+    /// The nominal law without a certificate, braking no harder than the follower can unless
+    /// the leader demands it: the ego is slower than the speed the table assumes for the
+    /// follower, so the table cannot speak (see [`Fault::BelowAssumedSpeed`]).
     Uncertified,
 }
 
@@ -199,6 +202,7 @@ pub enum Event {
 struct Model {
     ego: Bounds,
     leader_min: f32,
+    follower_min: f32,
     follower_max: f32,
     min_ego_speed: f32,
     error_bound: f32,
@@ -217,12 +221,12 @@ pub struct Controller<'t> {
 
 fn model_of(table: &Table<'_>) -> Result<Model, Fault> {
     let header = table.header();
-    let (ego, leader, follower_max, min_ego_speed) = match header.game {
+    let (ego, leader, follower, min_ego_speed) = match header.game {
         Game::ThreeCarBaseline {
             ego,
             leader,
             follower,
-        } => (ego, leader, follower.max, 0.0),
+        } => (ego, leader, follower, 0.0),
         Game::ThreeCarIdm {
             ego,
             leader,
@@ -234,7 +238,7 @@ fn model_of(table: &Table<'_>) -> Result<Model, Fault> {
                 FollowerSpeed::NominalEgoSpeed { ego_speed } => ego_speed,
                 FollowerSpeed::Adversarial { min_ego_speed, .. } => min_ego_speed,
             };
-            (ego, leader, follower_clip.max, min_speed)
+            (ego, leader, follower_clip, min_speed)
         }
         _ => return Err(Fault::WrongGame),
     };
@@ -244,7 +248,8 @@ fn model_of(table: &Table<'_>) -> Result<Model, Fault> {
     Ok(Model {
         ego,
         leader_min: leader.min,
-        follower_max,
+        follower_min: follower.min,
+        follower_max: follower.max,
         min_ego_speed,
         error_bound: header.error_bound.total(),
     })
@@ -412,7 +417,12 @@ impl<'t> Controller<'t> {
         let ego_speed = ego.value;
         if ego_speed < model.min_ego_speed {
             return Command {
-                acceleration: self.nominal(leader, ego_speed, model.ego),
+                acceleration: spare_the_follower(
+                    self.nominal(leader, ego_speed, model.ego),
+                    leader,
+                    ego_speed,
+                    &model,
+                ),
                 mode: Mode::Uncertified,
                 fault: Some(Fault::BelowAssumedSpeed),
                 value: None,
@@ -498,6 +508,25 @@ impl<'t> Controller<'t> {
         let law = math::clamp(law, ISO_15622_LIMITS.0, ISO_15622_LIMITS.1);
         math::clamp(law, ego.min, ego.max)
     }
+}
+
+/// Below the table's speed range (uncertified): the nominal law, but never braking harder than
+/// the follower can (the game's bound on its braking), unless the leader leaves no choice: the
+/// deceleration that stops the ego behind the point where the leader stops if it brakes as
+/// hard as its model allows (less a 2 m margin) is always allowed. A rear-end collision is the
+/// typical way to lose a sandwich at low speed, and braking harder than necessary invites it.
+fn spare_the_follower(nominal: f32, leader: Track, ego_speed: f32, model: &Model) -> f32 {
+    let follower_braking = math::max(-model.follower_min, 0.0);
+    let leader_braking = math::max(-model.leader_min, 0.1);
+    let needed = if math::is_finite(leader.gap) {
+        let leader_speed = math::max(ego_speed + leader.rel_speed, 0.0);
+        let room = leader.gap + leader_speed * leader_speed / (2.0 * leader_braking) - 2.0;
+        ego_speed * ego_speed / (2.0 * math::max(room, 0.5))
+    } else {
+        0.0
+    };
+    let allowed = math::max(needed, follower_braking);
+    math::clamp(math::max(nominal, -allowed), model.ego.min, model.ego.max)
 }
 
 /// The lowest corner of the box the state can reach within `h` under the held ego input `u`

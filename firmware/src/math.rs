@@ -38,6 +38,16 @@ pub fn min(a: f32, b: f32) -> f32 {
     }
 }
 
+/// The larger of two values (the first if either is NaN).
+#[inline]
+pub fn max(a: f32, b: f32) -> f32 {
+    if b > a {
+        b
+    } else {
+        a
+    }
+}
+
 /// Whether `x` is neither NaN nor infinite.
 #[inline]
 pub fn is_finite(x: f32) -> bool {

@@ -322,3 +322,24 @@ fn nominal_mode_is_certified_one_period_ahead() {
     }
     assert!(nominal > 100, "nominal in {nominal} states");
 }
+
+#[test]
+fn below_the_assumed_speed_the_ego_spares_the_follower_unless_the_leader_forbids_it() {
+    // 10 m/s, the leader stopped 15 m ahead, the follower close and closing: stopping behind
+    // the leader takes 10^2 / (2 (15 - 2)) = 3.8 m/s^2, more than the follower can match (1.5):
+    // the leader decides, and the ego brakes at its limit (2).
+    let mut c = controller();
+    let tight = c.step(&inputs((15.0, -10.0), (8.0, -3.0), 10.0));
+    assert_eq!(tight.mode, Mode::Uncertified);
+    assert_eq!(tight.acceleration, -2.0, "{tight:?}");
+    // With 40 m to a stopped leader the ego needs 10^2 / (2 * 38) = 1.3 m/s^2 only: the
+    // nominal law's harder braking is capped at what the follower can match.
+    let roomy = c.step(&inputs((40.0, -10.0), (8.0, -3.0), 10.0));
+    assert_eq!(roomy.mode, Mode::Uncertified);
+    assert_eq!(roomy.acceleration, -1.5, "{roomy:?}");
+    // In between, exactly what the leader needs: 30 m to a stopped leader takes
+    // 10^2 / (2 * 28) = 1.79 m/s^2, gentler than the nominal law's 2.
+    let needed = 10.0f32 * 10.0 / (2.0 * 28.0);
+    let cmd = c.step(&inputs((30.0, -10.0), (8.0, -3.0), 10.0));
+    assert!(cmd.acceleration <= -needed, "{cmd:?}");
+}

@@ -45,6 +45,9 @@ pub struct Outcome {
     pub collided: bool,
     /// Time of the first collision, s.
     pub collision_time: Option<f32>,
+    /// The first time the humans alone made a collision unavoidable (see
+    /// [`crate::sim::humans_make_a_collision_unavoidable`]), s.
+    pub unavoidable_from: Option<f32>,
     /// Smallest gap to the leader, m.
     pub min_gap_leader: f32,
     /// Smallest gap to the follower, m.
@@ -142,10 +145,22 @@ pub fn run_episode(
     let mut max_jerk = 0f32;
     let mut last_accel: Option<f32> = None;
     let mut collision_time = None;
+    let mut unavoidable_from = None;
+    let (leader_braking, follower_braking) = humans.hardest_braking();
     let mut trace = trace;
     for k in 0..steps {
         let t = k as f32 * h;
         let now_us = k * u64::from(config.period_us);
+        if unavoidable_from.is_none()
+            && crate::sim::humans_make_a_collision_unavoidable(
+                leader,
+                follower,
+                leader_braking,
+                follower_braking,
+            )
+        {
+            unavoidable_from = Some(t);
+        }
         let inputs = sensors.measure(now_us, [leader, ego, follower], &mut rng);
         let command = controller.step(&inputs);
         match command.mode {
@@ -185,6 +200,7 @@ pub fn run_episode(
     Some(Outcome {
         collided: collision_time.is_some(),
         collision_time,
+        unavoidable_from,
         min_gap_leader: min_front,
         min_gap_follower: min_rear,
         override_share: overrides as f32 / n,
@@ -209,6 +225,9 @@ pub struct GroupSummary {
     pub episodes: usize,
     /// Episodes with a collision.
     pub collisions: usize,
+    /// Of those, collisions the humans alone had made unavoidable beforehand (the follower could
+    /// no longer stop short of the leader's stopping point).
+    pub collisions_unavoidable: usize,
     /// `collisions / episodes`.
     pub collision_fraction: f64,
     /// Smallest gap to the leader over the group, m.
@@ -250,6 +269,10 @@ pub fn run_group(
         .collect();
     let n = outcomes.len().max(1);
     let collisions = outcomes.iter().filter(|(_, o)| o.collided).count();
+    let collisions_unavoidable = outcomes
+        .iter()
+        .filter(|(_, o)| o.collided && o.unavoidable_from.is_some())
+        .count();
     let worst = outcomes
         .iter()
         .min_by(|a, b| {
@@ -264,6 +287,7 @@ pub fn run_group(
         follower: template.follower,
         episodes: outcomes.len(),
         collisions,
+        collisions_unavoidable,
         collision_fraction: collisions as f64 / n as f64,
         min_gap_leader: outcomes
             .iter()

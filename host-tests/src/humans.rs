@@ -100,6 +100,11 @@ pub fn idm(p: &IdmParameters, speed: f32, leader_speed: f32, gap: f32, time_gap:
 }
 
 impl<'t> Humans<'t> {
+    /// The hardest braking the model allows the leader and the follower (positive, m/s^2).
+    pub fn hardest_braking(&self) -> (f32, f32) {
+        (-self.leader_bounds.0, -self.follower_bounds.0)
+    }
+
     /// The humans of one episode, with the bounds and IDM of the table's game.
     pub fn new(
         table: &'t Table<'t>,

@@ -168,9 +168,9 @@ fn main() -> Result<()> {
     );
     let mut summaries = Vec::new();
     println!(
-        "| start | leader | follower | episodes | collisions | fraction | min gap front | min gap rear | override | min-risk | uncertified episodes | max jerk |"
+        "| start | leader | follower | episodes | collisions | of them unavoidable | fraction | min gap front | min gap rear | override | min-risk | uncertified episodes | max jerk |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (i, (start, leader, follower)) in groups.iter().enumerate() {
         let template = Episode {
             start: *start,
@@ -183,12 +183,13 @@ fn main() -> Result<()> {
         let (summary, _) = run_group(&table, bytes, template, episodes, &|| bar.inc(1));
         bar.suspend(|| {
             println!(
-                "| {:?} | {:?} | {:?} | {} | {} | {:.4} | {:.2} | {:.2} | {:.3} | {:.3} | {:.3} | {:.0} |",
+                "| {:?} | {:?} | {:?} | {} | {} | {} | {:.4} | {:.2} | {:.2} | {:.3} | {:.3} | {:.3} | {:.0} |",
                 summary.start,
                 summary.leader,
                 summary.follower,
                 summary.episodes,
                 summary.collisions,
+                summary.collisions_unavoidable,
                 summary.collision_fraction,
                 summary.min_gap_leader,
                 summary.min_gap_follower,
@@ -227,8 +228,10 @@ fn main() -> Result<()> {
         .collect();
     let episodes_model: usize = model.iter().map(|s| s.episodes).sum();
     let collisions_model: usize = model.iter().map(|s| s.collisions).sum();
+    let unavoidable_model: usize = model.iter().map(|s| s.collisions_unavoidable).sum();
     println!(
-        "certified starts, humans within the model: {collisions_model} collisions in {episodes_model} episodes"
+        "certified starts, humans within the model: {collisions_model} collisions in {episodes_model} episodes \
+         ({unavoidable_model} of them after the humans alone had made one unavoidable)"
     );
     println!("wrote {}", out.display());
     Ok(())

@@ -53,6 +53,24 @@ pub fn lowest_gap(ahead: Car, a_ahead: f32, behind: Car, a_behind: f32, h: f32) 
         .fold(f32::INFINITY, f32::min)
 }
 
+/// Whether the humans alone have made a collision unavoidable: the follower, braking as hard
+/// as its model allows, cannot stop short of where the leader stops when it brakes as hard as
+/// its model allows. The ego is between them (cars are points on one lane), so whatever it
+/// does it is hit or hits. With a leader that does brake to a stop, this is exact.
+pub fn humans_make_a_collision_unavoidable(
+    leader: Car,
+    follower: Car,
+    leader_braking: f32,
+    follower_braking: f32,
+) -> bool {
+    if leader_braking <= 0.0 || follower_braking <= 0.0 {
+        return false;
+    }
+    let leader_stop = leader.x + leader.v * leader.v / (2.0 * leader_braking);
+    let follower_stop = follower.x + follower.v * follower.v / (2.0 * follower_braking);
+    follower_stop >= leader_stop
+}
+
 /// Sensor imperfections.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct SensorModel {
