@@ -9,7 +9,7 @@ use serde::Serialize;
 use table_format::Table;
 
 use crate::humans::{Follower, Humans, Leader};
-use crate::sim::{lowest_gap, Car, SensorModel, Sensors};
+use crate::sim::{humans_make_a_collision_unavoidable, lowest_gap, Car, SensorModel, Sensors};
 
 /// Where episodes start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -152,7 +152,7 @@ pub fn run_episode(
         let t = k as f32 * h;
         let now_us = k * u64::from(config.period_us);
         if unavoidable_from.is_none()
-            && crate::sim::humans_make_a_collision_unavoidable(
+            && humans_make_a_collision_unavoidable(
                 leader,
                 follower,
                 leader_braking,

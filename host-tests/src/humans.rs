@@ -120,6 +120,7 @@ impl<'t> Humans<'t> {
                 time_gap,
                 ..
             }
+            // (5-D tables are refused by the campaign; their humans have the same bounds.)
             | Game::ThreeCarIdmSpeeds {
                 leader,
                 follower_clip,

@@ -146,6 +146,13 @@ fn main() -> Result<()> {
     };
     let table =
         Table::parse(bytes).map_err(|e| anyhow::anyhow!("the table does not parse: {e}"))?;
+    // The humans' worst cases and the start sampler read the 4-D relative state, as the
+    // firmware does (it refuses other tables).
+    anyhow::ensure!(
+        table.dims() == 4,
+        "the campaign runs 4-D three-car tables (the firmware's); this one has {} axes",
+        table.dims()
+    );
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     let sensors = SensorModel {
         gap_noise: noise,

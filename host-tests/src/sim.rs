@@ -167,6 +167,32 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_follower_that_cannot_stop_short_of_the_leader_makes_a_collision_unavoidable() {
+        // Both brake at 1.5 m/s^2: the leader at 20 m/s 100 m ahead stops at 233 m.
+        let leader = Car { x: 100.0, v: 20.0 };
+        // A follower at 30 m/s needs 300 m; at 20 m/s, 133 m.
+        assert!(humans_make_a_collision_unavoidable(
+            leader,
+            Car { x: 0.0, v: 30.0 },
+            1.5,
+            1.5
+        ));
+        assert!(!humans_make_a_collision_unavoidable(
+            leader,
+            Car { x: 0.0, v: 20.0 },
+            1.5,
+            1.5
+        ));
+        // A model without braking says nothing.
+        assert!(!humans_make_a_collision_unavoidable(
+            leader,
+            Car { x: 0.0, v: 30.0 },
+            0.0,
+            1.5
+        ));
+    }
+
+    #[test]
     fn cars_stop_and_stay_stopped() {
         let mut c = Car { x: 0.0, v: 2.0 };
         c.advance(-4.0, 1.0);

@@ -44,7 +44,7 @@ pub enum GameKindConfig {
     ThreeCarBaseline,
     /// 4-D, IDM follower with adversarial time gap.
     ThreeCarIdm,
-    /// 5-D in absolute speeds, IDM follower with adversarial time gap (the firmware's game).
+    /// 5-D in absolute speeds, IDM follower with adversarial time gap.
     ThreeCarIdmSpeeds,
 }
 
@@ -274,7 +274,7 @@ impl Default for TrustedConfig {
 
 /// A slice to plot: the speed axes held fixed (the two gaps are the plot's axes). 4-D games
 /// use the relative speeds, the 5-D game the three absolute speeds; missing ones are 0 (4-D)
-/// or the ego's speed (5-D: leader and follower at the ego's speed).
+/// or, in 5-D, 20 m/s for the ego and the ego's speed for the other two.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SliceConfig {

@@ -958,9 +958,12 @@ mod tests {
             max_speed: 35.0,
             min_gap: 0.0,
         };
-        // (x_g1, v1, x_g2, v3, v_ego), including speeds at both faces.
+        // (x_g1, v1, x_g2, v3, v_ego), including speeds at both faces and states where the
+        // follower's IDM is not clipped, so that the time gap matters.
         let states = [
-            [20.0f32, 10.0, 12.0, 14.0, 10.0],
+            [30.0f32, 20.0, 60.0, 20.0, 20.0],
+            [25.0, 15.0, 45.0, 12.0, 14.0],
+            [20.0, 10.0, 12.0, 14.0, 10.0],
             [5.0, 0.0, 30.0, 0.0, 3.0],
             [40.0, 35.0, 8.0, 20.0, 0.0],
             [15.0, 12.0, 25.0, 35.0, 35.0],

@@ -405,7 +405,7 @@ impl<G: Dynamics> Context<'_, G> {
     }
 
     /// One RK stage over the whole grid: `out = a * base + b * (inp + dt * L(inp))`, where
-    /// `L = min(0, numerical Hamiltonian)`.
+    /// `L` is the numerical Hamiltonian (with [`Obstacle::Freeze`], `min(0, .)` of it).
     fn stage(&self, inp: &[f32], base: Base<'_>, out: &mut [f32], a: f32, b: f32, dt: f32) {
         let parts = self.split(out, &self.blocks);
         let d = self.grid.dims();
@@ -564,7 +564,8 @@ impl<G: Dynamics> Context<'_, G> {
         }
     }
 
-    /// Writes `out = a * base + b * (inp + dt * min(0, H_LF))` over a block, from the central
+    /// Writes `out = a * base + b * (inp + dt * L)` over a block (`L = min(0, H_LF)` or `H_LF`,
+    /// by [`Obstacle`]; the last stage caps at the step's start value or at `l`), from the central
     /// gradients and half jumps that [`Self::derivatives`] left in the scratch rows. The games'
     /// row form of the Hamiltonian is straight-line code, so every loop here vectorises.
     #[allow(clippy::too_many_arguments)]

@@ -33,6 +33,11 @@ fn numerics(spatial: Spatial, rk: RkOrder) -> Numerics {
 /// errors measured over x in [0, 40], v in [-10, 0] (away from every face), where the exact
 /// boundary lies.
 fn two_car_errors_at(points: usize, spatial: Spatial, rk: RkOrder) -> ExactComparison {
+    two_car_solve(points, numerics(spatial, rk)).0
+}
+
+/// [`two_car_errors_at`] with any numerics; also returns the values and the constraint.
+fn two_car_solve(points: usize, numerics: Numerics) -> (ExactComparison, Vec<f32>, Vec<f32>) {
     let grid = Grid::new(vec![
         GridAxis::new("gap_leader", -5.0, 45.0, points),
         GridAxis::new("rel_speed_leader", -15.0, 15.0, points),
@@ -43,21 +48,16 @@ fn two_car_errors_at(points: usize, spatial: Spatial, rk: RkOrder) -> ExactCompa
         leader: HUMAN,
         min_gap: 0.0,
     };
-    let s = solve(
-        &game,
-        &grid,
-        numerics(spatial, rk),
-        Stop::Horizon(3.0),
-        |_, _, _| {},
-    )
-    .unwrap();
+    let s = solve(&game, &grid, numerics, Stop::Horizon(3.0), |_, _, _| {}).unwrap();
+    let constraint = solver::hji::constraint_values(&game, &grid);
     let index = |a: &GridAxis, x: f64| ((x - a.min) / a.spacing()).round() as usize;
     let (xa, va) = (&grid.axes()[0], &grid.axes()[1]);
     let bx = IndexBox {
         lo: vec![index(xa, 0.0), index(va, -10.0)],
         hi: vec![index(xa, 40.0), index(va, 0.0)],
     };
-    two_car_errors(&grid, &s.values, 3.0, -2.0, -1.5, 0.0, &bx)
+    let errors = two_car_errors(&grid, &s.values, 3.0, -2.0, -1.5, 0.0, &bx);
+    (errors, s.values, constraint)
 }
 
 #[test]
@@ -84,6 +84,28 @@ fn two_car_matches_the_exact_value_and_converges() {
     // Absolute accuracy: the safe-set boundary within 5 cm at 201^2 (the grid has 25 cm cells).
     assert!(fine.max_boundary_error < 0.05, "{fine:?}");
     assert!(fine.mean_value_error < 0.01, "{fine:?}");
+}
+
+#[test]
+fn the_constraint_obstacle_solves_the_same_game_and_stays_below_the_constraint() {
+    let freeze = two_car_errors_at(101, Spatial::Weno5, RkOrder::Three);
+    let (constraint, values, l) = two_car_solve(
+        101,
+        Numerics {
+            obstacle: Obstacle::Constraint,
+            ..numerics(Spatial::Weno5, RkOrder::Three)
+        },
+    );
+    println!("101^2, freeze: {freeze:?}\nconstraint: {constraint:?}");
+    // `V <= l` holds by construction of the step, not by the equation's sign alone: where the
+    // leader pulls away `H > 0` and an uncapped step would lift V above the gap.
+    assert!(values.iter().zip(&l).all(|(v, l)| v <= l));
+    // The same game to within the scheme's error.
+    assert!(constraint.max_boundary_error < 0.15, "{constraint:?}");
+    assert!(
+        constraint.mean_value_error < 2.0 * freeze.mean_value_error,
+        "{constraint:?} vs {freeze:?}"
+    );
 }
 
 #[test]
