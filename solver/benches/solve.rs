@@ -10,7 +10,7 @@
 
 use std::time::Instant;
 
-use solver::game::{Accel, ThreeCarBaseline};
+use solver::games::{Accel, ThreeCarBaseline};
 use solver::grid::{Grid, GridAxis};
 use solver::hji::{solve, Boundary, Dissipation, Numerics, Obstacle, RkOrder, Stop};
 use solver::scheme::Spatial;

@@ -1,7 +1,7 @@
 //! How the two readings of the IDM follower's speed change the safe set (issue: "report how the
 //! safe sets differ"): `cargo run -p solver --release --example idm_readings [-- POINTS HORIZON]`.
 
-use solver::game::{Accel, FollowerSpeedModel, Idm, ThreeCarBaseline, ThreeCarIdm};
+use solver::games::{Accel, FollowerSpeedModel, Idm, ThreeCarBaseline, ThreeCarIdm};
 use solver::grid::{Grid, GridAxis};
 use solver::hji::{solve, Boundary, Numerics, Stop};
 

@@ -6,7 +6,7 @@
 use std::time::Instant;
 
 use solver::exact::two_car_errors;
-use solver::game::{Accel, TwoCar};
+use solver::games::{Accel, TwoCar};
 use solver::grid::{Grid, GridAxis};
 use solver::hji::{solve, Boundary, Numerics, Stop};
 use solver::trusted::agreement_box;

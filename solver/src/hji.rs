@@ -47,7 +47,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::SolverError;
-use crate::game::{Dynamics, Vector};
+use crate::games::{Dynamics, Vector};
 use crate::grid::{Grid, MAX_DIMS};
 use crate::scheme::{derivatives_row, derivatives_strided, Spatial};
 
@@ -692,6 +692,38 @@ fn max_abs_difference(a: &[f32], b: &[f32], floor: f32) -> f32 {
         )
 }
 
+/// `max |min(a, cap) - b|` over the nodes where `b > floor`, NaN-propagating.
+fn max_capped_difference(a: &[f32], b: &[f32], cap: &[f32], floor: f32) -> f32 {
+    const CHUNK: usize = 1 << 14;
+    a.par_chunks(CHUNK)
+        .zip(b.par_chunks(CHUNK))
+        .zip(cap.par_chunks(CHUNK))
+        .map(|((x, y), c)| {
+            let mut m = 0f32;
+            let mut nan = false;
+            for ((&p, &q), &l) in x.iter().zip(y).zip(c) {
+                nan |= p.is_nan();
+                let d = if q > floor { (p.min(l) - q).abs() } else { 0.0 };
+                m = if d > m { d } else { m };
+            }
+            if nan {
+                f32::NAN
+            } else {
+                m
+            }
+        })
+        .reduce(
+            || 0.0,
+            |p, q| {
+                if p.is_nan() || q.is_nan() {
+                    f32::NAN
+                } else {
+                    p.max(q)
+                }
+            },
+        )
+}
+
 /// Whether every value is finite.
 fn all_finite(v: &[f32]) -> bool {
     v.par_chunks(1 << 14)
@@ -735,7 +767,12 @@ pub fn solve<G: Dynamics>(
         let dtf = dt as f32;
         // After the first stage w = v + dt L(v): the residual max |L(v)| = max |w - v| / dt.
         ctx.stage(&v, Base::Zero, &mut w, 0.0, 1.0, dtf);
-        let rate = max_abs_difference(&w, &v, ctx.caps.0) / dtf;
+        // The rate the step really applies: under the constraint obstacle, where `V = l` and
+        // `H_LF > 0` the cap holds `V` in place, so the rate is measured after the cap.
+        let rate = match numerics.obstacle {
+            Obstacle::Freeze => max_abs_difference(&w, &v, ctx.caps.0),
+            Obstacle::Constraint => max_capped_difference(&w, &v, &ctx.constraint, ctx.caps.0),
+        } / dtf;
         match numerics.rk {
             RkOrder::One => {
                 let floor = ctx.caps.0;

@@ -1,7 +1,7 @@
 //! hjacc's solver: Hamilton-Jacobi-Isaacs level-set solutions of the car-following games of
 //! Bahati, Gibson & Bayen (arXiv:2112.14344), compiled into firmware safety tables.
 //!
-//! Data flows one way: [`config`] (a TOML file) -> [`game`] (dynamics and optimal inputs) ->
+//! Data flows one way: [`config`] (a TOML file) -> [`games`] (dynamics and optimal inputs) ->
 //! [`hji`] (the grid solve, with [`scheme`] for gradients on a [`grid`]) -> [`trusted`] (where
 //! the grid boundary does not matter) -> [`compile`] (the quantized table and its error bound)
 //! -> [`output`] (files and plots).
@@ -13,12 +13,13 @@ pub mod compile;
 pub mod config;
 pub mod error;
 pub mod exact;
-pub mod game;
+pub mod games;
 pub mod grid;
 pub mod hji;
 pub mod output;
 pub mod run;
 pub mod scheme;
+pub mod semi_lagrangian;
 pub mod trusted;
 
 pub use error::{ConfigError, SolverError};

@@ -12,7 +12,7 @@ use crate::compile::{compile, CompileInput, CompileReport};
 use crate::config::{Config, GameKindConfig};
 use crate::error::SolverError;
 use crate::exact::{self, ExactComparison};
-use crate::game::{AnyGame, Vector};
+use crate::games::{AnyGame, Vector};
 use crate::grid::{Grid, GridAxis, MAX_DIMS};
 use crate::hji::{self, Boundary, Numerics, Outcome, Solution, Stop};
 use crate::output::{self, CellMap, PlotAxis};

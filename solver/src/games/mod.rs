@@ -38,6 +38,9 @@
 
 use crate::grid::MAX_DIMS;
 
+mod rear_idm;
+pub use rear_idm::RearIdm;
+
 /// A state or co-state with room for every supported dimension.
 pub type Vector = [f32; MAX_DIMS];
 

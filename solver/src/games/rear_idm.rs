@@ -1,0 +1,322 @@
+//! The rear game: an IDM follower behind an ego whose braking is bounded.
+//!
+//! # Why this game exists
+//! The three-car game in absolute speeds has the state
+//! `(gap_leader, leader_speed, gap_follower, follower_speed, ego_speed)`. Its stationary value is
+//! at most the follower's jam distance `s0` everywhere (all three cars can stop, and the IDM
+//! follower then closes to `s0` behind the ego), so a certificate needs the value resolved to a
+//! fraction of `s0` over five axes: far beyond a table that fits a microcontroller. The ego's one
+//! input couples the two gaps only through *how hard it brakes*: braking protects the front gap
+//! and endangers the rear one. Fix a braking level `beta` and split the game:
+//!
+//! - **front** (`gap_leader, leader_speed, ego_speed`): the ego, braking at most `beta`, keeps
+//!   the front gap against a leader that may brake at up to `b_L`. Its value has a closed form
+//!   ([`table_format::front`]): both cars braking as hard as they may is a saddle point.
+//! - **rear** (this game, `gap_follower, follower_speed, ego_speed`): every ego acceleration in
+//!   `[-beta, a_max]` is *adversarial*, like the follower's time gap. Its value `W_beta` bounds
+//!   the rear gap from below whatever the ego does within that band.
+//!
+//! If `V_front,beta(z) >= 0` and `W_beta(z) >= 0`, the ego keeps both gaps for ever by braking
+//! at `beta` whenever the front demands it (and doing anything within `[-beta, a_max]`
+//! otherwise): the front value never decreases along its own braking, and the rear value never
+//! decreases along *any* trajectory whose ego acceleration stays in the band. So
+//! `min(V_front,beta, W_beta)` is a lower bound of the five-dimensional value, and the union
+//! over a few `beta` of these product sets is a controlled-invariant inner approximation of the
+//! five-dimensional safe set, computed on three axes where a grid can resolve `s0`.
+//!
+//! # Dynamics and Hamiltonian
+//! `x' = v_e - v_f`, `v_f' = u_f`, `v_e' = u_e`, with `z = (x, v_f, v_e)` and
+//! `p = (p1, p2, p3)`: `p . f = p1 (v_e - v_f) + p2 u_f + p3 u_e`. Nobody maximises:
+//! - ego (adversarial here): `u_e = -beta` where `p3 > 0`, else `a_max`, within its speed limits;
+//! - follower: `u_f = clip(g(v_f, v_f - v_e, x, T))`, `T` adversarial in `[T_min, T_max]`;
+//!   `g` is non-increasing in `T`, so `T = T_max` where `p2 > 0` and `T_min` otherwise.
+//!
+//! Speeds stay in `[0, v_max]` through the input sets (a car at rest cannot brake, one at
+//! `v_max` cannot speed up), so nothing leaves through a speed face.
+
+use super::{Accel, Dynamics, Idm, OptimalInputs, Vector};
+use crate::semi_lagrangian::SampledGame;
+
+/// The rear game of one braking level `beta` (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RearIdm {
+    /// The ego's acceleration band `[-beta, a_max]`, adversarial in this game.
+    pub ego: Accel,
+    /// The follower's IDM output is clipped to these bounds.
+    pub follower_clip: Accel,
+    /// The follower's IDM.
+    pub idm: Idm,
+    /// `[T_min, T_max]`, s.
+    pub time_gap: Accel,
+    /// The largest speed of any vehicle, m/s.
+    pub max_speed: f32,
+    /// `l(z) = gap_follower - min_gap`.
+    pub min_gap: f32,
+}
+
+impl RearIdm {
+    /// The follower's clipped IDM acceleration, within its speed limits.
+    #[inline(always)]
+    pub fn follower_acceleration(&self, vf: f32, ve: f32, gap: f32, t: f32) -> f32 {
+        let g = self.idm.acceleration(vf.max(0.0), vf - ve, gap, t);
+        let clip = self.follower_clip.at_speed(vf, self.max_speed);
+        g.clamp(clip.min, clip.max)
+    }
+
+    /// The adversary's time gap for co-state component `p2` (on `v_f`).
+    #[inline(always)]
+    pub fn adversarial_time_gap(&self, p2: f32) -> f32 {
+        if p2 > 0.0 {
+            self.time_gap.max
+        } else {
+            self.time_gap.min
+        }
+    }
+}
+
+impl Dynamics for RearIdm {
+    fn dims(&self) -> usize {
+        3
+    }
+
+    fn constraint(&self, z: &Vector) -> f32 {
+        z[0] - self.min_gap
+    }
+
+    fn monotone_axis(&self, axis: usize) -> bool {
+        axis == 0
+    }
+
+    #[inline(always)]
+    fn hamiltonian(&self, z: &Vector, p: &Vector) -> f32 {
+        let uf = self.follower_acceleration(z[1], z[2], z[0], self.adversarial_time_gap(p[1]));
+        let ue = self.ego.at_speed(z[2], self.max_speed).argmin(p[2]);
+        p[0] * (z[2] - z[1]) + p[1] * uf + p[2] * ue
+    }
+
+    #[inline(always)]
+    fn dissipation(&self, z: &Vector, alpha: &mut Vector) {
+        alpha[0] = (z[2] - z[1]).abs();
+        alpha[1] = self
+            .follower_clip
+            .at_speed(z[1], self.max_speed)
+            .magnitude();
+        alpha[2] = self.ego.at_speed(z[2], self.max_speed).magnitude();
+    }
+
+    fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs {
+        let t = self.adversarial_time_gap(p[1]);
+        OptimalInputs {
+            ego: self.ego.at_speed(z[2], self.max_speed).argmin(p[2]),
+            leader: 0.0,
+            follower: Some(self.follower_acceleration(z[1], z[2], z[0], t)),
+            time_gap: Some(t),
+            follower_speed: Some(z[1]),
+        }
+    }
+
+    /// The ego is adversarial here: the bit says whether its worst case is to accelerate.
+    fn ego_accelerates(&self, p: &Vector) -> bool {
+        p[2] <= 0.0
+    }
+
+    /// Local-local Lax-Friedrichs (Osher & Shu 1991): with `local`, `alpha_k` is the largest
+    /// `|dH/dp_k|` over the co-states between `p-` and `p+` only, not over every input.
+    ///
+    /// Why: at a rest point (both cars stopped, the follower `s0` behind) the flow is zero for
+    /// the inputs the co-state selects, while the input *set* still allows 2 m/s^2. Plain local
+    /// LF adds `alpha |p+ - p-| / 2` there with `alpha = 2`, a viscosity no transport balances:
+    /// on a 1 m, 1 m/s grid it lowered the whole plateau `W = s0` by 0.002 m/s of backward time
+    /// without end (0.63 m at 170 s, 0.39 m at 290 s). With `alpha` from the selected inputs
+    /// the rest point keeps its value, and the scheme is still monotone for the Hamiltonian
+    /// restricted to the co-states in the stencil.
+    fn lax_friedrichs_row(
+        &self,
+        z: &Vector,
+        last: &[f32],
+        pbar: &[&[f32]],
+        half_jump: &[&[f32]],
+        local: bool,
+        alpha: &Vector,
+        rate: &mut [f32],
+    ) {
+        let (x, vf) = (z[0], z[1]);
+        for (c, r) in rate.iter_mut().enumerate() {
+            let ve = last[c];
+            let ego = self.ego.at_speed(ve, self.max_speed);
+            let (p1, p2, p3) = (pbar[0][c], pbar[1][c], pbar[2][c]);
+            let uf = self.follower_acceleration(vf, ve, x, self.adversarial_time_gap(p2));
+            let ue = ego.argmin(p3);
+            let h = p1 * (ve - vf) + p2 * uf + p3 * ue;
+            let (a1, a2, a3) = if local {
+                let (j2, j3) = (half_jump[1][c].abs(), half_jump[2][c].abs());
+                // Follower: the time gaps the co-states in [p2 - j2, p2 + j2] select.
+                let mut a2 = 0f32;
+                if p2 + j2 > 0.0 {
+                    a2 = a2.max(
+                        self.follower_acceleration(vf, ve, x, self.time_gap.max)
+                            .abs(),
+                    );
+                }
+                if p2 - j2 <= 0.0 {
+                    a2 = a2.max(
+                        self.follower_acceleration(vf, ve, x, self.time_gap.min)
+                            .abs(),
+                    );
+                }
+                let mut a3 = 0f32;
+                if p3 + j3 > 0.0 {
+                    a3 = a3.max(ego.min.abs());
+                }
+                if p3 - j3 <= 0.0 {
+                    a3 = a3.max(ego.max.abs());
+                }
+                ((ve - vf).abs(), a2, a3)
+            } else {
+                (alpha[0], alpha[1], alpha[2])
+            };
+            *r = h + a1 * half_jump[0][c] + a2 * half_jump[1][c] + a3 * half_jump[2][c];
+        }
+    }
+}
+
+/// The sampled-data rear game: the ego's acceleration (one of `-beta`, `0`, `a_max`) and the
+/// follower's time gap (`T_min` or `T_max`) are held for a period; the follower's IDM is
+/// integrated in sub-steps of at most 50 ms within it (it reacts continuously).
+impl SampledGame for RearIdm {
+    fn dims(&self) -> usize {
+        3
+    }
+
+    fn constraint(&self, z: &Vector) -> f32 {
+        z[0] - self.min_gap
+    }
+
+    fn input_count(&self) -> usize {
+        6
+    }
+
+    fn advance(&self, z: &Vector, input: usize, h: f32) -> Vector {
+        let ue = [self.ego.min, 0.0, self.ego.max][input % 3];
+        let t = if input < 3 {
+            self.time_gap.min
+        } else {
+            self.time_gap.max
+        };
+        let steps = (h / 0.05).ceil().max(1.0);
+        let ds = h / steps;
+        let vm = self.max_speed;
+        let (mut x, mut vf, mut ve) = (z[0], z[1], z[2]);
+        for _ in 0..steps as usize {
+            let uf = self.follower_acceleration(vf, ve, x, t);
+            // Each car's speed is clamped to [0, v_max] exactly within the sub-step.
+            let (dve, nve) = travel(ve, ue, ds, vm);
+            let (dvf, nvf) = travel(vf, uf, ds, vm);
+            x += dve - dvf;
+            ve = nve;
+            vf = nvf;
+        }
+        let mut out = *z;
+        out[0] = x;
+        out[1] = vf;
+        out[2] = ve;
+        out
+    }
+}
+
+/// The distance a car at speed `v` covers in `dt` at acceleration `a`, its speed held in
+/// `[0, v_max]`, and its speed at the end.
+#[inline(always)]
+pub fn travel(v: f32, a: f32, dt: f32, v_max: f32) -> (f32, f32) {
+    let limit = if a < 0.0 { 0.0 } else { v_max };
+    if a == 0.0 {
+        return (v * dt, v);
+    }
+    let t_hit = ((limit - v) / a).max(0.0);
+    if t_hit >= dt {
+        (v * dt + 0.5 * a * dt * dt, v + a * dt)
+    } else {
+        (
+            v * t_hit + 0.5 * a * t_hit * t_hit + limit * (dt - t_hit),
+            limit,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn game() -> RearIdm {
+        RearIdm {
+            ego: Accel {
+                min: -3.5,
+                max: 2.0,
+            },
+            follower_clip: Accel {
+                min: -6.0,
+                max: 2.0,
+            },
+            idm: Idm {
+                max_acceleration: 1.0,
+                comfortable_deceleration: 1.5,
+                desired_speed: 33.3,
+                exponent: 4,
+                jam_distance: 2.0,
+            },
+            time_gap: Accel { min: 1.0, max: 2.0 },
+            max_speed: 35.0,
+            min_gap: 0.0,
+        }
+    }
+
+    #[test]
+    fn travel_is_exact_and_stops_at_the_speed_limits() {
+        assert_eq!(travel(10.0, -4.0, 1.0, 35.0), (8.0, 6.0));
+        // Stops after 0.5 s having covered 0.5 m, then stands.
+        assert_eq!(travel(2.0, -4.0, 1.0, 35.0), (0.5, 0.0));
+        // Reaches 35 m/s after 0.5 s, then cruises.
+        let (d, v) = travel(34.0, 2.0, 1.0, 35.0);
+        assert_eq!(v, 35.0);
+        assert!((d - (34.0 * 0.5 + 0.25 + 35.0 * 0.5)).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_rest_point_maps_onto_itself() {
+        // Both stopped, the follower exactly s0 behind: the IDM asks for nothing, the ego at
+        // rest cannot brake, so the state does not move under (0 acceleration, any T).
+        let g = game();
+        let mut z = [0f32; crate::grid::MAX_DIMS];
+        z[0] = 2.0;
+        for input in [1, 4] {
+            assert_eq!(g.advance(&z, input, 0.5), z);
+        }
+        // Braking at rest is no braking.
+        assert_eq!(g.advance(&z, 0, 0.5), z);
+    }
+
+    #[test]
+    fn the_hamiltonian_takes_the_least_rate_over_every_input() {
+        let g = game();
+        let mut z = [0f32; crate::grid::MAX_DIMS];
+        let mut p = [0f32; crate::grid::MAX_DIMS];
+        for (x, vf, ve) in [(5.0, 10.0, 8.0), (30.0, 20.0, 25.0), (3.0, 0.0, 0.0)] {
+            z[..3].copy_from_slice(&[x, vf, ve]);
+            for (p1, p2, p3) in [(1.0, -0.5, 0.3), (0.2, 0.7, -0.4), (0.0, 0.0, 1.0)] {
+                p[..3].copy_from_slice(&[p1, p2, p3]);
+                let mut least = f32::INFINITY;
+                for k in 0..=20 {
+                    let t = 1.0 + k as f32 / 20.0;
+                    let uf = g.follower_acceleration(vf, ve, x, t);
+                    for j in 0..=20 {
+                        let band = g.ego.at_speed(ve, g.max_speed);
+                        let ue = band.min + (band.max - band.min) * j as f32 / 20.0;
+                        least = least.min(p1 * (ve - vf) + p2 * uf + p3 * ue);
+                    }
+                }
+                let h = g.hamiltonian(&z, &p);
+                assert!((h - least).abs() < 1e-4, "H {h} vs brute force {least}");
+            }
+        }
+    }
+}
