@@ -397,7 +397,11 @@ fn the_constraint_obstacle_residual_is_the_applied_rate() {
     let mut previous: Option<(f64, Vec<f32>)> = None;
     let sol = solve(&game, &grid, numerics, Stop::Horizon(3.0), |t, _, v| {
         if let Some((t0, p)) = &previous {
-            let change = v.iter().zip(p).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
+            let change = v
+                .iter()
+                .zip(p)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0f32, f32::max);
             applied = f64::from(change) / (t - t0);
         }
         previous = Some((t, v.to_vec()));

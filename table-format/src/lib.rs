@@ -47,6 +47,7 @@
 )]
 
 mod error;
+pub mod front;
 mod header;
 mod table;
 #[cfg(feature = "std")]

@@ -1,0 +1,232 @@
+//! The front part of the three-car game in closed form: the smallest gap to the leader when
+//! the ego brakes at a bounded rate after a response time and the leader brakes as hard as it
+//! may, both down to standstill.
+//!
+//! # Why a closed form is the front game's value
+//! The front gap is `gap(t) = gap + p_L(t) - p_E(t)`, with `p_L`, `p_E` the distances the two
+//! cars cover from now. A leader braking at `b_L` until it stops covers the least distance
+//! *at every instant* among all its admissible behaviours (speeds stay at or above zero), and
+//! an ego braking at `beta` covers the least among all of its own. So the pair is a saddle point
+//! of `min_t gap(t)` for every `t` at once, and the game's value (`sup` over the ego, `inf` over
+//! the leader, of the smallest gap ever) is that pair's smallest gap. The solver uses the same
+//! function as the firmware, so the two agree to the bit.
+//!
+//! # The response time
+//! With a response time `rho` the ego keeps an acceleration `a_r` (clamped to its speed range)
+//! for `rho`, then brakes at `beta`: the ego's dead time plus actuator lag, bounded above by
+//! a hold of the current command (a first-order lag with time constant `tau` reaches a braking
+//! command no later than a step after `tau`: its speed is never above the step's, by
+//! `integral_0^inf e^(-s/tau) ds = tau`).
+//!
+//! # Evaluation
+//! Between events (the response ends, a car stops, the ego reaches `v_max`) both accelerations
+//! are constant and the gap is a parabola in time: its smallest value on a segment is at an
+//! end or at the vertex, where the relative speed changes sign from closing to opening. There
+//! are at most five segments. f32 throughout; no panics, no loops without a bound.
+
+/// The front model: the leader's hardest braking, and the ego's braking level, response time,
+/// acceleration during the response and speed limit. All in SI units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FrontModel {
+    /// The leader's hardest braking `b_L`, m/s^2 (positive).
+    pub leader_braking: f32,
+    /// The ego's braking level `beta`, m/s^2 (positive).
+    pub ego_braking: f32,
+    /// How long the ego keeps `response_acceleration` before braking, s (zero or positive).
+    pub response_time: f32,
+    /// The ego's acceleration during the response, m/s^2.
+    pub response_acceleration: f32,
+    /// The largest speed, m/s.
+    pub max_speed: f32,
+}
+
+/// The smallest gap (m) to a leader `gap` metres ahead at `leader_speed`, for an ego at
+/// `ego_speed`, under [`FrontModel`]: the front game's value with constraint `l = gap`.
+/// Speeds are clamped into `[0, max_speed]`. Non-decreasing in `gap` and `leader_speed`,
+/// non-increasing in `ego_speed`. NaN in, NaN out.
+pub fn front_value(gap: f32, leader_speed: f32, ego_speed: f32, model: &FrontModel) -> f32 {
+    let vmax = model.max_speed;
+    let (bl, beta) = (model.leader_braking, model.ego_braking);
+    let mut g = gap;
+    let mut vl = leader_speed.clamp(0.0, vmax);
+    let mut ve = ego_speed.clamp(0.0, vmax);
+    let mut response = model.response_time.max(0.0);
+    let mut least = g;
+    // Each pass ends at an event that does not recur: the response ends, the leader stops, the
+    // ego stops or reaches v_max (once, during the response). Five passes cover them all.
+    for _ in 0..5 {
+        let al = if vl > 0.0 { -bl } else { 0.0 };
+        let ae = if response > 0.0 {
+            let a = model.response_acceleration;
+            if (a > 0.0 && ve >= vmax) || (a < 0.0 && ve <= 0.0) {
+                0.0
+            } else {
+                a
+            }
+        } else if ve > 0.0 {
+            -beta
+        } else {
+            0.0
+        };
+        // Time to each event; the segment ends at the first, and the cars whose event it is
+        // are set exactly to their limit (no rounding remainder to start a spurious segment).
+        let t_leader = if al < 0.0 { vl / bl } else { f32::INFINITY };
+        let t_response = if response > 0.0 {
+            response
+        } else {
+            f32::INFINITY
+        };
+        let t_ego = if ae < 0.0 {
+            ve / -ae
+        } else if ae > 0.0 {
+            (vmax - ve) / ae
+        } else {
+            f32::INFINITY
+        };
+        let len = t_leader.min(t_response).min(t_ego);
+        let dv = vl - ve;
+        let da = al - ae;
+        // The vertex of a closing-then-opening parabola inside the segment.
+        if dv < 0.0 && da > 0.0 {
+            let s = -dv / da;
+            if s < len {
+                least = least.min(g + 0.5 * dv * s);
+            }
+        }
+        if !len.is_finite() {
+            // Nothing changes any more: both at constant speed, the ego no faster (it stops
+            // or brakes whenever it moves outside the response).
+            if dv < 0.0 {
+                return f32::NEG_INFINITY;
+            }
+            break;
+        }
+        g += dv * len + 0.5 * da * len * len;
+        vl = if len >= t_leader {
+            0.0
+        } else {
+            (vl + al * len).clamp(0.0, vmax)
+        };
+        ve = if len >= t_ego {
+            if ae < 0.0 {
+                0.0
+            } else {
+                vmax
+            }
+        } else {
+            (ve + ae * len).clamp(0.0, vmax)
+        };
+        response = if len >= t_response {
+            0.0
+        } else {
+            response - len
+        };
+        least = least.min(g);
+    }
+    if gap.is_nan() || leader_speed.is_nan() || ego_speed.is_nan() {
+        return f32::NAN;
+    }
+    least
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The smallest gap by brute-force integration (f64, 0.1 ms steps).
+    fn simulated(gap: f64, vl: f64, ve: f64, m: &FrontModel) -> f64 {
+        let dt = 1e-4;
+        let (mut g, mut vl, mut ve, mut t) = (gap, vl, ve, 0.0);
+        let mut least = g;
+        let vmax = f64::from(m.max_speed);
+        while vl > 0.0 || ve > 0.0 {
+            let ae = if t < f64::from(m.response_time) {
+                f64::from(m.response_acceleration)
+            } else {
+                -f64::from(m.ego_braking)
+            };
+            let nl = (vl - f64::from(m.leader_braking) * dt).max(0.0);
+            let ne = (ve + ae * dt).clamp(0.0, vmax);
+            g += 0.5 * (vl + nl) * dt - 0.5 * (ve + ne) * dt;
+            vl = nl;
+            ve = ne;
+            t += dt;
+            least = least.min(g);
+            if t > 200.0 {
+                break;
+            }
+        }
+        least
+    }
+
+    fn model(bl: f32, beta: f32, rho: f32, ar: f32) -> FrontModel {
+        FrontModel {
+            leader_braking: bl,
+            ego_braking: beta,
+            response_time: rho,
+            response_acceleration: ar,
+            max_speed: 35.0,
+        }
+    }
+
+    #[test]
+    fn known_cases() {
+        // Equal braking, no response: the gap never shrinks below min(gap, final gap).
+        let m = model(6.0, 6.0, 0.0, 0.0);
+        assert_eq!(front_value(20.0, 20.0, 20.0, &m), 20.0);
+        // A stopped leader: the ego stops v^2 / (2 beta) = 50 m later.
+        let m = model(6.0, 4.0, 0.0, 0.0);
+        assert!((front_value(60.0, 0.0, 20.0, &m) - 10.0).abs() < 1e-4);
+        // The ego out-brakes the leader and is faster: the smallest gap is where the speeds
+        // meet, gap - dv^2 / (2 (beta - b_L)) = 30 - 100 / 4 = 5 m.
+        let m = model(2.0, 4.0, 0.0, 0.0);
+        assert!((front_value(30.0, 20.0, 30.0, &m) - 5.0).abs() < 1e-3);
+        // A response of 1 s at +2 m/s^2 from 20 m/s: 21 m, then 22^2 / 8 = 60.5 m.
+        let m = model(6.0, 4.0, 1.0, 2.0);
+        assert!((front_value(100.0, 0.0, 20.0, &m) - 18.5).abs() < 1e-3);
+        assert!(front_value(f32::NAN, 0.0, 20.0, &m).is_nan());
+    }
+
+    proptest! {
+        #[test]
+        fn matches_brute_force_integration(
+            gap in -5.0f32..150.0, vl in 0.0f32..35.0, ve in 0.0f32..35.0,
+            bl in 1.0f32..9.0, beta in 1.0f32..9.0, rho in 0.0f32..1.0, ar in -4.0f32..2.0,
+        ) {
+            let m = model(bl, beta, rho, ar);
+            let exact = front_value(gap, vl, ve, &m);
+            let brute = simulated(f64::from(gap), f64::from(vl), f64::from(ve), &m);
+            prop_assert!((f64::from(exact) - brute).abs() < 0.01, "{} vs {}", exact, brute);
+        }
+
+        /// The property a safety filter rests on: braking at beta (no response time), the
+        /// value never decreases, whatever the leader does within its bounds.
+        #[test]
+        fn never_decreases_along_the_ego_braking(
+            gap in 0.0f32..150.0, vl in 0.0f32..35.0, ve in 0.0f32..35.0,
+            bl in 1.0f32..9.0, beta in 1.0f32..9.0,
+            leader in proptest::collection::vec(-1.0f32..1.0, 50),
+        ) {
+            let m = model(bl, beta, 0.0, 0.0);
+            let (mut g, mut l, mut e) = (gap, vl, ve);
+            let start = front_value(g, l, e, &m);
+            let h = 0.02f32;
+            for &u in &leader {
+                // The leader's acceleration in [-b_L, 2], held for 20 ms (speeds >= 0).
+                let al = if u < 0.0 { u * bl } else { 2.0 * u };
+                let nl = (l + al * h).clamp(0.0, 35.0);
+                let ne = (e - beta * h).max(0.0);
+                // Exact distances for the held accelerations, stopping at zero speed.
+                let dl = if l + al * h < 0.0 { l * l / (2.0 * -al) } else { 0.5 * (l + nl) * h };
+                let de = if e - beta * h < 0.0 { e * e / (2.0 * beta) } else { 0.5 * (e + ne) * h };
+                g += dl - de;
+                l = nl;
+                e = ne;
+                let now = front_value(g, l, e, &m);
+                prop_assert!(now >= start - 1e-3 * (1.0 + start.abs()), "{} after {} at {:?} from {:?} m {:?}", now, start, (g, l, e), (gap, vl, ve), m);
+            }
+        }
+    }
+}
