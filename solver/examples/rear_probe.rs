@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use solver::games::{Accel, Idm, RearIdm};
 use solver::grid::{Grid, GridAxis};
-use solver::semi_lagrangian::iterate;
+use solver::semi_lagrangian::{iterate, Breakpoints};
 
 fn main() {
     let game = RearIdm {
@@ -34,17 +34,20 @@ fn main() {
     };
     println!("| spacing (m, m/s) | period (s) | nodes | iterations | wall (s) | W(10, 0, 0) | W(20, 5, 5) | W(3, 0, 0) |");
     println!("|---|---|---|---|---|---|---|---|");
-    for spacing in [1.0, 0.5, 0.25, 0.125] {
+    let uniform = std::env::args().nth(1).as_deref() != Some("uneven");
+    for spacing in [1.0, 0.5, 0.25, 0.125].into_iter().filter(|_| uniform) {
         for h in [0.1f32, 0.5] {
-            let grid = Grid::new(vec![
-                GridAxis::new("gap_follower", -2.0, 30.0, (32.0 / spacing) as usize + 1),
-                GridAxis::new("follower_speed", 0.0, 8.0, (8.0 / spacing) as usize + 1),
-                GridAxis::new("ego_speed", 0.0, 8.0, (8.0 / spacing) as usize + 1),
-            ])
-            .expect("grid");
+            let grid = Breakpoints::from_uniform(
+                &Grid::new(vec![
+                    GridAxis::new("gap_follower", -2.0, 30.0, (32.0 / spacing) as usize + 1),
+                    GridAxis::new("follower_speed", 0.0, 8.0, (8.0 / spacing) as usize + 1),
+                    GridAxis::new("ego_speed", 0.0, 8.0, (8.0 / spacing) as usize + 1),
+                ])
+                .expect("grid"),
+            );
             let t0 = Instant::now();
             let out = iterate(&game, &grid, h, 1e-5, 100_000, |_, _, _| {});
-            let at = |x: f64, vf: f64, ve: f64| grid.interpolate(&out.values, &[x, vf, ve]);
+            let at = |x: f32, vf: f32, ve: f32| grid.interpolate(&out.values, &[x, vf, ve]);
             println!(
                 "| {spacing} | {h} | {} | {} | {:.1} | {:.3} | {:.3} | {:.3} |",
                 grid.len(),
@@ -52,6 +55,54 @@ fn main() {
                 t0.elapsed().as_secs_f64(),
                 at(10.0, 0.0, 0.0),
                 at(20.0, 5.0, 5.0),
+                at(3.0, 0.0, 0.0)
+            );
+        }
+    }
+    if uniform {
+        return;
+    }
+    // The whole speed range, fine only near the rest point (small gaps, low speeds).
+    let full = RearIdm {
+        max_speed: 35.0,
+        ..game
+    };
+    println!();
+    println!("| rest-point spacing (m, m/s) | period (s) | nodes | iterations | wall (s) | W(10, 0, 0) | W(45, 30, 30) | W(3, 0, 0) |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for fine in [0.25f32, 0.125, 0.0625] {
+        for h in [0.1f32, 0.05] {
+            let speed = Breakpoints::piecewise(
+                0.0,
+                &[(1.0, fine), (3.0, 2.0 * fine), (8.0, 0.25), (35.0, 0.5)],
+            );
+            let gap = Breakpoints::piecewise(
+                -1.0,
+                &[
+                    (1.0, 0.25),
+                    (4.0, fine),
+                    (10.0, 2.0 * fine),
+                    (40.0, 0.5),
+                    (80.0, 1.0),
+                    (150.0, 2.0),
+                ],
+            );
+            let grid = Breakpoints::new(vec![
+                ("gap_follower".into(), gap),
+                ("follower_speed".into(), speed.clone()),
+                ("ego_speed".into(), speed),
+            ])
+            .expect("grid");
+            let t0 = Instant::now();
+            let out = iterate(&full, &grid, h, 1e-5, 100_000, |_, _, _| {});
+            let at = |x: f32, vf: f32, ve: f32| grid.interpolate(&out.values, &[x, vf, ve]);
+            println!(
+                "| {fine} | {h} | {} | {} | {:.1} | {:.3} | {:.3} | {:.3} |",
+                grid.len(),
+                out.iterations,
+                t0.elapsed().as_secs_f64(),
+                at(10.0, 0.0, 0.0),
+                at(45.0, 30.0, 30.0),
                 at(3.0, 0.0, 0.0)
             );
         }

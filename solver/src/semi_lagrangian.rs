@@ -27,8 +27,133 @@
 
 use rayon::prelude::*;
 
+use crate::error::ConfigError;
 use crate::games::Vector;
 use crate::grid::{Grid, MAX_DIMS};
+
+/// A Cartesian grid whose axes are lists of breakpoints (strictly increasing, at least two),
+/// stored in C order (last axis fastest). Fine where the value needs it, coarse elsewhere.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Breakpoints {
+    names: Vec<String>,
+    axes: Vec<Vec<f32>>,
+    strides: Vec<usize>,
+    len: usize,
+}
+
+impl Breakpoints {
+    /// A grid over `axes` (name, breakpoints); refuses fewer than two or non-increasing
+    /// breakpoints and more than three axes.
+    pub fn new(axes: Vec<(String, Vec<f32>)>) -> Result<Self, ConfigError> {
+        if axes.is_empty() || axes.len() > 3 {
+            return Err(ConfigError::new("grid", "needs 1 to 3 axes"));
+        }
+        for (name, points) in &axes {
+            let ok = points.len() >= 2
+                && points.iter().all(|x| x.is_finite())
+                && points.windows(2).all(|w| w[0] < w[1]);
+            if !ok {
+                return Err(ConfigError::new(
+                    &format!("grid.{name}"),
+                    "needs at least two finite, strictly increasing breakpoints",
+                ));
+            }
+        }
+        let mut strides = vec![1usize; axes.len()];
+        for k in (0..axes.len().saturating_sub(1)).rev() {
+            strides[k] = strides[k + 1] * axes[k + 1].1.len();
+        }
+        let len = strides[0] * axes[0].1.len();
+        let (names, axes) = axes.into_iter().unzip();
+        Ok(Breakpoints {
+            names,
+            axes,
+            strides,
+            len,
+        })
+    }
+
+    /// The breakpoints of a uniform grid.
+    pub fn from_uniform(grid: &Grid) -> Self {
+        let axes = grid
+            .axes()
+            .iter()
+            .map(|a| {
+                let points = (0..a.points).map(|i| a.coordinate(i) as f32).collect();
+                (a.name.clone(), points)
+            })
+            .collect();
+        Breakpoints::new(axes).expect("a valid uniform grid has valid breakpoints")
+    }
+
+    /// Piecewise-uniform breakpoints: from `start`, to each `(end, spacing)` in turn.
+    pub fn piecewise(start: f32, pieces: &[(f32, f32)]) -> Vec<f32> {
+        let mut out = vec![start];
+        let mut at = f64::from(start);
+        for &(end, spacing) in pieces {
+            let n = ((f64::from(end) - at) / f64::from(spacing))
+                .round()
+                .max(1.0) as usize;
+            let step = (f64::from(end) - at) / n as f64;
+            for i in 1..=n {
+                out.push((at + step * i as f64) as f32);
+            }
+            at = f64::from(end);
+        }
+        out
+    }
+
+    /// The number of axes.
+    pub fn dims(&self) -> usize {
+        self.axes.len()
+    }
+
+    /// The number of nodes.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the grid has no nodes (never, for a constructed grid).
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The breakpoints of axis `k`.
+    pub fn axis(&self, k: usize) -> &[f32] {
+        &self.axes[k]
+    }
+
+    /// The name of axis `k`.
+    pub fn name(&self, k: usize) -> &str {
+        &self.names[k]
+    }
+
+    /// The coordinates of `node`.
+    pub fn node_coordinates(&self, mut node: usize) -> Vector {
+        let mut z = [0f32; MAX_DIMS];
+        for k in (0..self.dims()).rev() {
+            let n = self.axes[k].len();
+            z[k] = self.axes[k][node % n];
+            node /= n;
+        }
+        z
+    }
+
+    /// The cell holding `x` on axis `k` (clamped to the axis) and the position in it.
+    fn locate(&self, k: usize, x: f32) -> (usize, f32) {
+        let a = &self.axes[k];
+        let n = a.len();
+        let x = x.clamp(a[0], a[n - 1]);
+        let i = a.partition_point(|&b| b <= x).clamp(1, n - 1) - 1;
+        let t = ((x - a[i]) / (a[i + 1] - a[i])).clamp(0.0, 1.0);
+        (i, t)
+    }
+
+    /// Multilinear interpolation of `values` at `z`, clamped to the grid.
+    pub fn interpolate(&self, values: &[f32], z: &[f32]) -> f32 {
+        Stencil::new(self, z).apply(values)
+    }
+}
 
 /// A game whose inputs are held for a period and whose players all minimise.
 pub trait SampledGame: Sync {
@@ -60,23 +185,18 @@ pub struct Iterated {
 /// `(iteration, residual, values)` after each iteration.
 pub fn iterate<G: SampledGame>(
     game: &G,
-    grid: &Grid,
+    grid: &Breakpoints,
     h: f32,
     tolerance: f32,
     max_iterations: usize,
     mut progress: impl FnMut(usize, f32, &[f32]),
 ) -> Iterated {
     assert_eq!(game.dims(), grid.dims());
-    let d = grid.dims();
     let n = grid.len();
     // Every node's successors and the constraint never change: compute them once.
     let coords: Vec<Vector> = (0..n)
         .into_par_iter()
-        .map(|node| {
-            let mut c = [0f64; MAX_DIMS];
-            grid.node_coordinates(node, &mut c[..d]);
-            c.map(|x| x as f32)
-        })
+        .map(|node| grid.node_coordinates(node))
         .collect();
     let constraint: Vec<f32> = coords.par_iter().map(|z| game.constraint(z)).collect();
     let stencils: Vec<Stencil> = coords
@@ -128,19 +248,16 @@ struct Stencil {
 }
 
 impl Stencil {
-    fn new(grid: &Grid, z: &Vector) -> Self {
+    fn new(grid: &Breakpoints, z: &[f32]) -> Self {
         let d = grid.dims();
-        assert!(d <= 3, "semi-Lagrangian stencils are for up to three axes");
         let mut base = 0usize;
         let mut frac = [0f32; 3];
         let mut strides = [0u32; 3];
         for k in 0..d {
-            let a = &grid.axes()[k];
-            let s = ((f64::from(z[k]) - a.min) / a.spacing()).clamp(0.0, (a.points - 1) as f64);
-            let i = (s.floor() as usize).min(a.points - 2);
-            frac[k] = (s - i as f64) as f32;
-            base += i * grid.strides()[k];
-            strides[k] = grid.strides()[k] as u32;
+            let (i, t) = grid.locate(k, z[k]);
+            frac[k] = t;
+            base += i * grid.strides[k];
+            strides[k] = grid.strides[k] as u32;
         }
         Stencil {
             base: base as u32,
@@ -157,6 +274,7 @@ impl Stencil {
         let [t0, t1, t2] = self.frac;
         let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
         match self.dims {
+            1 => lerp(v[b], v[b + s0], t0),
             2 => lerp(
                 lerp(v[b], v[b + s1], t1),
                 lerp(v[b + s0], v[b + s0 + s1], t1),
@@ -208,11 +326,13 @@ mod tests {
     }
 
     fn error(points: usize) -> (f32, bool) {
-        let grid = Grid::new(vec![
-            GridAxis::new("gap", -20.0, 40.0, points),
-            GridAxis::new("speed", 0.0, 10.0, points),
-        ])
-        .unwrap();
+        let grid = Breakpoints::from_uniform(
+            &Grid::new(vec![
+                GridAxis::new("gap", -20.0, 40.0, points),
+                GridAxis::new("speed", 0.0, 10.0, points),
+            ])
+            .unwrap(),
+        );
         let game = Braking { b: 4.0 };
         let mut previous: Option<Vec<f32>> = None;
         let mut monotone = true;
@@ -224,16 +344,54 @@ mod tests {
         });
         assert!(out.converged);
         let mut worst = 0f32;
-        let mut z = [0f64; MAX_DIMS];
         for node in 0..grid.len() {
-            grid.node_coordinates(node, &mut z[..2]);
-            let exact = (z[0] - z[1] * z[1] / 8.0) as f32;
+            let z = grid.node_coordinates(node);
+            let exact = z[0] - z[1] * z[1] / 8.0;
             // Away from the lower gap face, where the grid clamps.
             if exact > -10.0 {
                 worst = worst.max((out.values[node] - exact).abs());
             }
         }
         (worst, monotone)
+    }
+
+    #[test]
+    fn interpolation_is_exact_for_multilinear_functions_on_uneven_breakpoints() {
+        let grid = Breakpoints::new(vec![
+            (
+                "a".into(),
+                Breakpoints::piecewise(-1.0, &[(1.0, 0.1), (10.0, 1.5)]),
+            ),
+            ("b".into(), vec![0.0, 0.3, 2.0, 7.0]),
+            (
+                "c".into(),
+                Breakpoints::piecewise(0.0, &[(0.5, 0.05), (35.0, 0.5)]),
+            ),
+        ])
+        .unwrap();
+        let f = |z: &[f32]| 1.0 + 2.0 * z[0] - z[1] + 0.5 * z[2] + 0.25 * z[0] * z[1] * z[2];
+        let values: Vec<f32> = (0..grid.len())
+            .map(|n| f(&grid.node_coordinates(n)))
+            .collect();
+        for z in [
+            [0.05f32, 0.2, 0.33],
+            [7.3, 5.5, 20.1],
+            [-1.0, 0.0, 0.0],
+            [10.0, 7.0, 35.0],
+        ] {
+            let got = grid.interpolate(&values, &z);
+            assert!(
+                (got - f(&z)).abs() < 1e-3 * (1.0 + f(&z).abs()),
+                "{got} vs {}",
+                f(&z)
+            );
+        }
+        // Clamped outside.
+        assert_eq!(
+            grid.interpolate(&values, &[-5.0, 0.0, 0.0]),
+            grid.interpolate(&values, &[-1.0, 0.0, 0.0])
+        );
+        assert!(Breakpoints::new(vec![("x".into(), vec![0.0, 0.0])]).is_err());
     }
 
     #[test]
