@@ -205,6 +205,7 @@ fn a_corrupt_or_foreign_table_means_minimum_risk_for_good() {
             min: -5.0,
             max: 45.0,
             points: 3,
+            spacing: table_format::Spacing::Uniform,
         },
         table_format::Axis {
             name: "rel_speed_leader",
@@ -212,6 +213,7 @@ fn a_corrupt_or_foreign_table_means_minimum_risk_for_good() {
             min: -10.0,
             max: 10.0,
             points: 3,
+            spacing: table_format::Spacing::Uniform,
         },
     ];
     let trusted = [
@@ -229,6 +231,7 @@ fn a_corrupt_or_foreign_table_means_minimum_risk_for_good() {
             status: table_format::HorizonStatus::Fixed,
         },
         axes: &axes,
+        breakpoints: &[],
         trusted_box: &trusted,
         interpolation_error: 0.0,
         value_bits: table_format::ValueBits::Sixteen,

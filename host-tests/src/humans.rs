@@ -70,7 +70,7 @@ pub fn speed_gradient(table: &Table<'_>, z: [f32; 4]) -> Option<(f32, f32)> {
     let axes = &table.header().axes;
     let diff = |k: usize| -> Option<f32> {
         let a = axes.get(k)?;
-        let h = 0.5 * a.spacing();
+        let h = 0.5 * a.uniform_spacing();
         let (mut lo, mut hi) = (z, z);
         lo[k] = (z[k] - h).max(a.min);
         hi[k] = (z[k] + h).min(a.max);
@@ -136,7 +136,8 @@ impl<'t> Humans<'t> {
                 FALLBACK_IDM,
                 table_format::Bounds::new(1.0, 2.0),
             ),
-            Game::TwoCar { leader, .. } => (
+            // Rear tables have no leader; the campaign refuses them like two-car tables.
+            Game::RearIdm { ego: leader, .. } | Game::TwoCar { leader, .. } => (
                 leader,
                 leader,
                 FALLBACK_IDM,

@@ -148,6 +148,7 @@ pub fn compile(input: &CompileInput<'_>) -> Result<(Vec<u8>, CompileReport), Sol
             min: a.min as f32,
             max: a.max as f32,
             points: a.points as u32,
+            spacing: table_format::Spacing::Uniform,
         })
         .collect();
     let trusted: Vec<Bounds> = input
@@ -161,6 +162,7 @@ pub fn compile(input: &CompileInput<'_>) -> Result<(Vec<u8>, CompileReport), Sol
         min_gap: input.min_gap,
         horizon: input.horizon,
         axes: &header_axes,
+        breakpoints: &[],
         trusted_box: &trusted,
         interpolation_error,
         value_bits: if input.bits == 8 {

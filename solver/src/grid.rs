@@ -2,8 +2,9 @@
 
 use crate::error::ConfigError;
 
-/// The largest number of axes the solver handles.
-pub const MAX_DIMS: usize = table_format::MAX_DIMS;
+/// The largest number of axes the solver handles (a table may have more).
+pub const MAX_DIMS: usize = 5;
+const _: () = assert!(MAX_DIMS <= table_format::MAX_DIMS);
 
 /// One grid axis: `points` equally spaced nodes from `min` to `max` inclusive.
 #[derive(Debug, Clone, PartialEq)]

@@ -51,6 +51,7 @@ pub fn solve_any(
         AnyGame::Baseline(g) => hji::solve(g, grid, numerics, stop, progress),
         AnyGame::Idm(g) => hji::solve(g, grid, numerics, stop, progress),
         AnyGame::IdmSpeeds(g) => hji::solve(g, grid, numerics, stop, progress),
+        AnyGame::Rear(g) => hji::solve(g, grid, numerics, stop, progress),
     }
 }
 
@@ -66,6 +67,7 @@ pub fn gradient_any(
         AnyGame::Baseline(g) => hji::gradient(g, grid, numerics, values),
         AnyGame::Idm(g) => hji::gradient(g, grid, numerics, values),
         AnyGame::IdmSpeeds(g) => hji::gradient(g, grid, numerics, values),
+        AnyGame::Rear(g) => hji::gradient(g, grid, numerics, values),
     }
 }
 
@@ -300,6 +302,7 @@ fn constraint_any(game: &AnyGame, grid: &Grid) -> Vec<f32> {
         AnyGame::Baseline(g) => hji::constraint_values(g, grid),
         AnyGame::Idm(g) => hji::constraint_values(g, grid),
         AnyGame::IdmSpeeds(g) => hji::constraint_values(g, grid),
+        AnyGame::Rear(g) => hji::constraint_values(g, grid),
     }
 }
 

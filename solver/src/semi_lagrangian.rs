@@ -54,7 +54,7 @@ impl Breakpoints {
                 && points.windows(2).all(|w| w[0] < w[1]);
             if !ok {
                 return Err(ConfigError::new(
-                    &format!("grid.{name}"),
+                    format!("grid.{name}"),
                     "needs at least two finite, strictly increasing breakpoints",
                 ));
             }

@@ -69,6 +69,8 @@ pub enum Error {
         /// The number of entries given.
         found: usize,
     },
+    /// A policy lookup on a table that stores no policy bits.
+    NoPolicy,
 }
 
 impl fmt::Display for Error {
@@ -109,6 +111,7 @@ impl fmt::Display for Error {
                 f,
                 "table contents have {found} entries, the grid has {expected} nodes"
             ),
+            Error::NoPolicy => f.write_str("the table stores no policy bits"),
         }
     }
 }

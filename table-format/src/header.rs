@@ -8,8 +8,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::Error;
 
-/// The largest number of state axes a table may have (the solver handles games of 2 to 5 axes).
-pub const MAX_DIMS: usize = 5;
+/// The largest number of state axes a table may have (format version 2: six; the solver's
+/// games have two to five).
+pub const MAX_DIMS: usize = 6;
 
 /// A closed interval `[min, max]`: an input's bounds, or one axis of a box.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -37,7 +38,19 @@ impl Bounds {
     }
 }
 
-/// One grid axis: `points` equally spaced nodes from `min` to `max` inclusive.
+/// Where an axis' nodes sit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Spacing {
+    /// Equally spaced from `min` to `max`.
+    Uniform,
+    /// At breakpoints listed in the table's breakpoint block (`points` little-endian `f32`,
+    /// strictly increasing, the first `min` and the last `max`): fine where the value needs it,
+    /// coarse elsewhere.
+    Listed,
+}
+
+/// One grid axis: `points` nodes from `min` to `max` inclusive, placed as `spacing` says.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Axis<'a> {
@@ -51,17 +64,28 @@ pub struct Axis<'a> {
     pub max: f32,
     /// The number of nodes, at least 2.
     pub points: u32,
+    /// Uniform, or at listed breakpoints.
+    pub spacing: Spacing,
 }
 
 impl Axis<'_> {
-    /// The distance between neighbouring nodes.
-    pub fn spacing(&self) -> f32 {
+    /// The distance between neighbouring nodes of a uniform axis (the mean one of a listed
+    /// axis).
+    pub fn uniform_spacing(&self) -> f32 {
         (self.max - self.min) / (self.points.saturating_sub(1).max(1)) as f32
     }
 
-    /// The coordinate of node `i` (not range-checked).
-    pub fn coordinate(&self, i: u32) -> f32 {
-        self.min + i as f32 * self.spacing()
+    /// The coordinate of node `i` of a uniform axis (not range-checked).
+    pub fn uniform_coordinate(&self, i: u32) -> f32 {
+        self.min + i as f32 * self.uniform_spacing()
+    }
+
+    /// The bytes its breakpoints take in the breakpoint block (zero for a uniform axis).
+    pub fn breakpoint_bytes(&self) -> usize {
+        match self.spacing {
+            Spacing::Uniform => 0,
+            Spacing::Listed => self.points as usize * 4,
+        }
     }
 }
 
@@ -178,6 +202,24 @@ pub enum Game {
         /// The largest speed of any vehicle, m/s.
         max_speed: f32,
     },
+    /// The rear part of the split three-car game (format version 2): an IDM follower behind an
+    /// ego whose acceleration is any value in `ego` (the band `[-beta, a_max]` of one braking
+    /// level `beta`), both adversarial. Three axes in absolute speeds: `gap_follower` [m],
+    /// `follower_speed` [m/s], `ego_speed` [m/s], every speed in `[0, max_speed]`. Its value
+    /// bounds the rear gap from below for as long as the ego keeps its acceleration in the
+    /// band, whatever else it does (see `table_format::front` for the other half).
+    RearIdm {
+        /// The ego's acceleration band, m/s^2: `min = -beta`.
+        ego: Bounds,
+        /// The follower's IDM output is clipped to these bounds, m/s^2.
+        follower_clip: Bounds,
+        /// The follower's IDM.
+        idm: IdmParameters,
+        /// The adversarial time gap's range, s.
+        time_gap: Bounds,
+        /// The largest speed of any vehicle, m/s.
+        max_speed: f32,
+    },
 }
 
 /// The game without its parameters, for checks such as "the firmware expects a three-car table".
@@ -192,6 +234,8 @@ pub enum GameKind {
     ThreeCarIdm,
     /// [`Game::ThreeCarIdmSpeeds`].
     ThreeCarIdmSpeeds,
+    /// [`Game::RearIdm`].
+    RearIdm,
 }
 
 impl Game {
@@ -202,6 +246,7 @@ impl Game {
             Game::ThreeCarBaseline { .. } => GameKind::ThreeCarBaseline,
             Game::ThreeCarIdm { .. } => GameKind::ThreeCarIdm,
             Game::ThreeCarIdmSpeeds { .. } => GameKind::ThreeCarIdmSpeeds,
+            Game::RearIdm { .. } => GameKind::RearIdm,
         }
     }
 
@@ -211,6 +256,7 @@ impl Game {
         match self {
             Game::TwoCar { .. } => 2,
             Game::ThreeCarIdmSpeeds { .. } => 5,
+            Game::RearIdm { .. } => 3,
             _ => 4,
         }
     }
@@ -221,7 +267,8 @@ impl Game {
             Game::TwoCar { ego, .. }
             | Game::ThreeCarBaseline { ego, .. }
             | Game::ThreeCarIdm { ego, .. }
-            | Game::ThreeCarIdmSpeeds { ego, .. } => *ego,
+            | Game::ThreeCarIdmSpeeds { ego, .. }
+            | Game::RearIdm { ego, .. } => *ego,
         }
     }
 
@@ -271,6 +318,22 @@ impl Game {
             } => {
                 ego.is_valid()
                     && leader.is_valid()
+                    && follower_clip.is_valid()
+                    && time_gap.is_valid()
+                    && time_gap.min >= 0.0
+                    && idm.is_valid()
+                    && max_speed.is_finite()
+                    && *max_speed > 0.0
+            }
+            Game::RearIdm {
+                ego,
+                follower_clip,
+                idm,
+                time_gap,
+                max_speed,
+            } => {
+                ego.is_valid()
+                    && ego.min < 0.0
                     && follower_clip.is_valid()
                     && time_gap.is_valid()
                     && time_gap.min >= 0.0
@@ -376,6 +439,8 @@ pub enum PolicyEncoding {
     /// "accelerate" where the weighted sum of `+1` (set) and `-1` (clear) is positive, "brake"
     /// where it is negative, and the bit of the corner with the largest weight on a tie.
     SignBitWeightedVote,
+    /// No policy bits: the table holds values only (the consumer derives its input otherwise).
+    None,
 }
 
 /// Everything a consumer needs to interpret a table's payload.
@@ -416,10 +481,23 @@ impl Header<'_> {
         Ok(n)
     }
 
-    /// Bytes of the payload: the values, then the policy bits.
+    /// Bytes of the payload: the breakpoint block, the values, then the policy bits (if any).
     pub fn payload_len(&self) -> Result<usize, Error> {
         let n = self.node_count()?;
-        Ok(n * self.quantization.bytes_per_value() + n.div_ceil(8))
+        Ok(self.breakpoint_len() + n * self.quantization.bytes_per_value() + self.policy_len(n))
+    }
+
+    /// The bytes of the breakpoint block: four per node of every listed axis.
+    pub fn breakpoint_len(&self) -> usize {
+        self.axes.iter().map(Axis::breakpoint_bytes).sum()
+    }
+
+    /// The bytes of the policy bits for `nodes` nodes.
+    pub fn policy_len(&self, nodes: usize) -> usize {
+        match self.policy {
+            PolicyEncoding::SignBitWeightedVote => nodes.div_ceil(8),
+            PolicyEncoding::None => 0,
+        }
     }
 
     /// Checks everything the reader relies on: finite numbers, increasing axes, a trusted box
@@ -441,7 +519,7 @@ impl Header<'_> {
             if axis.points < 2 {
                 return Err(Error::InvalidHeader("axis points"));
             }
-            let spacing = axis.spacing();
+            let spacing = axis.uniform_spacing();
             if !(spacing.is_finite() && spacing > 0.0) {
                 return Err(Error::InvalidHeader("axis spacing"));
             }

@@ -56,7 +56,7 @@ mod writer;
 pub use error::Error;
 pub use header::{
     Axis, Bounds, ErrorBound, FollowerSpeed, Game, GameKind, Header, Horizon, HorizonStatus,
-    IdmParameters, PolicyEncoding, Quantization, MAX_DIMS,
+    IdmParameters, PolicyEncoding, Quantization, Spacing, MAX_DIMS,
 };
 pub use table::{EgoAction, Lookup, Table};
 #[cfg(feature = "std")]
@@ -67,7 +67,7 @@ pub const MAGIC: [u8; 4] = *b"HJTB";
 
 /// The layout version this crate reads and writes. Bumped on any change a reader of the previous
 /// version would misread.
-pub const FORMAT_VERSION: u16 = 1;
+pub const FORMAT_VERSION: u16 = 2;
 
 /// Bytes before the header: magic (4), format version (2), header length (2).
 pub const PREAMBLE_LEN: usize = 8;

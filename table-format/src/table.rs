@@ -4,7 +4,7 @@
 //! lookups afterwards only have to check the state they are given. No function here allocates,
 //! and none panics: every slice access is a checked `get`.
 
-use crate::header::{Header, MAX_DIMS};
+use crate::header::{Header, PolicyEncoding, Spacing, MAX_DIMS};
 use crate::{Error, CRC32, CRC_LEN, FORMAT_VERSION, MAGIC, PREAMBLE_LEN};
 
 /// The ego's bang-bang input, as stored in the policy bits.
@@ -35,12 +35,15 @@ pub struct Table<'a> {
     policy: &'a [u8],
     nodes: usize,
     dims: usize,
-    geometry: [AxisGeometry; MAX_DIMS],
+    geometry: [AxisGeometry<'a>; MAX_DIMS],
 }
 
 /// Per axis, what a lookup needs, unpacked from the header once at parse time.
 #[derive(Debug, Clone, Copy, Default)]
-struct AxisGeometry {
+struct AxisGeometry<'a> {
+    /// The breakpoints of a listed axis (little-endian `f32`, checked at parse time); empty
+    /// for a uniform axis.
+    breakpoints: &'a [u8],
     min: f32,
     max: f32,
     inv_spacing: f32,
@@ -55,6 +58,10 @@ struct AxisGeometry {
 fn le_u16(bytes: &[u8], at: usize) -> Option<u16> {
     let b = bytes.get(at..at + 2)?;
     Some(u16::from_le_bytes([*b.first()?, *b.get(1)?]))
+}
+
+fn le_f32(bytes: &[u8], at: usize) -> Option<f32> {
+    le_u32(bytes, at).map(f32::from_bits)
 }
 
 fn le_u32(bytes: &[u8], at: usize) -> Option<u32> {
@@ -127,12 +134,14 @@ impl<'a> Table<'a> {
         }
         let n = header.node_count()?;
         let value_len = n * header.quantization.bytes_per_value();
-        let (values, policy) = payload
-            .split_at_checked(value_len)
-            .ok_or(Error::PayloadSize {
-                expected: expected + CRC_LEN,
-                found: payload.len() + CRC_LEN,
-            })?;
+        let size_error = Error::PayloadSize {
+            expected: expected + CRC_LEN,
+            found: payload.len() + CRC_LEN,
+        };
+        let (mut breakpoints, payload) = payload
+            .split_at_checked(header.breakpoint_len())
+            .ok_or(size_error)?;
+        let (values, policy) = payload.split_at_checked(value_len).ok_or(size_error)?;
         let dims = header.axes.len();
         let mut geometry = [AxisGeometry::default(); MAX_DIMS];
         let mut stride = 1usize;
@@ -145,15 +154,27 @@ impl<'a> Table<'a> {
                 return Err(Error::HeaderDecode);
             };
             *slot = AxisGeometry {
+                breakpoints: &[],
                 min: axis.min,
                 max: axis.max,
-                inv_spacing: 1.0 / axis.spacing(),
+                inv_spacing: 1.0 / axis.uniform_spacing(),
                 last: axis.points.saturating_sub(1) as f32,
                 last_cell: axis.points.saturating_sub(2),
                 stride,
                 trusted: (trusted.min, trusted.max),
             };
             stride = stride.saturating_mul(axis.points as usize);
+        }
+        // The breakpoint block holds the listed axes in axis order.
+        for (slot, axis) in geometry.iter_mut().zip(header.axes.iter()) {
+            if axis.spacing == Spacing::Listed {
+                let (list, rest) = breakpoints
+                    .split_at_checked(axis.breakpoint_bytes())
+                    .ok_or(size_error)?;
+                check_breakpoints(list, axis.min, axis.max)?;
+                slot.breakpoints = list;
+                breakpoints = rest;
+            }
         }
         Ok(Table {
             header,
@@ -195,9 +216,10 @@ impl<'a> Table<'a> {
             .map(|q| self.header.quantization.dequantize(q))
     }
 
-    /// The policy bit at a flat (C-order) node index, `None` past the last node.
+    /// The policy bit at a flat (C-order) node index, `None` past the last node or in a table
+    /// without policy bits.
     pub fn action_at_node(&self, node: usize) -> Option<EgoAction> {
-        if node >= self.node_count() {
+        if node >= self.node_count() || self.header.policy == PolicyEncoding::None {
             return None;
         }
         let byte = self.policy.get(node / 8)?;
@@ -267,14 +289,21 @@ impl<'a> Table<'a> {
             if x < g.min || x > g.max {
                 return Err(Error::OutOfDomain { axis: k });
             }
-            // `s` is finite and in [0, last] up to rounding: clamp, then truncation is floor
-            // and fits in u32.
-            // (Not `f32::clamp`: it asserts its bounds are ordered, a panic path.)
-            let s = (x - g.min) * g.inv_spacing;
-            let s = if s > 0.0 { s } else { 0.0 };
-            let s = if s < g.last { s } else { g.last };
-            let i = (s as u32).min(g.last_cell);
-            *f = s - i as f32;
+            let i = if g.breakpoints.is_empty() {
+                // `s` is finite and in [0, last] up to rounding: clamp, then truncation is
+                // floor and fits in u32.
+                // (Not `f32::clamp`: it asserts its bounds are ordered, a panic path.)
+                let s = (x - g.min) * g.inv_spacing;
+                let s = if s > 0.0 { s } else { 0.0 };
+                let s = if s < g.last { s } else { g.last };
+                let i = (s as u32).min(g.last_cell);
+                *f = s - i as f32;
+                i
+            } else {
+                let (i, t) = locate_listed(g.breakpoints, g.last_cell, x);
+                *f = t;
+                i
+            };
             cell.base += i as usize * g.stride;
         }
         Ok(cell)
@@ -361,8 +390,12 @@ impl<'a> Table<'a> {
         Ok(self.lookup(state)?.action)
     }
 
-    /// Value and action at `state` from one cell search.
+    /// Value and action at `state` from one cell search ([`Error::NoPolicy`] for a table
+    /// without policy bits).
     pub fn lookup(&self, state: &[f32]) -> Result<Lookup, Error> {
+        if self.header.policy == PolicyEncoding::None {
+            return Err(Error::NoPolicy);
+        }
         let cell = self.cell(state)?;
         let mut sum = 0.0f32;
         let mut vote = 0.0f32;
@@ -387,4 +420,46 @@ impl<'a> Table<'a> {
             },
         })
     }
+}
+
+/// Checks a listed axis' breakpoints: finite, strictly increasing, from `min` to `max`.
+fn check_breakpoints(list: &[u8], min: f32, max: f32) -> Result<(), Error> {
+    let bad = Error::InvalidHeader("axis breakpoints");
+    let count = list.len() / 4;
+    let first = le_f32(list, 0).ok_or(bad)?;
+    let last = le_f32(list, (count.saturating_sub(1)) * 4).ok_or(bad)?;
+    if first != min || last != max {
+        return Err(bad);
+    }
+    let mut previous = f32::NEG_INFINITY;
+    for k in 0..count {
+        let x = le_f32(list, 4 * k).ok_or(bad)?;
+        if !(x.is_finite() && x > previous) {
+            return Err(bad);
+        }
+        previous = x;
+    }
+    Ok(())
+}
+
+/// The cell of `x` (within `[min, max]`) on a listed axis and the position in it, by binary
+/// search over the breakpoints: `i` in `[0, last_cell]` with `b_i <= x`, and
+/// `t = (x - b_i) / (b_{i+1} - b_i)` clamped to `[0, 1]`.
+#[inline(always)]
+fn locate_listed(list: &[u8], last_cell: u32, x: f32) -> (u32, f32) {
+    // Invariant: b_lo <= x (or lo = 0), and the answer is in [lo, hi].
+    let (mut lo, mut hi) = (0u32, last_cell);
+    while lo < hi {
+        let mid = lo + (hi - lo).div_ceil(2);
+        if le_f32(list, mid as usize * 4).is_some_and(|b| b <= x) {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    let a = le_f32(list, lo as usize * 4).unwrap_or(x);
+    let b = le_f32(list, lo as usize * 4 + 4).unwrap_or(x);
+    let t = if b > a { (x - a) / (b - a) } else { 0.0 };
+    let t = if t > 0.0 { t } else { 0.0 };
+    (lo, if t < 1.0 { t } else { 1.0 })
 }

@@ -6,7 +6,8 @@
 //! solver's value.
 
 use crate::header::{
-    Axis, Bounds, ErrorBound, Game, Header, Horizon, PolicyEncoding, Quantization, MAX_DIMS,
+    Axis, Bounds, ErrorBound, Game, Header, Horizon, PolicyEncoding, Quantization, Spacing,
+    MAX_DIMS,
 };
 use crate::{Error, CRC32, FORMAT_VERSION, MAGIC};
 
@@ -44,8 +45,12 @@ pub struct TableContents<'a> {
     pub min_gap: f32,
     /// Horizon and convergence.
     pub horizon: Horizon,
-    /// The grid, in state order.
+    /// The grid, in state order. An axis whose `spacing` is [`Spacing::Listed`] takes its
+    /// breakpoints from `breakpoints`.
     pub axes: &'a [Axis<'a>],
+    /// Per listed axis, in axis order, its breakpoints (strictly increasing, from `min` to
+    /// `max`, `points` of them); nothing for uniform axes.
+    pub breakpoints: &'a [&'a [f32]],
     /// The trusted box, one interval per axis.
     pub trusted_box: &'a [Bounds],
     /// The bound on the interpolation error (see [`ErrorBound::interpolation`]).
@@ -54,7 +59,8 @@ pub struct TableContents<'a> {
     pub value_bits: ValueBits,
     /// The value at every node, C order (last axis fastest).
     pub values: &'a [f32],
-    /// The policy bit at every node, C order: `true` where the ego should accelerate.
+    /// The policy bit at every node, C order: `true` where the ego should accelerate. Empty for
+    /// a table without policy bits ([`PolicyEncoding::None`]).
     pub accelerate: &'a [bool],
 }
 
@@ -86,11 +92,20 @@ pub fn encode(contents: &TableContents<'_>) -> Result<Vec<u8>, Error> {
             quantization: 0.0,
             interpolation: contents.interpolation_error,
         },
-        policy: PolicyEncoding::SignBitWeightedVote,
+        policy: if contents.accelerate.is_empty() {
+            PolicyEncoding::None
+        } else {
+            PolicyEncoding::SignBitWeightedVote
+        },
     };
     header.validate()?;
     let n = header.node_count()?;
-    for len in [contents.values.len(), contents.accelerate.len()] {
+    let policy_len = if contents.accelerate.is_empty() {
+        n
+    } else {
+        contents.accelerate.len()
+    };
+    for len in [contents.values.len(), policy_len] {
         if len != n {
             return Err(Error::ContentsSize {
                 expected: n,
@@ -117,6 +132,27 @@ pub fn encode(contents: &TableContents<'_>) -> Result<Vec<u8>, Error> {
     out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
     out.extend_from_slice(&header_len.to_le_bytes());
     out.extend_from_slice(&header_bytes);
+    let listed: Vec<&Axis<'_>> = header
+        .axes
+        .iter()
+        .filter(|a| a.spacing == Spacing::Listed)
+        .collect();
+    if listed.len() != contents.breakpoints.len() {
+        return Err(Error::InvalidHeader("one breakpoint list per listed axis"));
+    }
+    for (axis, list) in listed.iter().zip(contents.breakpoints) {
+        let ok = list.len() == axis.points as usize
+            && list.first() == Some(&axis.min)
+            && list.last() == Some(&axis.max)
+            && list.iter().all(|x| x.is_finite())
+            && list.iter().zip(list.iter().skip(1)).all(|(a, b)| a < b);
+        if !ok {
+            return Err(Error::InvalidHeader("axis breakpoints"));
+        }
+        for x in *list {
+            out.extend_from_slice(&x.to_le_bytes());
+        }
+    }
     match contents.value_bits {
         ValueBits::Eight => out.extend(q.iter().map(|&v| v as u8)),
         ValueBits::Sixteen => {

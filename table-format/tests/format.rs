@@ -42,12 +42,15 @@ fn axes(points: [u32; 4]) -> Vec<Axis<'static>> {
             min: ranges[k].0,
             max: ranges[k].1,
             points: points[k],
+            spacing: table_format::Spacing::Uniform,
         })
         .collect()
 }
 
 fn coords(axis: &Axis<'_>) -> Vec<f32> {
-    (0..axis.points).map(|i| axis.coordinate(i)).collect()
+    (0..axis.points)
+        .map(|i| axis.uniform_coordinate(i))
+        .collect()
 }
 
 /// A 4-D table whose node values are `f` at the nodes and whose policy bit is `bit`.
@@ -83,6 +86,7 @@ fn table_of(
             status: HorizonStatus::Fixed,
         },
         axes: &axes,
+        breakpoints: &[],
         trusted_box: &trusted,
         interpolation_error: 0.05,
         value_bits: bits,
@@ -121,10 +125,10 @@ fn round_trip_keeps_header_and_node_values() {
             for k in 0..5 {
                 for l in 0..3 {
                     let z = [
-                        axes[0].coordinate(i),
-                        axes[1].coordinate(j),
-                        axes[2].coordinate(k),
-                        axes[3].coordinate(l),
+                        axes[0].uniform_coordinate(i),
+                        axes[1].uniform_coordinate(j),
+                        axes[2].uniform_coordinate(k),
+                        axes[3].uniform_coordinate(l),
                     ];
                     let v = table.value_at_node(node).unwrap();
                     assert!(v <= multilinear(z), "conservative at node {node}");
@@ -207,10 +211,10 @@ fn eight_bit_quantization_is_conservative_and_bounded() {
             for k in 0..6 {
                 for l in 0..4 {
                     let z = [
-                        axes[0].coordinate(i),
-                        axes[1].coordinate(j),
-                        axes[2].coordinate(k),
-                        axes[3].coordinate(l),
+                        axes[0].uniform_coordinate(i),
+                        axes[1].uniform_coordinate(j),
+                        axes[2].uniform_coordinate(k),
+                        axes[3].uniform_coordinate(l),
                     ];
                     let v = table.value_at_node(node).unwrap();
                     assert!(v <= f(z));
@@ -306,11 +310,18 @@ fn specific_corruptions_name_their_cause() {
     let mut wrong_magic = bytes.clone();
     wrong_magic[0] = b'X';
     assert_eq!(Table::parse(&wrong_magic).unwrap_err(), Error::BadMagic);
-    let mut wrong_version = bytes.clone();
-    wrong_version[4] = 2;
+    // A version-1 table (the layout without breakpoints) is refused by its version alone.
+    let mut version_one = bytes.clone();
+    version_one[4] = 1;
     assert_eq!(
-        Table::parse(&wrong_version).unwrap_err(),
-        Error::UnsupportedVersion { found: 2 }
+        Table::parse(&version_one).unwrap_err(),
+        Error::UnsupportedVersion { found: 1 }
+    );
+    let mut future = bytes.clone();
+    future[4] = 3;
+    assert_eq!(
+        Table::parse(&future).unwrap_err(),
+        Error::UnsupportedVersion { found: 3 }
     );
     let mut payload_flip = bytes.clone();
     let last = payload_flip.len() - 5;
@@ -352,6 +363,7 @@ fn writer_refuses_bad_contents() {
             status: HorizonStatus::Fixed,
         },
         axes: &axes,
+        breakpoints: &[],
         trusted_box: &trusted,
         interpolation_error: 0.0,
         value_bits: ValueBits::Sixteen,
@@ -425,4 +437,138 @@ proptest! {
             Err(e) => prop_assert!(false, "unexpected {e:?}"),
         }
     }
+}
+
+/// A 3-D table on listed (uneven) breakpoints, without policy bits, of the multilinear function
+/// `f`: the reader must reproduce `f` between nodes (multilinear interpolation is exact for it)
+/// to within the quantization step.
+fn listed_table(f: impl Fn(f32, f32, f32) -> f32, bits: ValueBits) -> (Vec<u8>, [Vec<f32>; 3]) {
+    let gap: Vec<f32> = vec![-1.0, 0.0, 0.5, 1.0, 1.25, 1.5, 2.0, 4.0, 10.0, 40.0, 150.0];
+    let speed: Vec<f32> = vec![0.0, 0.05, 0.1, 0.3, 1.0, 3.0, 8.0, 35.0];
+    let axes = [
+        Axis {
+            name: "gap_follower",
+            unit: "m",
+            min: -1.0,
+            max: 150.0,
+            points: gap.len() as u32,
+            spacing: table_format::Spacing::Listed,
+        },
+        Axis {
+            name: "follower_speed",
+            unit: "m/s",
+            min: 0.0,
+            max: 35.0,
+            points: 36,
+            spacing: table_format::Spacing::Uniform,
+        },
+        Axis {
+            name: "ego_speed",
+            unit: "m/s",
+            min: 0.0,
+            max: 35.0,
+            points: speed.len() as u32,
+            spacing: table_format::Spacing::Listed,
+        },
+    ];
+    let uniform: Vec<f32> = (0..36).map(|i| i as f32).collect();
+    let mut values = Vec::new();
+    for &x in &gap {
+        for &v in &uniform {
+            for &w in &speed {
+                values.push(f(x, v, w));
+            }
+        }
+    }
+    let bytes = encode(&TableContents {
+        game: Game::RearIdm {
+            ego: Bounds::new(-3.5, 2.0),
+            follower_clip: Bounds::new(-6.0, 2.0),
+            idm: table_format::IdmParameters {
+                max_acceleration: 1.0,
+                comfortable_deceleration: 1.5,
+                desired_speed: 33.3,
+                exponent: 4,
+                jam_distance: 2.0,
+            },
+            time_gap: Bounds::new(1.0, 2.0),
+            max_speed: 35.0,
+        },
+        min_gap: 0.0,
+        horizon: Horizon {
+            seconds: 1.0,
+            status: HorizonStatus::Fixed,
+        },
+        axes: &axes,
+        breakpoints: &[&gap, &speed],
+        trusted_box: &[
+            Bounds::new(-1.0, 150.0),
+            Bounds::new(0.0, 35.0),
+            Bounds::new(0.0, 35.0),
+        ],
+        interpolation_error: 0.0,
+        value_bits: bits,
+        values: &values,
+        accelerate: &[],
+    });
+    (bytes.unwrap(), [gap, uniform, speed])
+}
+
+#[test]
+fn listed_axes_interpolate_exactly_between_uneven_breakpoints() {
+    let f = |x: f32, v: f32, w: f32| 0.5 + 0.01 * x - 0.02 * v + 0.03 * w + 0.001 * x * v * w;
+    let (bytes, [gap, _, speed]) = listed_table(f, ValueBits::Sixteen);
+    let table = Table::parse(&bytes).unwrap();
+    let step = table.header().quantization.scale;
+    // Nodes, cell midpoints and arbitrary points, with cells of very different widths.
+    let mut points = vec![(-1.0, 0.0, 0.0), (150.0, 35.0, 35.0), (1.3, 0.2, 0.07)];
+    for (i, &x) in gap.iter().enumerate().skip(1) {
+        for (j, &w) in speed.iter().enumerate().skip(1) {
+            points.push((x, 17.5, w));
+            points.push((0.5 * (x + gap[i - 1]), 3.3, 0.5 * (w + speed[j - 1])));
+            points.push((
+                0.9 * x + 0.1 * gap[i - 1],
+                34.9,
+                0.2 * w + 0.8 * speed[j - 1],
+            ));
+        }
+    }
+    for (x, v, w) in points {
+        let got = table.value_at(&[x, v, w]).unwrap();
+        let want = f(x, v, w);
+        assert!(
+            got <= want + 1e-4 && got >= want - step - 1e-3 * (1.0 + want.abs()),
+            "value at ({x}, {v}, {w}): {got}, exact {want}"
+        );
+    }
+    assert_eq!(table.policy_at(&[1.0, 1.0, 1.0]), Err(Error::NoPolicy));
+    assert_eq!(table.action_at_node(0), None);
+    assert_eq!(
+        table.value_at(&[150.5, 1.0, 1.0]),
+        Err(Error::OutOfDomain { axis: 0 })
+    );
+}
+
+#[test]
+fn bad_breakpoints_are_refused_by_writer_and_reader() {
+    let f = |x: f32, _: f32, w: f32| x + w;
+    let (bytes, _) = listed_table(f, ValueBits::Eight);
+    Table::parse(&bytes).unwrap();
+    // The breakpoint block starts right after the header; its first f32 is the gap axis' min.
+    let header_len = u16::from_le_bytes([bytes[6], bytes[7]]) as usize;
+    let block = 8 + header_len;
+    let body = &bytes[..bytes.len() - 4];
+    // Two breakpoints out of order, and a first breakpoint that is not the axis' min.
+    for (at, value) in [(block + 8, 1.5f32), (block, -0.5f32)] {
+        let mut broken = body.to_vec();
+        broken[at..at + 4].copy_from_slice(&value.to_le_bytes());
+        assert_eq!(
+            Table::parse(&resign(broken)).unwrap_err(),
+            Error::InvalidHeader("axis breakpoints")
+        );
+    }
+    // A NaN breakpoint.
+    let mut broken = body.to_vec();
+    broken[block + 12..block + 16].copy_from_slice(&f32::NAN.to_le_bytes());
+    assert!(Table::parse(&resign(broken)).is_err());
 }

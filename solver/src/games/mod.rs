@@ -765,6 +765,8 @@ pub enum AnyGame {
     Idm(ThreeCarIdm),
     /// See [`ThreeCarIdmSpeeds`].
     IdmSpeeds(ThreeCarIdmSpeeds),
+    /// See [`RearIdm`].
+    Rear(RearIdm),
 }
 
 impl AnyGame {
@@ -830,6 +832,20 @@ impl AnyGame {
                 max_speed,
                 min_gap,
             }),
+            G::RearIdm {
+                ego,
+                follower_clip,
+                idm,
+                time_gap,
+                max_speed,
+            } => AnyGame::Rear(RearIdm {
+                ego: Accel::from(ego),
+                follower_clip: Accel::from(follower_clip),
+                idm: Idm::from(idm),
+                time_gap: Accel::from(time_gap),
+                max_speed,
+                min_gap,
+            }),
         }
     }
 
@@ -840,6 +856,7 @@ impl AnyGame {
             AnyGame::Baseline(g) => g,
             AnyGame::Idm(g) => g,
             AnyGame::IdmSpeeds(g) => g,
+            AnyGame::Rear(g) => g,
         }
     }
 }
