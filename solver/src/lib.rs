@@ -17,6 +17,7 @@ pub mod games;
 pub mod grid;
 pub mod hji;
 pub mod output;
+pub mod rear;
 pub mod run;
 pub mod scheme;
 pub mod semi_lagrangian;

@@ -1,7 +1,8 @@
 //! `cargo run -p solver --release [-- --config FILE ... --out DIR]`
 //!
-//! With no `--config`, runs the built-in configs (`solver/configs/*.toml`): the paper's three
-//! results and the firmware's default table.
+//! With no `--config` and no `--rear`, runs the built-in configs (`solver/configs/*.toml`): the
+//! paper's three results and the firmware's default table. `--rear FILE` runs a rear-game config
+//! (`solver/configs/rear-*.toml`) through the sampled-data iteration into a version-2 table.
 
 use std::path::PathBuf;
 
@@ -9,6 +10,7 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use solver::config::{builtin, Config};
+use solver::rear::{run_rear, RearConfig};
 use solver::run::{run, Event};
 
 /// HJI safety analysis of car following, compiled into firmware tables.
@@ -21,6 +23,9 @@ struct Args {
     /// Output folder; each config writes `DIR/<name>/`.
     #[arg(long, default_value = "out")]
     out: PathBuf,
+    /// A rear-game config (repeatable), solved by the sampled-data iteration.
+    #[arg(long = "rear", value_name = "FILE")]
+    rears: Vec<PathBuf>,
     /// No progress bars.
     #[arg(long)]
     quiet: bool,
@@ -28,6 +33,37 @@ struct Args {
 
 fn main() -> Result<()> {
     let args = Args::parse();
+    for path in &args.rears {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        let config =
+            RearConfig::from_toml(&text).with_context(|| format!("in {}", path.display()))?;
+        eprintln!("== {} ({})", config.name, path.display());
+        let s = run_rear(&config, &args.out)?;
+        println!(
+            "{}: {} x {} x {} breakpoints, {} iterations ({}), residual {:.1e} m, {:.1} s; \
+             plateau {:.3} m; table {} bytes (quantization {:.4} m)",
+            s.name,
+            s.points[0],
+            s.points[1],
+            s.points[2],
+            s.iterations,
+            if s.converged {
+                "converged"
+            } else {
+                "not converged"
+            },
+            s.residual,
+            s.solve_seconds,
+            s.plateau,
+            s.table_bytes,
+            s.quantization_error
+        );
+        println!("  wrote {}", args.out.join(&config.name).display());
+    }
+    if !args.rears.is_empty() && args.configs.is_empty() {
+        return Ok(());
+    }
     let configs: Vec<(String, Config)> = if args.configs.is_empty() {
         builtin()
             .into_iter()

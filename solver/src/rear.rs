@@ -1,0 +1,406 @@
+//! The rear game's pipeline: a `[rear]` TOML config -> the sampled-data value on breakpoint
+//! axes -> a version-2 `RearIdm` table with its summary.
+//!
+//! One responsibility: turn a rear config into files. The game is [`crate::games::RearIdm`],
+//! the scheme [`crate::semi_lagrangian`]; why the split and why that scheme is written there.
+//!
+//! # The table is the solver's value, not an approximation of it
+//! The sampled-data iteration defines its value between nodes by multilinear interpolation, and
+//! the table stores the same nodes and interpolates the same way. So the table's interpolant
+//! *is* the solver's value function, and its only error against it is quantization, which is
+//! rounded down (`V_table <= W`). The error bound's interpolation term is zero by construction.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+use table_format::{Axis, Bounds, Game, Horizon, HorizonStatus, Spacing, TableContents, ValueBits};
+
+use crate::config::{IdmConfig, Range};
+use crate::error::{ConfigError, SolverError};
+use crate::games::{Accel, Idm, RearIdm};
+use crate::output;
+use crate::semi_lagrangian::{iterate, Breakpoints};
+
+/// A breakpoint axis: from `start`, uniform pieces `[end, spacing]` in turn.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PiecewiseAxis {
+    /// The first breakpoint.
+    pub start: f64,
+    /// `[end, spacing]` per piece, ends increasing.
+    pub pieces: Vec<[f64; 2]>,
+}
+
+/// The rear game's parameters.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RearGameConfig {
+    /// The ego's acceleration band `[-beta, a_max]`, m/s^2.
+    pub ego: Range,
+    /// The follower's IDM output is clipped to these bounds, m/s^2.
+    pub follower: Range,
+    /// The IDM's parameters.
+    #[serde(default)]
+    pub idm: IdmConfig,
+    /// The adversarial time gap's range, s.
+    pub time_gap: Range,
+    /// Every speed lies in `[0, max_speed]`, m/s.
+    pub max_speed: f64,
+    /// `l = gap_follower - min_gap`, m.
+    #[serde(default)]
+    pub min_gap: f64,
+}
+
+/// The grid: three breakpoint axes in state order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RearGridConfig {
+    /// Gap to the follower, m.
+    pub gap_follower: PiecewiseAxis,
+    /// The follower's speed, m/s: from 0 to `max_speed`.
+    pub follower_speed: PiecewiseAxis,
+    /// The ego's speed, m/s: from 0 to `max_speed`.
+    pub ego_speed: PiecewiseAxis,
+}
+
+/// The iteration's settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RearSolveConfig {
+    /// The period the inputs are held, s.
+    pub period: f64,
+    /// Stop when no node changes by more than this in one iteration, m.
+    pub tolerance: f64,
+    /// Give up after this many iterations (the table then says "not converged").
+    pub max_iterations: usize,
+}
+
+/// A rear-game run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RearConfig {
+    /// Output folder name.
+    pub name: String,
+    /// What the run is for.
+    #[serde(default)]
+    pub description: String,
+    /// The game.
+    pub game: RearGameConfig,
+    /// The grid.
+    pub grid: RearGridConfig,
+    /// The iteration.
+    pub solve: RearSolveConfig,
+    /// Stored value width, 8 or 16 bits.
+    pub table_bits: u8,
+}
+
+fn check(ok: bool, field: &str, reason: &str) -> Result<(), ConfigError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(ConfigError::new(field, reason))
+    }
+}
+
+impl PiecewiseAxis {
+    fn breakpoints(&self) -> Vec<f32> {
+        let pieces: Vec<(f32, f32)> = self
+            .pieces
+            .iter()
+            .map(|p| (p[0] as f32, p[1] as f32))
+            .collect();
+        Breakpoints::piecewise(self.start as f32, &pieces)
+    }
+
+    fn validate(&self, field: &str) -> Result<(), ConfigError> {
+        check(
+            self.start.is_finite() && !self.pieces.is_empty(),
+            field,
+            "needs a finite start and at least one [end, spacing] piece",
+        )?;
+        let mut at = self.start;
+        for (k, [end, spacing]) in self.pieces.iter().enumerate() {
+            check(
+                end.is_finite() && *end > at && spacing.is_finite() && *spacing > 0.0,
+                &format!("{field}.pieces[{k}]"),
+                "each end must exceed the previous one and each spacing be > 0",
+            )?;
+            at = *end;
+        }
+        Ok(())
+    }
+
+    fn end(&self) -> f64 {
+        self.pieces.last().map_or(self.start, |p| p[0])
+    }
+}
+
+impl RearConfig {
+    /// Parses and validates a TOML document.
+    pub fn from_toml(text: &str) -> Result<Self, ConfigError> {
+        let config: RearConfig =
+            toml::from_str(text).map_err(|e| ConfigError::new("document", e.to_string()))?;
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// Checks every field.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let g = &self.game;
+        check(
+            !self.name.is_empty()
+                && self
+                    .name
+                    .chars()
+                    .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-'),
+            "name",
+            "must be non-empty and use only a-z, 0-9 and '-'",
+        )?;
+        check(
+            g.ego.min < 0.0 && g.ego.max >= 0.0 && g.ego.min.is_finite() && g.ego.max.is_finite(),
+            "game.ego",
+            "the band [-beta, a_max] needs min < 0 <= max",
+        )?;
+        check(
+            g.follower.min < 0.0 && g.follower.max >= 0.0 && g.follower.min.is_finite(),
+            "game.follower",
+            "needs min < 0 <= max",
+        )?;
+        check(
+            g.time_gap.min >= 0.0 && g.time_gap.max >= g.time_gap.min,
+            "game.time_gap",
+            "needs 0 <= min <= max",
+        )?;
+        check(
+            g.max_speed.is_finite() && g.max_speed > 0.0,
+            "game.max_speed",
+            "must be > 0",
+        )?;
+        check(
+            g.idm.jam_distance > 0.0,
+            "game.idm.jam_distance",
+            "must be > 0: with s0 = 0 a follower creeps into a stopped ego and nothing is safe for ever",
+        )?;
+        self.grid.gap_follower.validate("grid.gap_follower")?;
+        for (field, axis) in [
+            ("grid.follower_speed", &self.grid.follower_speed),
+            ("grid.ego_speed", &self.grid.ego_speed),
+        ] {
+            axis.validate(field)?;
+            check(
+                axis.start == 0.0 && axis.end() == g.max_speed,
+                field,
+                "must span [0, game.max_speed] (speeds are held in that range)",
+            )?;
+        }
+        let s = &self.solve;
+        check(
+            s.period > 0.0 && s.period <= 1.0,
+            "solve.period",
+            "must be in (0, 1] s",
+        )?;
+        check(s.tolerance > 0.0, "solve.tolerance", "must be > 0")?;
+        check(s.max_iterations > 0, "solve.max_iterations", "must be > 0")?;
+        check(
+            self.table_bits == 8 || self.table_bits == 16,
+            "table_bits",
+            "must be 8 or 16",
+        )?;
+        Ok(())
+    }
+
+    /// The game as the engine sees it.
+    pub fn game(&self) -> RearIdm {
+        let g = &self.game;
+        let accel = |r: Range| Accel {
+            min: r.min as f32,
+            max: r.max as f32,
+        };
+        RearIdm {
+            ego: accel(g.ego),
+            follower_clip: accel(g.follower),
+            idm: Idm::from(self.description_idm()),
+            time_gap: accel(g.time_gap),
+            max_speed: g.max_speed as f32,
+            min_gap: g.min_gap as f32,
+        }
+    }
+
+    fn description_idm(&self) -> table_format::IdmParameters {
+        let idm = self.game.idm;
+        table_format::IdmParameters {
+            max_acceleration: idm.max_acceleration as f32,
+            comfortable_deceleration: idm.comfortable_deceleration as f32,
+            desired_speed: idm.desired_speed as f32,
+            exponent: idm.exponent,
+            jam_distance: idm.jam_distance as f32,
+        }
+    }
+
+    /// The game as the table header describes it.
+    pub fn game_description(&self) -> Game {
+        let b = |r: Range| Bounds::new(r.min as f32, r.max as f32);
+        let g = &self.game;
+        Game::RearIdm {
+            ego: b(g.ego),
+            follower_clip: b(g.follower),
+            idm: self.description_idm(),
+            time_gap: b(g.time_gap),
+            max_speed: g.max_speed as f32,
+        }
+    }
+
+    /// The grid.
+    pub fn grid(&self) -> Result<Breakpoints, ConfigError> {
+        let gr = &self.grid;
+        Breakpoints::new(vec![
+            ("gap_follower".into(), gr.gap_follower.breakpoints()),
+            ("follower_speed".into(), gr.follower_speed.breakpoints()),
+            ("ego_speed".into(), gr.ego_speed.breakpoints()),
+        ])
+    }
+}
+
+/// What a rear run measured.
+#[derive(Debug, Clone, Serialize)]
+pub struct RearSummary {
+    /// The config's name.
+    pub name: String,
+    /// The config, as run.
+    pub config: RearConfig,
+    /// Breakpoints per axis.
+    pub points: [usize; 3],
+    /// Iterations done.
+    pub iterations: usize,
+    /// Whether the largest change per iteration fell below the tolerance.
+    pub converged: bool,
+    /// The largest change in the last iteration, m.
+    pub residual: f32,
+    /// Largest change in the last tenth of the iterations, m.
+    pub change_over_last_tenth: f32,
+    /// Wall time of the iteration, s.
+    pub solve_seconds: f64,
+    /// The value at rest with the follower 10 m back (the plateau `s0` is its exact value).
+    pub plateau: f32,
+    /// Per equal speed of both cars, the smallest gap with `W` above 0.5 m (m; `None`: none).
+    pub smallest_gap_at_equal_speeds: Vec<(f32, Option<f32>)>,
+    /// Share of nodes with `W > 0`.
+    pub safe_share: f64,
+    /// Table size, bytes.
+    pub table_bytes: usize,
+    /// The table's quantization error bound, m.
+    pub quantization_error: f32,
+}
+
+/// Solves a rear config and writes `out/<name>/`: `table.bin`, `value.npy`, `summary.json`.
+pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverError> {
+    config.validate()?;
+    let grid = config.grid()?;
+    let game = config.game();
+    let s = config.solve;
+    let t0 = Instant::now();
+    let mut history: Vec<f32> = Vec::new();
+    let result = iterate(
+        &game,
+        &grid,
+        s.period as f32,
+        s.tolerance as f32,
+        s.max_iterations,
+        |_, residual, _| history.push(residual),
+    );
+    let solve_seconds = t0.elapsed().as_secs_f64();
+    let tail = history.len() / 10;
+    let change_over_last_tenth = history[history.len() - tail.max(1)..].iter().copied().sum();
+
+    let names = ["gap_follower", "follower_speed", "ego_speed"];
+    let units = ["m", "m/s", "m/s"];
+    let lists: Vec<Vec<f32>> = (0..3).map(|k| grid.axis(k).to_vec()).collect();
+    let axes: Vec<Axis<'_>> = (0..3)
+        .map(|k| Axis {
+            name: names[k],
+            unit: units[k],
+            min: lists[k][0],
+            max: *lists[k].last().unwrap_or(&lists[k][0]),
+            points: lists[k].len() as u32,
+            spacing: Spacing::Listed,
+        })
+        .collect();
+    let trusted: Vec<Bounds> = axes.iter().map(|a| Bounds::new(a.min, a.max)).collect();
+    let breakpoints: Vec<&[f32]> = lists.iter().map(Vec::as_slice).collect();
+    let bytes = table_format::encode(&TableContents {
+        game: config.game_description(),
+        min_gap: config.game.min_gap as f32,
+        horizon: Horizon {
+            seconds: (result.iterations as f64 * s.period) as f32,
+            status: if result.converged {
+                HorizonStatus::Converged {
+                    tolerance: s.tolerance as f32,
+                    residual: result.residual,
+                }
+            } else {
+                HorizonStatus::NotConverged {
+                    tolerance: s.tolerance as f32,
+                    residual: result.residual,
+                }
+            },
+        },
+        axes: &axes,
+        breakpoints: &breakpoints,
+        trusted_box: &trusted,
+        interpolation_error: 0.0,
+        value_bits: if config.table_bits == 8 {
+            ValueBits::Eight
+        } else {
+            ValueBits::Sixteen
+        },
+        values: &result.values,
+        accelerate: &[],
+    })?;
+    let table = table_format::Table::parse(&bytes)?;
+
+    let dir = out.join(&config.name);
+    std::fs::create_dir_all(&dir).map_err(|e| SolverError::Io {
+        path: dir.display().to_string(),
+        source: e,
+    })?;
+    output::write_bytes(&dir.join("table.bin"), &bytes)?;
+    output::write_npy(
+        &dir.join("value.npy"),
+        &result.values,
+        &[lists[0].len(), lists[1].len(), lists[2].len()],
+    )?;
+
+    let at = |x: f32, vf: f32, ve: f32| grid.interpolate(&result.values, &[x, vf, ve]);
+    let vmax = config.game.max_speed as f32;
+    let smallest_gap_at_equal_speeds = [0.0f32, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0]
+        .into_iter()
+        .filter(|&v| v <= vmax)
+        .map(|v| {
+            let gap = lists[0].iter().copied().find(|&x| at(x, v, v) > 0.5);
+            (v, gap)
+        })
+        .collect();
+    let summary = RearSummary {
+        name: config.name.clone(),
+        config: config.clone(),
+        points: [lists[0].len(), lists[1].len(), lists[2].len()],
+        iterations: result.iterations,
+        converged: result.converged,
+        residual: result.residual,
+        change_over_last_tenth,
+        solve_seconds,
+        plateau: at(10.0, 0.0, 0.0),
+        smallest_gap_at_equal_speeds,
+        safe_share: result.values.iter().filter(|&&w| w > 0.0).count() as f64
+            / result.values.len() as f64,
+        table_bytes: bytes.len(),
+        quantization_error: table.header().error_bound.quantization,
+    };
+    let json = serde_json::to_string_pretty(&summary).map_err(|e| SolverError::Io {
+        path: "summary.json".into(),
+        source: e.into(),
+    })?;
+    output::write_bytes(&dir.join("summary.json"), json.as_bytes())?;
+    Ok(summary)
+}
