@@ -680,16 +680,7 @@ fn max_abs_difference(a: &[f32], b: &[f32], floor: f32) -> f32 {
                 lanes.iter().copied().fold(0.0, f32::max)
             }
         })
-        .reduce(
-            || 0.0,
-            |p, q| {
-                if p.is_nan() || q.is_nan() {
-                    f32::NAN
-                } else {
-                    p.max(q)
-                }
-            },
-        )
+        .reduce(|| 0.0, nan_max)
 }
 
 /// `max |min(a, cap) - b|` over the nodes where `b > floor`, NaN-propagating.
@@ -712,16 +703,16 @@ fn max_capped_difference(a: &[f32], b: &[f32], cap: &[f32], floor: f32) -> f32 {
                 m
             }
         })
-        .reduce(
-            || 0.0,
-            |p, q| {
-                if p.is_nan() || q.is_nan() {
-                    f32::NAN
-                } else {
-                    p.max(q)
-                }
-            },
-        )
+        .reduce(|| 0.0, nan_max)
+}
+
+/// The larger of two, NaN if either is.
+fn nan_max(p: f32, q: f32) -> f32 {
+    if p.is_nan() || q.is_nan() {
+        f32::NAN
+    } else {
+        p.max(q)
+    }
 }
 
 /// Whether every value is finite.

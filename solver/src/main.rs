@@ -2,7 +2,7 @@
 //!
 //! With no `--config` and no `--rear`, runs the built-in configs (`solver/configs/*.toml`): the
 //! paper's three results and the firmware's default table. `--rear FILE` runs a rear-game config
-//! (`solver/configs/rear-*.toml`) through the sampled-data iteration into a version-2 table.
+//! (`solver/configs/rear/*.toml`) through the sampled-data iteration into a version-2 table.
 
 use std::path::PathBuf;
 

@@ -9,6 +9,7 @@ fn builtin_configs_are_valid() {
     let mut files: Vec<String> = std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/configs"))
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".toml"))
         .collect();
     files.sort();
     let mut sorted = names.clone();
@@ -17,6 +18,21 @@ fn builtin_configs_are_valid() {
     for (name, text) in builtin() {
         Config::from_toml(text).unwrap_or_else(|e| panic!("{name}: {e}"));
     }
+}
+
+/// The rear-game configs (run with `--rear`, not built in) parse and validate.
+#[test]
+fn rear_configs_are_valid() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rear");
+    let mut count = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        solver::rear::RearConfig::from_toml(&text)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        count += 1;
+    }
+    assert!(count > 0, "no rear configs in {dir}");
 }
 
 fn idm() -> String {

@@ -366,6 +366,16 @@ pub struct Idm {
 }
 
 impl Idm {
+    /// Treiber & Kesting's highway parameters (*Traffic Flow Dynamics*, Table 11.2), the
+    /// config defaults: `a` 1.0 m/s^2, `b` 1.5 m/s^2, `v0` 33.3 m/s, `delta` 4, `s0` 2 m.
+    pub const HIGHWAY: Idm = Idm {
+        max_acceleration: 1.0,
+        comfortable_deceleration: 1.5,
+        desired_speed: 33.3,
+        exponent: 4,
+        jam_distance: 2.0,
+    };
+
     /// The IDM acceleration of a vehicle at speed `speed` (>= 0), `gap` metres behind its
     /// leader, approaching it at `approach_rate = speed - leader_speed`, with desired time gap
     /// `time_gap`:
@@ -634,24 +644,47 @@ impl Accel {
     }
 }
 
+/// The IDM follower's acceleration at speed `v3` behind an ego at `ve`, `gap` metres ahead,
+/// for time gap `t`: clipped to `clip`, within the speed limits `[0, max_speed]`. Shared by
+/// every game in absolute speeds.
+#[inline(always)]
+fn clipped_idm(idm: &Idm, clip: Accel, max_speed: f32, v3: f32, ve: f32, gap: f32, t: f32) -> f32 {
+    let g = idm.acceleration(v3.max(0.0), v3 - ve, gap, t);
+    let clip = clip.at_speed(v3, max_speed);
+    g.clamp(clip.min, clip.max)
+}
+
+/// The time gap an adversary minimising `p u3` picks: the IDM acceleration is non-increasing
+/// in `T`, so `T_max` where `p > 0` and `T_min` otherwise.
+#[inline(always)]
+fn time_gap_against(time_gap: Accel, p: f32) -> f32 {
+    if p > 0.0 {
+        time_gap.max
+    } else {
+        time_gap.min
+    }
+}
+
 impl ThreeCarIdmSpeeds {
     /// The follower's clipped IDM acceleration, within its speed limits, at follower speed
     /// `v3`, ego speed `ve` and gap `gap`, for time gap `t`.
     #[inline(always)]
     pub fn follower_acceleration(&self, v3: f32, ve: f32, gap: f32, t: f32) -> f32 {
-        let g = self.idm.acceleration(v3.max(0.0), v3 - ve, gap, t);
-        let clip = self.follower_clip.at_speed(v3, self.max_speed);
-        g.clamp(clip.min, clip.max)
+        clipped_idm(
+            &self.idm,
+            self.follower_clip,
+            self.max_speed,
+            v3,
+            ve,
+            gap,
+            t,
+        )
     }
 
     /// The adversary's time gap for co-state component `p4` (on `v3`).
     #[inline(always)]
     pub fn adversarial_time_gap(&self, p4: f32) -> f32 {
-        if p4 > 0.0 {
-            self.time_gap.max
-        } else {
-            self.time_gap.min
-        }
+        time_gap_against(self.time_gap, p4)
     }
 }
 

@@ -58,19 +58,21 @@ impl RearIdm {
     /// The follower's clipped IDM acceleration, within its speed limits.
     #[inline(always)]
     pub fn follower_acceleration(&self, vf: f32, ve: f32, gap: f32, t: f32) -> f32 {
-        let g = self.idm.acceleration(vf.max(0.0), vf - ve, gap, t);
-        let clip = self.follower_clip.at_speed(vf, self.max_speed);
-        g.clamp(clip.min, clip.max)
+        super::clipped_idm(
+            &self.idm,
+            self.follower_clip,
+            self.max_speed,
+            vf,
+            ve,
+            gap,
+            t,
+        )
     }
 
     /// The adversary's time gap for co-state component `p2` (on `v_f`).
     #[inline(always)]
     pub fn adversarial_time_gap(&self, p2: f32) -> f32 {
-        if p2 > 0.0 {
-            self.time_gap.max
-        } else {
-            self.time_gap.min
-        }
+        super::time_gap_against(self.time_gap, p2)
     }
 }
 
@@ -257,13 +259,7 @@ mod tests {
                 min: -6.0,
                 max: 2.0,
             },
-            idm: Idm {
-                max_acceleration: 1.0,
-                comfortable_deceleration: 1.5,
-                desired_speed: 33.3,
-                exponent: 4,
-                jam_distance: 2.0,
-            },
+            idm: Idm::HIGHWAY,
             time_gap: Accel { min: 1.0, max: 2.0 },
             max_speed: 35.0,
             min_gap: 0.0,
