@@ -277,7 +277,8 @@ pub struct RearSummary {
     pub converged: bool,
     /// The largest change in the last iteration, m.
     pub residual: f32,
-    /// Largest change in the last tenth of the iterations, m.
+    /// A bound on how much any node changed over the last tenth of the iterations: the sum of
+    /// the per-iteration largest changes, m.
     pub change_over_last_tenth: f32,
     /// Wall time of the iteration, s.
     pub solve_seconds: f64,
