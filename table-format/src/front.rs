@@ -49,8 +49,9 @@ pub fn front_value(gap: f32, leader_speed: f32, ego_speed: f32, model: &FrontMod
     let vmax = model.max_speed;
     let (bl, beta) = (model.leader_braking, model.ego_braking);
     let mut g = gap;
-    let mut vl = leader_speed.clamp(0.0, vmax);
-    let mut ve = ego_speed.clamp(0.0, vmax);
+    // (Not `f32::clamp`: it asserts its bounds are ordered, a panic path.)
+    let mut vl = leader_speed.max(0.0).min(vmax);
+    let mut ve = ego_speed.max(0.0).min(vmax);
     let mut response = model.response_time.max(0.0);
     let mut least = g;
     // Each pass ends at an event that does not recur: the response ends, the leader stops, the
@@ -106,7 +107,7 @@ pub fn front_value(gap: f32, leader_speed: f32, ego_speed: f32, model: &FrontMod
         vl = if len >= t_leader {
             0.0
         } else {
-            (vl + al * len).clamp(0.0, vmax)
+            (vl + al * len).max(0.0).min(vmax)
         };
         ve = if len >= t_ego {
             if ae < 0.0 {
@@ -115,7 +116,7 @@ pub fn front_value(gap: f32, leader_speed: f32, ego_speed: f32, model: &FrontMod
                 vmax
             }
         } else {
-            (ve + ae * len).clamp(0.0, vmax)
+            (ve + ae * len).max(0.0).min(vmax)
         };
         response = if len >= t_response {
             0.0
