@@ -66,41 +66,40 @@ fn main() {
     println!();
     println!("| rest-point spacing (m, m/s) | period (s) | nodes | iterations | wall (s) | W(10, 0, 0) | W(45, 30, 30) | W(3, 0, 0) |");
     println!("|---|---|---|---|---|---|---|---|");
+    let h = 0.1f32;
     for fine in [0.25f32, 0.125] {
-        for h in [0.1f32] {
-            let speed = Breakpoints::piecewise(
-                0.0,
-                &[(1.0, fine), (3.0, 2.0 * fine), (8.0, 0.25), (35.0, 0.5)],
-            );
-            let gap = Breakpoints::piecewise(
-                -1.0,
-                &[
-                    (1.0, 0.25),
-                    (4.0, fine),
-                    (10.0, 2.0 * fine),
-                    (40.0, 0.5),
-                    (80.0, 1.0),
-                    (150.0, 2.0),
-                ],
-            );
-            let grid = Breakpoints::new(vec![
-                ("gap_follower".into(), gap),
-                ("follower_speed".into(), speed.clone()),
-                ("ego_speed".into(), speed),
-            ])
-            .expect("grid");
-            let t0 = Instant::now();
-            let out = iterate(&full, &grid, h, 1e-5, 100_000, |_, _, _| {});
-            let at = |x: f32, vf: f32, ve: f32| grid.interpolate(&out.values, &[x, vf, ve]);
-            println!(
-                "| {fine} | {h} | {} | {} | {:.1} | {:.3} | {:.3} | {:.3} |",
-                grid.len(),
-                out.iterations,
-                t0.elapsed().as_secs_f64(),
-                at(10.0, 0.0, 0.0),
-                at(45.0, 30.0, 30.0),
-                at(3.0, 0.0, 0.0)
-            );
-        }
+        let speed = Breakpoints::piecewise(
+            0.0,
+            &[(1.0, fine), (3.0, 2.0 * fine), (8.0, 0.25), (35.0, 0.5)],
+        );
+        let gap = Breakpoints::piecewise(
+            -1.0,
+            &[
+                (1.0, 0.25),
+                (4.0, fine),
+                (10.0, 2.0 * fine),
+                (40.0, 0.5),
+                (80.0, 1.0),
+                (150.0, 2.0),
+            ],
+        );
+        let grid = Breakpoints::new(vec![
+            ("gap_follower".into(), gap),
+            ("follower_speed".into(), speed.clone()),
+            ("ego_speed".into(), speed),
+        ])
+        .expect("grid");
+        let t0 = Instant::now();
+        let out = iterate(&full, &grid, h, 1e-5, 100_000, |_, _, _| {});
+        let at = |x: f32, vf: f32, ve: f32| grid.interpolate(&out.values, &[x, vf, ve]);
+        println!(
+            "| {fine} | {h} | {} | {} | {:.1} | {:.3} | {:.3} | {:.3} |",
+            grid.len(),
+            out.iterations,
+            t0.elapsed().as_secs_f64(),
+            at(10.0, 0.0, 0.0),
+            at(45.0, 30.0, 30.0),
+            at(3.0, 0.0, 0.0)
+        );
     }
 }
