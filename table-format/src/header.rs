@@ -302,10 +302,7 @@ impl Game {
                 };
                 ego.is_valid()
                     && leader.is_valid()
-                    && follower_clip.is_valid()
-                    && time_gap.is_valid()
-                    && time_gap.min >= 0.0
-                    && idm.is_valid()
+                    && idm_follower_is_valid(follower_clip, time_gap, idm)
                     && speed_ok
             }
             Game::ThreeCarIdmSpeeds {
@@ -318,10 +315,7 @@ impl Game {
             } => {
                 ego.is_valid()
                     && leader.is_valid()
-                    && follower_clip.is_valid()
-                    && time_gap.is_valid()
-                    && time_gap.min >= 0.0
-                    && idm.is_valid()
+                    && idm_follower_is_valid(follower_clip, time_gap, idm)
                     && max_speed.is_finite()
                     && *max_speed > 0.0
             }
@@ -334,10 +328,7 @@ impl Game {
             } => {
                 ego.is_valid()
                     && ego.min < 0.0
-                    && follower_clip.is_valid()
-                    && time_gap.is_valid()
-                    && time_gap.min >= 0.0
-                    && idm.is_valid()
+                    && idm_follower_is_valid(follower_clip, time_gap, idm)
                     && max_speed.is_finite()
                     && *max_speed > 0.0
             }
@@ -348,6 +339,12 @@ impl Game {
             Err(Error::InvalidHeader("game parameters"))
         }
     }
+}
+
+/// The IDM follower's parameters as every IDM game has them: clip bounds, a time-gap range of
+/// non-negative times, and valid IDM parameters.
+fn idm_follower_is_valid(follower_clip: &Bounds, time_gap: &Bounds, idm: &IdmParameters) -> bool {
+    follower_clip.is_valid() && time_gap.is_valid() && time_gap.min >= 0.0 && idm.is_valid()
 }
 
 /// Whether the value function is the finite-horizon one or a converged (invariant) one.
