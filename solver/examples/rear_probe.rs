@@ -40,7 +40,8 @@ fn main() {
                     GridAxis::new("ego_speed", 0.0, 8.0, (8.0 / spacing) as usize + 1),
                 ])
                 .expect("grid"),
-            );
+            )
+            .expect("three axes");
             let t0 = Instant::now();
             let out = iterate(&game, &grid, h, 1e-5, 100_000, |_, _, _| {});
             let at = |x: f32, vf: f32, ve: f32| grid.interpolate(&out.values, &[x, vf, ve]);

@@ -73,8 +73,8 @@ impl Breakpoints {
         })
     }
 
-    /// The breakpoints of a uniform grid.
-    pub fn from_uniform(grid: &Grid) -> Self {
+    /// The breakpoints of a uniform grid (of at most three axes, like [`Breakpoints::new`]).
+    pub fn from_uniform(grid: &Grid) -> Result<Self, ConfigError> {
         let axes = grid
             .axes()
             .iter()
@@ -83,7 +83,7 @@ impl Breakpoints {
                 (a.name.clone(), points)
             })
             .collect();
-        Breakpoints::new(axes).expect("a valid uniform grid has valid breakpoints")
+        Breakpoints::new(axes)
     }
 
     /// Piecewise-uniform breakpoints: from `start`, to each `(end, spacing)` in turn.
@@ -332,7 +332,8 @@ mod tests {
                 GridAxis::new("speed", 0.0, 10.0, points),
             ])
             .unwrap(),
-        );
+        )
+        .unwrap();
         let game = Braking { b: 4.0 };
         let mut previous: Option<Vec<f32>> = None;
         let mut monotone = true;
