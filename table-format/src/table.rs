@@ -445,7 +445,8 @@ fn check_breakpoints(list: &[u8], min: f32, max: f32) -> Result<(), Error> {
 /// The cell of `x` (within `[min, max]`) on a listed axis and the position in it, by binary
 /// search over the breakpoints: `i` in `[0, last_cell]` with `b_i <= x`, and
 /// `t = (x - b_i) / (b_{i+1} - b_i)` clamped to `[0, 1]`.
-#[inline(always)]
+// Out of line: it keeps the uniform axes' path, the common one, short and inlined.
+#[inline(never)]
 fn locate_listed(list: &[u8], last_cell: u32, x: f32) -> (u32, f32) {
     // Invariant: b_lo <= x (or lo = 0), and the answer is in [lo, hi].
     let (mut lo, mut hi) = (0u32, last_cell);
