@@ -352,12 +352,25 @@ pub struct Config {
     pub slices: Vec<SliceConfig>,
 }
 
-fn check(ok: bool, field: &str, reason: &str) -> Result<(), ConfigError> {
+/// `Ok` if `ok`, else the refusal of `field` for `reason`.
+pub(crate) fn check(ok: bool, field: &str, reason: &str) -> Result<(), ConfigError> {
     if ok {
         Ok(())
     } else {
         Err(ConfigError::new(field, reason))
     }
+}
+
+/// A run's name names its output folder: non-empty, a-z, 0-9, '-' and '_' only.
+pub(crate) fn check_name(name: &str) -> Result<(), ConfigError> {
+    check(
+        !name.is_empty()
+            && name
+                .chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-' || c == '_'),
+        "name",
+        "must be non-empty and use only a-z, 0-9, '-' and '_' (it names the output folder)",
+    )
 }
 
 fn check_range(r: &Range, field: &str) -> Result<(), ConfigError> {
@@ -393,15 +406,7 @@ impl Config {
 
     /// Checks every field the solver relies on.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        check(
-            !self.name.is_empty()
-                && self
-                    .name
-                    .chars()
-                    .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-' || c == '_'),
-            "name",
-            "must be non-empty and use only a-z, 0-9, '-' and '_' (it names the output folder)",
-        )?;
+        check_name(&self.name)?;
         let g = &self.game;
         check_accel(&g.ego, "game.ego")?;
         check_accel(&g.leader, "game.leader")?;
@@ -721,7 +726,8 @@ impl Config {
     }
 }
 
-fn idm_parameters(idm: IdmConfig) -> table_format::IdmParameters {
+/// The IDM as a table header states it.
+pub(crate) fn idm_parameters(idm: IdmConfig) -> table_format::IdmParameters {
     table_format::IdmParameters {
         max_acceleration: idm.max_acceleration as f32,
         comfortable_deceleration: idm.comfortable_deceleration as f32,

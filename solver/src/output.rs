@@ -36,6 +36,12 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), SolverError> {
     std::fs::write(path, bytes).map_err(|e| io_err(path, e))
 }
 
+/// Writes `value` as pretty-printed JSON.
+pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<(), SolverError> {
+    let json = serde_json::to_string_pretty(value).map_err(|e| io_err(path, e.into()))?;
+    write_bytes(path, json.as_bytes())
+}
+
 /// A curve to draw: legend label, colour, points.
 pub type Curve<'a> = (&'a str, RGBColor, Vec<(f64, f64)>);
 

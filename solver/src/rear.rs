@@ -16,7 +16,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 use table_format::{Axis, Bounds, Game, Horizon, HorizonStatus, Spacing, TableContents, ValueBits};
 
-use crate::config::{IdmConfig, Range};
+use crate::config::{check, check_name, idm_parameters, IdmConfig, Range};
 use crate::error::{ConfigError, SolverError};
 use crate::games::{Accel, Idm, RearIdm};
 use crate::output;
@@ -95,14 +95,6 @@ pub struct RearConfig {
     pub table_bits: u8,
 }
 
-fn check(ok: bool, field: &str, reason: &str) -> Result<(), ConfigError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(ConfigError::new(field, reason))
-    }
-}
-
 impl PiecewiseAxis {
     fn breakpoints(&self) -> Vec<f32> {
         let pieces: Vec<(f32, f32)> = self
@@ -148,15 +140,7 @@ impl RearConfig {
     /// Checks every field.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let g = &self.game;
-        check(
-            !self.name.is_empty()
-                && self
-                    .name
-                    .chars()
-                    .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-'),
-            "name",
-            "must be non-empty and use only a-z, 0-9 and '-'",
-        )?;
+        check_name(&self.name)?;
         check(
             g.ego.min < 0.0 && g.ego.max >= 0.0 && g.ego.min.is_finite() && g.ego.max.is_finite(),
             "game.ego",
@@ -220,21 +204,10 @@ impl RearConfig {
         RearIdm {
             ego: accel(g.ego),
             follower_clip: accel(g.follower),
-            idm: Idm::from(self.description_idm()),
+            idm: Idm::from(idm_parameters(g.idm)),
             time_gap: accel(g.time_gap),
             max_speed: g.max_speed as f32,
             min_gap: g.min_gap as f32,
-        }
-    }
-
-    fn description_idm(&self) -> table_format::IdmParameters {
-        let idm = self.game.idm;
-        table_format::IdmParameters {
-            max_acceleration: idm.max_acceleration as f32,
-            comfortable_deceleration: idm.comfortable_deceleration as f32,
-            desired_speed: idm.desired_speed as f32,
-            exponent: idm.exponent,
-            jam_distance: idm.jam_distance as f32,
         }
     }
 
@@ -245,7 +218,7 @@ impl RearConfig {
         Game::RearIdm {
             ego: b(g.ego),
             follower_clip: b(g.follower),
-            idm: self.description_idm(),
+            idm: idm_parameters(g.idm),
             time_gap: b(g.time_gap),
             max_speed: g.max_speed as f32,
         }
@@ -314,13 +287,11 @@ pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverEr
     let tail = history.len() / 10;
     let change_over_last_tenth = history[history.len() - tail.max(1)..].iter().copied().sum();
 
-    let names = ["gap_follower", "follower_speed", "ego_speed"];
-    let units = ["m", "m/s", "m/s"];
     let lists: Vec<Vec<f32>> = (0..3).map(|k| grid.axis(k).to_vec()).collect();
     let axes: Vec<Axis<'_>> = (0..3)
         .map(|k| Axis {
-            name: names[k],
-            unit: units[k],
+            name: grid.name(k),
+            unit: if k == 0 { "m" } else { "m/s" },
             min: lists[k][0],
             max: *lists[k].last().unwrap_or(&lists[k][0]),
             points: lists[k].len() as u32,
@@ -366,11 +337,8 @@ pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverEr
         source: e,
     })?;
     output::write_bytes(&dir.join("table.bin"), &bytes)?;
-    output::write_npy(
-        &dir.join("value.npy"),
-        &result.values,
-        &[lists[0].len(), lists[1].len(), lists[2].len()],
-    )?;
+    let points = [lists[0].len(), lists[1].len(), lists[2].len()];
+    output::write_npy(&dir.join("value.npy"), &result.values, &points)?;
 
     let at = |x: f32, vf: f32, ve: f32| grid.interpolate(&result.values, &[x, vf, ve]);
     let vmax = config.game.max_speed as f32;
@@ -385,7 +353,7 @@ pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverEr
     let summary = RearSummary {
         name: config.name.clone(),
         config: config.clone(),
-        points: [lists[0].len(), lists[1].len(), lists[2].len()],
+        points,
         iterations: result.iterations,
         converged: result.converged,
         residual: result.residual,
@@ -398,10 +366,6 @@ pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverEr
         table_bytes: bytes.len(),
         quantization_error: table.header().error_bound.quantization,
     };
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| SolverError::Io {
-        path: "summary.json".into(),
-        source: e.into(),
-    })?;
-    output::write_bytes(&dir.join("summary.json"), json.as_bytes())?;
+    output::write_json(&dir.join("summary.json"), &summary)?;
     Ok(summary)
 }

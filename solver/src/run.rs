@@ -281,11 +281,7 @@ pub fn run(
         table: table.map(|t| t.1),
         exact,
     };
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| SolverError::Io {
-        path: "summary.json".into(),
-        source: e.into(),
-    })?;
-    output::write_bytes(&dir.join("summary.json"), json.as_bytes())?;
+    output::write_json(&dir.join("summary.json"), &summary)?;
     Ok(summary)
 }
 

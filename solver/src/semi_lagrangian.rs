@@ -211,17 +211,18 @@ pub fn iterate<G: SampledGame>(
     let mut residual = f32::INFINITY;
     let mut iterations = 0;
     while iterations < max_iterations {
-        next.par_iter_mut().enumerate().for_each(|(node, out)| {
-            let mut w = constraint[node];
-            for s in &stencils[node * m..(node + 1) * m] {
-                w = w.min(s.apply(&values));
-            }
-            *out = w;
-        });
+        // The update and the largest change in one pass over the nodes.
         residual = next
-            .par_iter()
-            .zip(&values)
-            .map(|(a, b)| (a - b).abs())
+            .par_iter_mut()
+            .enumerate()
+            .map(|(node, out)| {
+                let mut w = constraint[node];
+                for s in &stencils[node * m..(node + 1) * m] {
+                    w = w.min(s.apply(&values));
+                }
+                *out = w;
+                (w - values[node]).abs()
+            })
             .reduce(|| 0.0, f32::max);
         std::mem::swap(&mut values, &mut next);
         iterations += 1;

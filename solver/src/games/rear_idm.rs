@@ -189,11 +189,11 @@ impl Dynamics for RearIdm {
 /// integrated in sub-steps of at most 50 ms within it (it reacts continuously).
 impl SampledGame for RearIdm {
     fn dims(&self) -> usize {
-        3
+        Dynamics::dims(self)
     }
 
     fn constraint(&self, z: &Vector) -> f32 {
-        z[0] - self.min_gap
+        Dynamics::constraint(self, z)
     }
 
     fn input_count(&self) -> usize {
