@@ -1,52 +1,63 @@
 //! The control step: one set of inputs in, one acceleration command out.
 //!
-//! # Policy: a least-restrictive safety filter
-//! A nominal ACC law (constant time gap with a speed set-point) drives while the table certifies
-//! that the state stays safe through the next control period under it; otherwise the table's
-//! bang-bang input `u2*` takes over ([`Mode::Override`]). Faults lead to a minimum-risk manoeuvre
-//! ([`Mode::MinimumRisk`]).
+//! # The certificate: a split of the three-car game at one braking level
+//! The table is a [`Game::ThreeCarSplit`] table. For the ego's braking level `beta` (the
+//! table's `-ego.min`) a state `(gap_leader, leader_speed, gap_follower, follower_speed,
+//! ego_speed)` is **certified** when
+//! - the *front value* `F(z) = front_value(gap_leader, leader_speed, ego_speed)`, the smallest
+//!   gap to a leader braking as hard as its model allows while the ego brakes at `beta`, in
+//!   closed form ([`table_format::front`]), exceeds `front_margin`, and
+//! - the *rear value* `W(z)`, the table's value at `(gap_follower, follower_speed, ego_speed)`
+//!   less its error bound, exceeds `rear_margin`. `W` is the stationary (infinite-horizon)
+//!   value of the rear game in which the ego's acceleration anywhere in the band
+//!   `[-beta, a_max]` is adversarial: it bounds the rear gap from below for as long as the
+//!   ego keeps its command in the band, whatever the command is.
 //!
-//! # Why a one-step look-ahead, and why it is sound
-//! The command is held for a period `h`. In that time the state moves, under the ego's held
-//! command `u` and any admissible human inputs, within a box whose *lowest* corner is
+//! # The law, and why it keeps a certified state certified
+//! Every command is in the band `[-beta, a_max]`, in every mode, so the rear half needs no
+//! decision: it is a property of the band (proven for the game's exact value; the table is its
+//! sampled-data approximation, see `solver::semi_lagrangian`, and what that leaves unproven is
+//! issue 11's verify). The front half decides the command. The nominal ACC law's command `u`
+//! is held for one period `h`; the look-ahead computes `front_value` with a *response* of `u`
+//! for `h` before the braking at `beta`. That is the smallest front gap over every leader
+//! behaviour, the period included, and every state the period can reach has a front value at
+//! least as large (the reached state's worst case is one of the behaviours the look-ahead
+//! took the minimum over). So if the look-ahead exceeds `front_margin` the nominal command is
+//! applied ([`Mode::Nominal`]); otherwise the ego brakes at `beta` ([`Mode::Override`]), along
+//! which the front value never decreases (checked by property tests in `table_format::front`).
+//! Either way a certified state's front value stays above `front_margin`. No monotonicity of
+//! the table is used: the rear value is a property of the band, and the front value is exact.
 //!
-//! `x_g1 + v_g1 h + (l_min - u) h^2/2`, `v_g1 + (l_min - u) h`,
-//! `x_g2 + v_g2 h + (u - f_max) h^2/2`, `v_g2 + (u - f_max) h`,
-//!
-//! with `l_min` the leader's hardest braking and `f_max` the follower's largest acceleration;
-//! the corner used is the lower of that and the current state, per coordinate. Relative speeds
-//! are affine in time, so their lowest value is at an end of the period. A gap is a parabola
-//! in time: its lowest value is at an end too, except when the relative speed changes sign
-//! inside the period, where it dips below both ends by at most `|a| h^2 / 2` (4 m/s^2, 20 ms:
-//! under 1 mm), which the switch margin covers. The value function never decreases with more
-//! gap or more relative speed (the property the solver's boundary bounds rest on), so its
-//! minimum over the reachable box is at that corner, and the table's value is at most
-//! `error_bound.total()` above the solver's. Hence if `V_table(corner) - error_bound > margin`,
-//! the solver's value stays positive through the period whatever the humans do, and the
-//! nominal command is safe to apply. A plain `V(z) > eps` test ignores the motion during the
-//! period and lets the state cross the boundary between two samples.
+//! # The domain
+//! The rear table covers `gap_follower` up to its last breakpoint, and speeds in
+//! `[0, max_speed]`. A follower farther back than the grid (or none: a gap of `+inf`) is safe
+//! until it crosses the grid's last gap, where its value is at least the smallest value on that
+//! face of the grid, computed once when the table is loaded: that is its rear value. A leader
+//! farther than any gap (or none) has an infinite front value. A measured speed of a human
+//! slightly below zero is taken as zero (a slower follower and a faster leader are never
+//! worse). An ego or follower faster than `max_speed`, or a follower gap below the grid, is
+//! outside the domain: [`Fault::OutsideDomain`], [`Mode::Uncertified`], with the nominal law.
+//! Its braking, like every command's, is at most `beta`, which spares the follower: a rear
+//! table certifies nothing unless the follower can out-brake the band (measured: with the
+//! follower's braking equal to `beta` the rear value's plateau is -0.99 m, README).
 //!
 //! # Faults and the minimum-risk manoeuvre
-//! A table that does not parse or is not a three-car table, a measurement the sensor flags
+//! A table that does not parse or is not a split table, a measurement the sensor flags
 //! invalid, a non-finite or physically impossible value, a measurement older than
-//! `stale_periods` periods, a state below the grid (a gap below the grid's lowest gap or a
-//! closing speed beyond it), or a clock that went backwards: each is a [`Fault`], reported in
-//! the command and logged, and the
-//! command is the minimum-risk manoeuvre: a controlled deceleration of
-//! `mrm_deceleration` (default 2 m/s^2, at most 4), softened to `mrm_gentle_deceleration`
-//! when the follower is known, close and closing, so as not to provoke a rear-end collision.
-//! States above the grid (more gap, more opening speed) are clamped onto it, which is
-//! conservative; so is clamping them onto the table's trusted box from above. Below the trusted
-//! box the table is still a lower bound of the value (it is compiled from the pessimistic
-//! solve), but how close a bound is not established there: the look-ahead then demands a
-//! further `untrusted_margin` (default 2 m) before the nominal law may drive. An ego slower than the
-//! table assumes is not a fault of the inputs: the controller runs the nominal law uncertified
-//! ([`Mode::Uncertified`]), braking no harder than the follower can unless the leader's
-//! stopping point demands it (`spare_the_follower`): at low speed the sandwich is lost by
-//! rear-end collisions.
+//! `stale_periods` periods, or a clock that went backwards: each is a [`Fault`], reported in
+//! the command and logged, and the command is the minimum-risk manoeuvre: a controlled
+//! deceleration of `mrm_deceleration` (default 2 m/s^2, at most 4), softened to
+//! `mrm_gentle_deceleration` when the follower is known, close and closing, so as not to provoke
+//! a rear-end collision. Clamped into the band, like every other command.
+//!
+//! # What is assumed
+//! The humans keep to the table's model (the leader brakes at most `-leader.min`, the follower
+//! drives by the IDM with its time gap in range); the measurements are exact and current, and
+//! the ego's acceleration is its command (delays and actuator lag are issue 11).
 
 use heapless::Deque;
-use table_format::{Bounds, EgoAction, FollowerSpeed, Game, Table};
+use table_format::front::{front_value, FrontModel};
+use table_format::{Bounds, Game, Table};
 
 use crate::fmt::{log_info, log_warn};
 use crate::inputs::{Inputs, Measurement, Track};
@@ -72,11 +83,11 @@ pub struct Config {
     pub rel_speed_gain: f32,
     /// Nominal law: acceleration per m/s of speed error.
     pub speed_gain: f32,
-    /// Extra value margin (m) the look-ahead must keep before the nominal law may drive.
-    pub switch_margin: f32,
-    /// Further margin (m) below the table's trusted box, where the table is a sound lower
-    /// bound but its accuracy is not established.
-    pub untrusted_margin: f32,
+    /// The front value (m) a certified state keeps, and the look-ahead demands of the nominal
+    /// command.
+    pub front_margin: f32,
+    /// The rear value (m, after the table's error bound) a certified state has.
+    pub rear_margin: f32,
     /// Minimum-risk deceleration, m/s^2 (positive, at most 4).
     pub mrm_deceleration: f32,
     /// Minimum-risk deceleration when the follower is close and closing, m/s^2 (positive).
@@ -96,8 +107,8 @@ impl Default for Config {
             gap_gain: 0.23,
             rel_speed_gain: 0.7,
             speed_gain: 0.3,
-            switch_margin: 0.5,
-            untrusted_margin: 2.0,
+            front_margin: 0.5,
+            rear_margin: 0.0,
             mrm_deceleration: 2.0,
             mrm_gentle_deceleration: 1.0,
             follower_close_gap: 15.0,
@@ -112,26 +123,26 @@ pub const ISO_15622_LIMITS: (f32, f32) = (-3.5, 2.0);
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Mode {
-    /// The nominal ACC law, certified safe through the next period.
+    /// The nominal ACC law; the look-ahead showed the front value stays above the margin
+    /// through the next period.
     Nominal,
-    /// The table's bang-bang input `u2*`.
+    /// Braking at the certificate's level `beta`: the look-ahead refused the nominal command.
     Override,
     /// The minimum-risk manoeuvre after a fault.
     MinimumRisk,
-    /// The nominal law without a certificate, braking no harder than the follower can unless
-    /// the leader demands it: the ego is slower than the speed the table assumes for the
-    /// follower, so the table cannot speak (see [`Fault::BelowAssumedSpeed`]).
+    /// The nominal law (in the band) without a certificate: the state is outside the table's
+    /// domain ([`Fault::OutsideDomain`]).
     Uncertified,
 }
 
-/// Why the controller is in the minimum-risk manoeuvre.
+/// Why the controller is in the minimum-risk manoeuvre or uncertified.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum Fault {
     /// The table did not pass `Table::parse`.
     Table(table_format::Error),
-    /// The table is not a three-car table.
+    /// The table is not a split three-car table ([`Game::ThreeCarSplit`]).
     WrongGame,
     /// The leader track is flagged invalid, non-finite or impossible.
     LeaderInvalid,
@@ -145,17 +156,15 @@ pub enum Fault {
     EgoSpeedInvalid,
     /// The ego speed is older than `stale_periods` periods.
     EgoSpeedStale,
-    /// The state lies below the table's grid on this axis (0: gap_leader, 1: rel_speed_leader,
-    /// 2: gap_follower, 3: rel_speed_follower).
-    OutsideGrid {
+    /// The state is outside the table's domain on this axis of the rear table (0:
+    /// gap_follower below the grid, 1: follower_speed above `max_speed`, 2: ego_speed above
+    /// `max_speed`). Not a sensor fault: the controller runs the nominal law uncertified
+    /// ([`Mode::Uncertified`]), as a conventional ACC would outside its certified range,
+    /// rather than braking hard into the follower.
+    OutsideDomain {
         /// The axis.
         axis: u8,
     },
-    /// The ego is slower than the speed the table assumes for the follower's IDM. Not a sensor
-    /// fault: the controller runs the nominal law uncertified ([`Mode::Uncertified`]), as a
-    /// conventional ACC would below its certified range, rather than braking (a hard
-    /// minimum-risk braking there invites the follower into the ego's rear).
-    BelowAssumedSpeed,
     /// The clock went backwards.
     ClockWentBackwards,
 }
@@ -164,15 +173,42 @@ pub enum Fault {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Command {
-    /// Requested acceleration, m/s^2 (negative: braking). Always finite.
+    /// Requested acceleration, m/s^2 (negative: braking). Always finite, always in the band.
     pub acceleration: f32,
     /// Which law produced it.
     pub mode: Mode,
-    /// The fault behind a minimum-risk manoeuvre.
+    /// The fault behind a minimum-risk manoeuvre or an uncertified command.
     pub fault: Option<Fault>,
-    /// The table's value at the state (m), when it was looked up.
-    pub value: Option<f32>,
+    /// The certificate's margin at the measured state (m): the smaller of the front value
+    /// less `front_margin` and the rear value less its error bound and `rear_margin`. The state
+    /// is certified when it is positive. `None` when no certificate was evaluated.
+    pub margin: Option<f32>,
 }
+
+/// The two halves of the certificate at a state, each as a margin over its level (m): the
+/// state is certified when both are positive.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Certificate {
+    /// The front value less `front_margin`.
+    pub front: f32,
+    /// The rear value less the table's error bound and `rear_margin`.
+    pub rear: f32,
+}
+
+impl Certificate {
+    /// The smaller of the two margins.
+    pub fn margin(&self) -> f32 {
+        math::min(self.front, self.rear)
+    }
+}
+
+/// f32 rounding can lower a computed margin along a trajectory on which the exact one never
+/// decreases (the front value's closed form and the plant are evaluated in f32; the property
+/// test `never_decreases_along_the_ego_braking` in `table_format::front` allows
+/// `1e-3 (1 + |F|)`, 1.5 mm at `F = 0.5 m`). A certified state (margin above zero) is claimed
+/// to keep its margin above `-CERTIFICATE_TOLERANCE`, 1 cm.
+pub const CERTIFICATE_TOLERANCE: f32 = 0.01;
 
 /// Something worth a line in the log.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -187,25 +223,42 @@ pub enum Event {
         /// The fault, for the minimum-risk manoeuvre.
         fault: Option<Fault>,
     },
-    /// The state is no longer certified safe (its table value is within the error bound of
-    /// zero, or below): logged once per episode.
+    /// The state is no longer certified (its margin is zero or below): logged once per
+    /// excursion.
     MarginLost {
         /// Time, microseconds.
         at_us: u64,
-        /// The table's value at the state, m.
-        value: f32,
+        /// The certificate's margin at the state, m.
+        margin: f32,
     },
 }
 
 /// What the controller takes from the table's header once.
 #[derive(Debug, Clone, Copy)]
 struct Model {
+    /// The band `[-beta, a_max]`.
     ego: Bounds,
-    leader_min: f32,
-    follower_min: f32,
-    follower_max: f32,
-    min_ego_speed: f32,
+    /// The leader's hardest braking, positive.
+    leader_braking: f32,
+    max_speed: f32,
+    /// The rear grid's lowest and highest gap, m.
+    gap_min: f32,
+    gap_max: f32,
+    /// The smallest value on the rear grid's last gap face: the rear value beyond the grid.
+    beyond_grid: f32,
     error_bound: f32,
+}
+
+impl Model {
+    fn front(&self, response_time: f32, response_acceleration: f32) -> FrontModel {
+        FrontModel {
+            leader_braking: self.leader_braking,
+            ego_braking: -self.ego.min,
+            response_time,
+            response_acceleration,
+            max_speed: self.max_speed,
+        }
+    }
 }
 
 /// The ACC safety controller. It owns the table and a log of recent events; it never allocates
@@ -221,44 +274,53 @@ pub struct Controller<'t> {
 
 fn model_of(table: &Table<'_>) -> Result<Model, Fault> {
     let header = table.header();
-    let (ego, leader, follower, min_ego_speed) = match header.game {
-        Game::ThreeCarBaseline {
-            ego,
-            leader,
-            follower,
-        } => (ego, leader, follower, 0.0),
-        Game::ThreeCarIdm {
-            ego,
-            leader,
-            follower_clip,
-            follower_speed,
-            ..
-        } => {
-            let min_speed = match follower_speed {
-                FollowerSpeed::NominalEgoSpeed { ego_speed } => ego_speed,
-                FollowerSpeed::Adversarial { min_ego_speed, .. } => min_ego_speed,
-            };
-            (ego, leader, follower_clip, min_speed)
-        }
-        _ => return Err(Fault::WrongGame),
+    let Game::ThreeCarSplit {
+        ego,
+        leader,
+        max_speed,
+        ..
+    } = header.game
+    else {
+        return Err(Fault::WrongGame);
     };
-    if table.dims() != 4 {
+    let (Some(gaps), Some(follower_speeds), Some(ego_speeds)) = (
+        table.axis_bounds(0),
+        table.axis_bounds(1),
+        table.axis_bounds(2),
+    ) else {
+        return Err(Fault::WrongGame);
+    };
+    // The rear table must cover every speed the game allows: the domain check below relies on
+    // it.
+    let covers = |b: Bounds| b.min <= 0.0 && b.max >= max_speed;
+    if table.dims() != 3 || !covers(follower_speeds) || !covers(ego_speeds) {
         return Err(Fault::WrongGame);
     }
+    // The last gap face is the last `points(1) * points(2)` nodes (C order).
+    let nodes = table.node_count();
+    let face = header
+        .axes
+        .get(1)
+        .zip(header.axes.get(2))
+        .map_or(0, |(a, b)| a.points as usize * b.points as usize);
+    let beyond_grid = (nodes.saturating_sub(face)..nodes)
+        .filter_map(|n| table.value_at_node(n))
+        .fold(f32::INFINITY, math::min);
     Ok(Model {
         ego,
-        leader_min: leader.min,
-        follower_min: follower.min,
-        follower_max: follower.max,
-        min_ego_speed,
+        leader_braking: -leader.min,
+        max_speed,
+        gap_min: gaps.min,
+        gap_max: gaps.max,
+        beyond_grid,
         error_bound: header.error_bound.total(),
     })
 }
 
 impl<'t> Controller<'t> {
-    /// A controller running `table_bytes`. A table that does not parse, or is not a three-car
-    /// table, leaves the controller in the minimum-risk manoeuvre for good, with the reason in
-    /// every command.
+    /// A controller running `table_bytes`. A table that does not parse, or is not a split
+    /// three-car table, leaves the controller in the minimum-risk manoeuvre for good, with the
+    /// reason in every command.
     pub fn new(table_bytes: &'t [u8], config: Config) -> Self {
         let table = Table::parse(table_bytes)
             .map_err(Fault::Table)
@@ -298,6 +360,25 @@ impl<'t> Controller<'t> {
     /// Recent events (the last 32), oldest first.
     pub fn events(&self) -> impl Iterator<Item = &Event> {
         self.events.iter()
+    }
+
+    /// The certificate at the true state `(gap_leader, leader_speed, gap_follower,
+    /// follower_speed, ego_speed)`, with the same domain rules as the control step: `None`
+    /// outside the domain or without a table. For tests and campaigns, which judge the
+    /// certificate on the state the firmware cannot see exactly.
+    pub fn certificate(&self, state: [f32; 5]) -> Option<Certificate> {
+        let (table, model) = self.table.as_ref().ok()?;
+        let [gap_leader, leader_speed, gap_follower, follower_speed, ego_speed] = state;
+        let rear = rear_value(table, model, gap_follower, follower_speed, ego_speed).ok()?;
+        let front = front_value(gap_leader, leader_speed, ego_speed, &model.front(0.0, 0.0));
+        Some(self.certificate_of(front, rear, model))
+    }
+
+    fn certificate_of(&self, front: f32, rear: f32, model: &Model) -> Certificate {
+        Certificate {
+            front: front - self.config.front_margin,
+            rear: rear - model.error_bound - self.config.rear_margin,
+        }
     }
 
     /// Appends to the event log, dropping the oldest entry when it is full. (`heapless::Deque`
@@ -344,11 +425,15 @@ impl<'t> Controller<'t> {
         } else {
             c.mrm_deceleration
         };
+        let acceleration = match &self.table {
+            Ok((_, model)) => math::clamp(-deceleration, model.ego.min, model.ego.max),
+            Err(_) => -deceleration,
+        };
         Command {
-            acceleration: -deceleration,
+            acceleration,
             mode: Mode::MinimumRisk,
             fault: Some(fault),
-            value: None,
+            margin: None,
         }
     }
 
@@ -415,86 +500,54 @@ impl<'t> Controller<'t> {
             return self.minimum_risk(inputs, Fault::EgoSpeedStale);
         }
         let ego_speed = ego.value;
-        if ego_speed < model.min_ego_speed {
-            return Command {
-                acceleration: spare_the_follower(
-                    self.nominal(leader, ego_speed, model.ego),
-                    leader,
-                    ego_speed,
-                    &model,
-                ),
-                mode: Mode::Uncertified,
-                fault: Some(Fault::BelowAssumedSpeed),
-                value: None,
-            };
-        }
-
-        let measured = [
-            leader.gap,
-            leader.rel_speed,
-            follower.gap,
-            follower.rel_speed,
-        ];
-        // Below the trusted box on any axis the table may be needlessly conservative there;
-        // above it (more gap, more opening speed) the state is clamped onto it, conservatively.
-        let trusted = (0..4).all(|k| {
-            table
-                .trusted_bounds(k)
-                .zip(measured.get(k))
-                .is_some_and(|(b, x)| *x >= b.min)
-        });
-        let state = match onto_grid(table, measured) {
-            Ok(z) => z,
-            Err(f) => return self.minimum_risk(inputs, f),
-        };
-        let here = match table.lookup(&state) {
-            Ok(l) => l,
-            Err(_) => return self.minimum_risk(inputs, Fault::OutsideGrid { axis: 0 }),
-        };
-        let u_star = match here.action {
-            EgoAction::Accelerate => model.ego.max,
-            EgoAction::Brake => model.ego.min,
-        };
         let nominal = self.nominal(leader, ego_speed, model.ego);
-        let h = self.config.period_us as f32 * 1e-6;
-        // The look-ahead (module docs): the lowest corner reachable in one period under the
-        // nominal law must keep a certified value; below the grid it cannot.
-        let margin = if trusted {
-            self.config.switch_margin
-        } else {
-            self.config.switch_margin + self.config.untrusted_margin
+        // Absolute speeds; a human measured slightly below zero is taken at rest (a slower
+        // follower and a faster leader are never worse).
+        let leader_speed = math::max(ego_speed + leader.rel_speed, 0.0);
+        let follower_speed = math::max(ego_speed - follower.rel_speed, 0.0);
+        let rear = match rear_value(table, &model, follower.gap, follower_speed, ego_speed) {
+            Ok(w) => w,
+            Err(fault) => {
+                return Command {
+                    acceleration: nominal,
+                    mode: Mode::Uncertified,
+                    fault: Some(fault),
+                    margin: None,
+                }
+            }
         };
-        let certified = onto_grid(
-            table,
-            lowest_corner(&state, nominal, model.leader_min, model.follower_max, h),
-        )
-        .ok()
-        .and_then(|corner| table.value_at(&corner).ok())
-        .is_some_and(|v| v - model.error_bound > margin);
-        let (acceleration, mode) = if certified {
+        let h = self.config.period_us as f32 * 1e-6;
+        // The look-ahead (module docs): the front value with the nominal command held for one
+        // period before braking at beta.
+        let ahead = front_value(
+            leader.gap,
+            leader_speed,
+            ego_speed,
+            &model.front(h, nominal),
+        );
+        let (acceleration, mode) = if ahead > self.config.front_margin {
             (nominal, Mode::Nominal)
         } else {
-            (u_star, Mode::Override)
+            (model.ego.min, Mode::Override)
         };
-        // Diagnostics: the state itself is no longer certified (logged once per episode).
-        let outside = here.value - model.error_bound <= 0.0;
+        let front = front_value(leader.gap, leader_speed, ego_speed, &model.front(0.0, 0.0));
+        let margin = self.certificate_of(front, rear, &model).margin();
+        // Diagnostics: the state itself is no longer certified (logged once per excursion).
+        let outside = margin.is_nan() || margin <= 0.0;
         if outside && !self.margin_lost {
-            self.log(Event::MarginLost {
-                at_us: now,
-                value: here.value,
-            });
+            self.log(Event::MarginLost { at_us: now, margin });
         }
         self.margin_lost = outside;
         Command {
             acceleration: math::clamp(acceleration, model.ego.min, model.ego.max),
             mode,
             fault: None,
-            value: Some(here.value),
+            margin: Some(margin),
         }
     }
 
     /// The nominal ACC law: constant time gap with a speed set-point, limited to ISO 15622 and
-    /// then to the game's ego bounds.
+    /// then to the band.
     fn nominal(&self, leader: Track, ego_speed: f32, ego: Bounds) -> f32 {
         let c = &self.config;
         let speed_law = c.speed_gain * (c.set_speed - ego_speed);
@@ -510,60 +563,29 @@ impl<'t> Controller<'t> {
     }
 }
 
-/// Below the table's speed range (uncertified): the nominal law, but never braking harder than
-/// the follower can (the game's bound on its braking), unless the leader leaves no choice: the
-/// deceleration that stops the ego behind the point where the leader stops if it brakes as
-/// hard as its model allows (less a 2 m margin) is always allowed. A rear-end collision is the
-/// typical way to lose a sandwich at low speed, and braking harder than necessary invites it.
-fn spare_the_follower(nominal: f32, leader: Track, ego_speed: f32, model: &Model) -> f32 {
-    let follower_braking = math::max(-model.follower_min, 0.0);
-    let leader_braking = math::max(-model.leader_min, 0.1);
-    let needed = if math::is_finite(leader.gap) {
-        let leader_speed = math::max(ego_speed + leader.rel_speed, 0.0);
-        let room = leader.gap + leader_speed * leader_speed / (2.0 * leader_braking) - 2.0;
-        ego_speed * ego_speed / (2.0 * math::max(room, 0.5))
-    } else {
-        0.0
-    };
-    let allowed = math::max(needed, follower_braking);
-    math::clamp(math::max(nominal, -allowed), model.ego.min, model.ego.max)
-}
-
-/// The lowest corner of the box the state can reach within `h` under the held ego input `u`
-/// (see the module docs).
-fn lowest_corner(z: &[f32; 4], u: f32, leader_min: f32, follower_max: f32, h: f32) -> [f32; 4] {
-    let a1 = leader_min - u;
-    let a2 = u - follower_max;
-    let end = [
-        z[0] + z[1] * h + 0.5 * a1 * h * h,
-        z[1] + a1 * h,
-        z[2] + z[3] * h + 0.5 * a2 * h * h,
-        z[3] + a2 * h,
-    ];
-    // Lowest values over the period are at its ends (up to the sub-millimetre dip of a gap
-    // whose relative speed changes sign, which the switch margin covers).
-    [
-        math::min(z[0], end[0]),
-        math::min(z[1], end[1]),
-        math::min(z[2], end[2]),
-        math::min(z[3], end[3]),
-    ]
-}
-
-/// Clamps a state from above onto the trusted box (more gap or relative speed is never worse,
-/// so this is conservative) and refuses it below the grid.
-fn onto_grid(table: &Table<'_>, z: [f32; 4]) -> Result<[f32; 4], Fault> {
-    let mut out = z;
-    for (k, x) in out.iter_mut().enumerate() {
-        let axis = u8::try_from(k).unwrap_or(u8::MAX);
-        let grid = table.axis_bounds(k).ok_or(Fault::OutsideGrid { axis })?;
-        let trusted = table.trusted_bounds(k).ok_or(Fault::OutsideGrid { axis })?;
-        if x.is_nan() || *x < grid.min {
-            return Err(Fault::OutsideGrid { axis });
-        }
-        if *x > trusted.max {
-            *x = trusted.max;
-        }
+/// The rear value at `(gap_follower, follower_speed, ego_speed)`: the table's interpolation
+/// inside the grid, the last gap face's smallest value beyond it (module docs), and
+/// [`Fault::OutsideDomain`] below the grid or above the speed range.
+fn rear_value(
+    table: &Table<'_>,
+    model: &Model,
+    gap_follower: f32,
+    follower_speed: f32,
+    ego_speed: f32,
+) -> Result<f32, Fault> {
+    if gap_follower.is_nan() || gap_follower < model.gap_min {
+        return Err(Fault::OutsideDomain { axis: 0 });
     }
-    Ok(out)
+    if !(follower_speed >= 0.0 && follower_speed <= model.max_speed) {
+        return Err(Fault::OutsideDomain { axis: 1 });
+    }
+    if !(ego_speed >= 0.0 && ego_speed <= model.max_speed) {
+        return Err(Fault::OutsideDomain { axis: 2 });
+    }
+    if gap_follower > model.gap_max {
+        return Ok(model.beyond_grid);
+    }
+    table
+        .value_at(&[gap_follower, follower_speed, ego_speed])
+        .map_err(|_| Fault::OutsideDomain { axis: 0 })
 }

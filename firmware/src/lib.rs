@@ -13,9 +13,10 @@
 //! - Hardware behind traits ([`Sensors`], [`Actuator`], [`Clock`], [`Watchdog`]), with a CAN
 //!   driver over `embedded-can` ([`can`]).
 //!
-//! The default table (`tables/default.bin`, 139 KiB) comes from
-//! `cargo run -p solver --release -- --config solver/configs/firmware-default.toml`; copy
-//! `out/firmware-default/table.bin` over it to regenerate it.
+//! The default table (`tables/default.bin`, 693 KiB) is the split three-car certificate's rear
+//! value (see [`controller`]); it comes from
+//! `cargo run -p solver --release -- --rear solver/configs/rear/deployment.toml` (part of the
+//! main job); copy `out/deployment/table.bin` over it to regenerate it.
 #![cfg_attr(not(test), no_std)]
 #![warn(missing_docs)]
 #![cfg_attr(
@@ -37,12 +38,15 @@ pub mod controller;
 pub mod inputs;
 pub mod math;
 
-pub use controller::{Command, Config, Controller, Event, Fault, Mode};
+pub use controller::{
+    Certificate, Command, Config, Controller, Event, Fault, Mode, CERTIFICATE_TOLERANCE,
+};
 pub use inputs::{Actuator, Clock, Inputs, Measurement, Sensors, Track, Watchdog};
 pub use table_format;
 
-/// The default table: the IDM game with the follower's speed adversarial for ego speeds in
-/// [15, 40] m/s, 16^4 nodes of 16 bits.
+/// The default table: the split three-car certificate at the ego's braking level 3.5 m/s^2,
+/// every speed in [0, 35] m/s; the stationary rear value on 133 x 73 x 73 listed breakpoints of
+/// 8 bits.
 pub static DEFAULT_TABLE: &[u8] = include_bytes!("../tables/default.bin");
 
 /// Runs one control period: reads the sensors, steps the controller, sends the command and

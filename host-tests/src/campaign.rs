@@ -1,31 +1,30 @@
 //! Episodes and campaigns: the firmware's `Controller` at its real period against the humans,
-//! from initial states sampled inside the table's certified safe set or just outside it.
+//! from initial states sampled over the whole certified set of the firmware's table, standstill
+//! included.
+//!
+//! What an episode judges, on the *true* state (not the measured one):
+//! - a **collision**: a gap reaches zero, inside a period or at a sample;
+//! - a **certificate loss**: the certificate's margin ([`firmware::Controller::certificate`])
+//!   falls to `-firmware::CERTIFICATE_TOLERANCE` (f32 rounding) or below, or the state leaves
+//!   the table's domain, at a sample while the firmware runs; the firmware's mode at that moment
+//!   and the half of the certificate that was lost are kept. From a certified start, with humans that keep to the model, both must be zero, or
+//!   the certificate is wrong;
+//! - whether the **humans alone** made a collision unavoidable first (the follower can no
+//!   longer stop short of where the leader stops).
 
-use firmware::{Config, Controller, Mode};
+use firmware::{Config, Controller, Mode, CERTIFICATE_TOLERANCE};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 use serde::Serialize;
 use table_format::Table;
 
-use crate::humans::{Follower, Humans, Leader};
+use crate::humans::{Follower, HumanModel, Humans, Leader};
 use crate::sim::{humans_make_a_collision_unavoidable, lowest_gap, Car, SensorModel, Sensors};
-
-/// Where episodes start.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Start {
-    /// Inside the trusted box, certified: `V_table - error_bound > 0.5 m`.
-    Certified,
-    /// Inside the trusted box, just outside the safe set: `V_table` in `[-2, 0)` m.
-    JustOutside,
-}
 
 /// One episode's setting.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct Episode {
-    /// Start set.
-    pub start: Start,
     /// Leader behaviour.
     pub leader: Leader,
     /// Follower behaviour.
@@ -38,6 +37,43 @@ pub struct Episode {
     pub seed: u64,
 }
 
+/// The firmware's mode, for reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ModeName {
+    /// [`Mode::Nominal`].
+    Nominal,
+    /// [`Mode::Override`].
+    Override,
+    /// [`Mode::MinimumRisk`].
+    MinimumRisk,
+    /// [`Mode::Uncertified`].
+    Uncertified,
+}
+
+impl From<Mode> for ModeName {
+    fn from(m: Mode) -> Self {
+        match m {
+            Mode::Nominal => ModeName::Nominal,
+            Mode::Override => ModeName::Override,
+            Mode::MinimumRisk => ModeName::MinimumRisk,
+            Mode::Uncertified => ModeName::Uncertified,
+        }
+    }
+}
+
+/// Which half of the certificate was lost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Half {
+    /// The front value.
+    Front,
+    /// The rear value.
+    Rear,
+    /// The state left the table's domain.
+    Domain,
+}
+
 /// What happened.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct Outcome {
@@ -45,79 +81,111 @@ pub struct Outcome {
     pub collided: bool,
     /// Time of the first collision, s.
     pub collision_time: Option<f32>,
-    /// The first time the humans alone made a collision unavoidable (see
-    /// [`crate::sim::humans_make_a_collision_unavoidable`]), s.
+    /// The first time the humans alone made a collision unavoidable, s.
     pub unavoidable_from: Option<f32>,
+    /// The first time the true state was not certified, s, the firmware's mode then, and the
+    /// half lost.
+    pub certificate_lost: Option<(f32, ModeName, Half)>,
+    /// The smallest certificate margin over the episode, m.
+    pub min_margin: f32,
+    /// The smallest front and rear margins over the episode, m (each half on its own).
+    pub min_half_margins: (f32, f32),
     /// Smallest gap to the leader, m.
     pub min_gap_leader: f32,
     /// Smallest gap to the follower, m.
     pub min_gap_follower: f32,
-    /// Share of the time the table's input overrode the nominal law.
+    /// Share of the time the firmware braked at the certificate's level (override).
     pub override_share: f32,
     /// Share of the time in the minimum-risk manoeuvre.
     pub minimum_risk_share: f32,
-    /// Share of the time the ego was slower than the table assumes (nominal law, uncertified).
+    /// Share of the time outside the table's domain (uncertified).
     pub uncertified_share: f32,
     /// Largest |jerk| of the ego's command, m/s^3.
     pub max_jerk: f32,
-    /// The initial state `(gap_leader, rel_speed_leader, gap_follower, rel_speed_follower)`
-    /// and ego speed.
+    /// Times the leader came to a standstill.
+    pub leader_stops: u32,
+    /// The initial state `(gap_leader, leader_speed, gap_follower, follower_speed, ego_speed)`.
     pub initial: [f32; 5],
-    /// The table value at the start, m.
-    pub initial_value: f32,
+    /// The certificate margin at the start, m.
+    pub initial_margin: f32,
 }
 
-/// A recorded trajectory: per period `(t, gap_leader, gap_follower, ego accel, mode)`.
-pub type Trace = Vec<(f32, f32, f32, f32, u8)>;
+/// A recorded trajectory, one entry per period.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct TracePoint {
+    /// Time, s.
+    pub t: f32,
+    /// Gap to the leader, m.
+    pub gap_leader: f32,
+    /// Gap to the follower, m.
+    pub gap_follower: f32,
+    /// Speeds of leader, ego and follower, m/s.
+    pub speeds: [f32; 3],
+    /// The ego's command, m/s^2.
+    pub command: f32,
+    /// The firmware's mode.
+    pub mode: ModeName,
+    /// The certificate margin at the true state, m.
+    pub margin: f32,
+}
 
-/// Draws an initial state of the wanted kind: relative speeds and gaps inside the trusted box,
-/// an ego speed in [20, 35] m/s, and absolute speeds of the humans in [0, 40] m/s.
+/// A recorded trajectory.
+pub type Trace = Vec<TracePoint>;
+
+/// The true state `(gap_leader, leader_speed, gap_follower, follower_speed, ego_speed)`.
+pub fn state_of([leader, ego, follower]: [Car; 3]) -> [f32; 5] {
+    [
+        leader.x - ego.x,
+        leader.v,
+        ego.x - follower.x,
+        follower.v,
+        ego.v,
+    ]
+}
+
+/// Draws an initial state over the whole certified set (`margin > 0`): each speed is zero with
+/// probability 0.15 and uniform in `[0, max_speed]` otherwise; gaps are uniform in `[0, 150]`
+/// m ahead and over the rear grid behind. `None` after 10,000 rejected draws.
 pub fn sample_start(
-    table: &Table<'_>,
-    start: Start,
+    controller: &Controller<'_>,
+    model: &HumanModel,
+    gap_max: f32,
     rng: &mut impl Rng,
 ) -> Option<([Car; 3], f32)> {
-    let header = table.header();
-    let error = header.error_bound.total();
+    let vmax = model.max_speed;
+    let speed = |rng: &mut dyn rand::RngCore| {
+        if rng.random::<f32>() < 0.15 {
+            0.0
+        } else {
+            rng.random_range(0.0..=vmax)
+        }
+    };
     for _ in 0..10_000 {
-        let z: Vec<f32> = header
-            .trusted_box
-            .iter()
-            .map(|b| rng.random_range(b.min..=b.max))
-            .collect();
-        let ego_v: f32 = rng.random_range(20.0..=35.0);
-        let leader_v = ego_v + z[1];
-        let follower_v = ego_v - z[3];
-        if !(0.0..=40.0).contains(&leader_v) || !(0.0..=40.0).contains(&follower_v) {
-            continue;
-        }
-        if z[0] <= 0.5 || z[2] <= 0.5 {
-            continue;
-        }
-        let Ok(value) = table.value_at(&z) else {
-            continue;
-        };
-        let wanted = match start {
-            Start::Certified => value - error > 0.5,
-            Start::JustOutside => (-2.0..0.0).contains(&value),
-        };
-        if wanted {
-            let ego = Car { x: 0.0, v: ego_v };
-            let leader = Car {
-                x: z[0],
-                v: leader_v,
-            };
-            let follower = Car {
-                x: -z[2],
-                v: follower_v,
-            };
-            return Some(([leader, ego, follower], value));
+        let (vl, vf, ve) = (speed(rng), speed(rng), speed(rng));
+        let gap_leader = rng.random_range(0.0..=150.0f32);
+        let gap_follower = rng.random_range(0.0..=gap_max);
+        let state = [gap_leader, vl, gap_follower, vf, ve];
+        if let Some(certificate) = controller.certificate(state) {
+            let margin = certificate.margin();
+            if margin > 0.0 {
+                let ego = Car { x: 0.0, v: ve };
+                let leader = Car {
+                    x: gap_leader,
+                    v: vl,
+                };
+                let follower = Car {
+                    x: -gap_follower,
+                    v: vf,
+                };
+                return Some(([leader, ego, follower], margin));
+            }
         }
     }
     None
 }
 
-/// Runs one episode; with `trace`, records the trajectory.
+/// Runs one episode on `bytes` (a split table); with `trace`, records the trajectory. `None`
+/// if the table is not a split table or no certified start was found.
 pub fn run_episode(
     table: &Table<'_>,
     bytes: &[u8],
@@ -125,18 +193,14 @@ pub fn run_episode(
     trace: Option<&mut Trace>,
 ) -> Option<Outcome> {
     let mut rng = StdRng::seed_from_u64(episode.seed);
-    let ([mut leader, mut ego, mut follower], initial_value) =
-        sample_start(table, episode.start, &mut rng)?;
-    let initial = [
-        leader.x - ego.x,
-        leader.v - ego.v,
-        ego.x - follower.x,
-        ego.v - follower.v,
-        ego.v,
-    ];
     let config = Config::default();
     let mut controller = Controller::new(bytes, config);
-    let mut humans = Humans::new(table, episode.leader, episode.follower, &mut rng);
+    let model = HumanModel::of(table)?;
+    let gap_max = table.axis_bounds(0)?.max;
+    let ([mut leader, mut ego, mut follower], initial_margin) =
+        sample_start(&controller, &model, gap_max, &mut rng)?;
+    let initial = state_of([leader, ego, follower]);
+    let mut humans = Humans::new(table, episode.leader, episode.follower, &mut rng)?;
     let mut sensors = Sensors::new(episode.sensors);
     let h = config.period_us as f32 * 1e-6;
     let steps = (episode.seconds / h).round() as u64;
@@ -146,6 +210,10 @@ pub fn run_episode(
     let mut last_accel: Option<f32> = None;
     let mut collision_time = None;
     let mut unavoidable_from = None;
+    let mut certificate_lost = None;
+    let mut min_margin = f32::INFINITY;
+    let mut min_half = (f32::INFINITY, f32::INFINITY);
+    let mut leader_stops = 0u32;
     let (leader_braking, follower_braking) = humans.hardest_braking();
     let mut trace = trace;
     for k in 0..steps {
@@ -163,6 +231,21 @@ pub fn run_episode(
         }
         let inputs = sensors.measure(now_us, [leader, ego, follower], &mut rng);
         let command = controller.step(&inputs);
+        let certificate = controller.certificate(state_of([leader, ego, follower]));
+        let m = certificate.map_or(f32::NEG_INFINITY, |c| c.margin());
+        min_margin = min_margin.min(m);
+        if let Some(c) = certificate {
+            min_half.0 = min_half.0.min(c.front);
+            min_half.1 = min_half.1.min(c.rear);
+        }
+        if certificate_lost.is_none() && (m.is_nan() || m <= -CERTIFICATE_TOLERANCE) {
+            let half = match certificate {
+                None => Half::Domain,
+                Some(c) if c.front <= c.rear => Half::Front,
+                Some(_) => Half::Rear,
+            };
+            certificate_lost = Some((t, command.mode.into(), half));
+        }
         match command.mode {
             Mode::Override => overrides += 1,
             Mode::MinimumRisk => mrm += 1,
@@ -174,62 +257,100 @@ pub fn run_episode(
             max_jerk = max_jerk.max((a_ego - prev).abs() / h);
         }
         last_accel = Some(a_ego);
-        let (a_leader, a_follower) = humans.accelerations(t, [leader, ego, follower], &mut rng);
+        let (a_leader, a_follower) = humans.accelerations(t, h, [leader, ego, follower], &mut rng);
         let front = lowest_gap(leader, a_leader, ego, a_ego, h);
         let rear = lowest_gap(ego, a_ego, follower, a_follower, h);
         min_front = min_front.min(front);
         min_rear = min_rear.min(rear);
         if let Some(tr) = trace.as_deref_mut() {
-            let mode = match command.mode {
-                Mode::Nominal => 0,
-                Mode::Override => 1,
-                Mode::MinimumRisk => 2,
-                Mode::Uncertified => 3,
-            };
-            tr.push((t, leader.x - ego.x, ego.x - follower.x, a_ego, mode));
+            tr.push(TracePoint {
+                t,
+                gap_leader: leader.x - ego.x,
+                gap_follower: ego.x - follower.x,
+                speeds: [leader.v, ego.v, follower.v],
+                command: a_ego,
+                mode: command.mode.into(),
+                margin: m,
+            });
         }
         if front <= 0.0 || rear <= 0.0 {
             collision_time = Some(t);
             break;
         }
+        let moving = leader.v > 0.0;
         leader.advance(a_leader, h);
         ego.advance(a_ego, h);
         follower.advance(a_follower, h);
+        if moving && leader.v <= 0.0 {
+            leader_stops += 1;
+        }
     }
     let n = steps.max(1) as f32;
     Some(Outcome {
         collided: collision_time.is_some(),
         collision_time,
         unavoidable_from,
+        certificate_lost,
+        min_margin,
+        min_half_margins: min_half,
         min_gap_leader: min_front,
         min_gap_follower: min_rear,
         override_share: overrides as f32 / n,
         minimum_risk_share: mrm as f32 / n,
         uncertified_share: uncertified as f32 / n,
         max_jerk,
+        leader_stops,
         initial,
-        initial_value,
+        initial_margin,
     })
 }
 
-/// Per (start, leader, follower) group: counts and extremes.
+/// Certificate losses by the firmware's mode at the moment of loss.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct LossesByMode {
+    /// In [`Mode::Nominal`].
+    pub nominal: usize,
+    /// In [`Mode::Override`].
+    pub r#override: usize,
+    /// In [`Mode::MinimumRisk`].
+    pub minimum_risk: usize,
+    /// In [`Mode::Uncertified`].
+    pub uncertified: usize,
+    /// Of all, those where the front value was lost.
+    pub front: usize,
+    /// Of all, those where the rear value was lost.
+    pub rear: usize,
+    /// Of all, those where the state left the domain.
+    pub domain: usize,
+}
+
+/// Per (leader, follower) group: counts and extremes.
 #[derive(Debug, Clone, Serialize)]
 pub struct GroupSummary {
-    /// Start set.
-    pub start: Start,
     /// Leader behaviour.
     pub leader: Leader,
     /// Follower behaviour.
     pub follower: Follower,
+    /// Whether the humans keep to the table's model.
+    pub in_model: bool,
     /// Episodes run.
     pub episodes: usize,
     /// Episodes with a collision.
     pub collisions: usize,
-    /// Of those, collisions the humans alone had made unavoidable beforehand (the follower could
-    /// no longer stop short of the leader's stopping point).
+    /// Of those, collisions the humans alone had made unavoidable beforehand.
     pub collisions_unavoidable: usize,
-    /// `collisions / episodes`.
-    pub collision_fraction: f64,
+    /// Episodes in which the true state left the certified set.
+    pub certificate_losses: usize,
+    /// The same, by the firmware's mode at the moment of loss.
+    pub certificate_losses_by_mode: LossesByMode,
+    /// Episodes in which the humans alone made a collision unavoidable at some point.
+    pub humans_made_unavoidable: usize,
+    /// The smallest certificate margin over the group, m.
+    pub min_margin: f32,
+    /// The smallest front margin over the group, m.
+    pub min_front_margin: f32,
+    /// The smallest rear margin over the group, m.
+    pub min_rear_margin: f32,
     /// Smallest gap to the leader over the group, m.
     pub min_gap_leader: f32,
     /// Smallest gap to the follower over the group, m.
@@ -238,12 +359,15 @@ pub struct GroupSummary {
     pub mean_override_share: f32,
     /// Mean share of time in the minimum-risk manoeuvre.
     pub mean_minimum_risk_share: f32,
-    /// Share of episodes in which the ego ran uncertified (slower than the table assumes) at
-    /// some point.
-    pub uncertified_episodes: f64,
+    /// Mean share of time outside the table's domain.
+    pub mean_uncertified_share: f32,
     /// Largest |jerk|, m/s^3.
     pub max_jerk: f32,
-    /// Seed of the episode with the smallest gap (to replay it).
+    /// Mean number of leader stops to standstill per episode.
+    pub mean_leader_stops: f32,
+    /// Starts at standstill (ego speed zero).
+    pub standstill_starts: usize,
+    /// Seed of the episode with the smallest margin (to replay it).
     pub worst_seed: u64,
 }
 
@@ -267,48 +391,57 @@ pub fn run_group(
             o.map(|o| (e.seed, o))
         })
         .collect();
-    let n = outcomes.len().max(1);
-    let collisions = outcomes.iter().filter(|(_, o)| o.collided).count();
-    let collisions_unavoidable = outcomes
-        .iter()
-        .filter(|(_, o)| o.collided && o.unavoidable_from.is_some())
-        .count();
+    let n = outcomes.len().max(1) as f32;
+    let count = |f: &dyn Fn(&Outcome) -> bool| outcomes.iter().filter(|(_, o)| f(o)).count();
+    let mean = |f: &dyn Fn(&Outcome) -> f32| outcomes.iter().map(|(_, o)| f(o)).sum::<f32>() / n;
+    let least = |f: &dyn Fn(&Outcome) -> f32| {
+        outcomes
+            .iter()
+            .map(|(_, o)| f(o))
+            .fold(f32::INFINITY, f32::min)
+    };
+    let mut by_mode = LossesByMode::default();
+    for (_, o) in &outcomes {
+        let Some((_, mode, half)) = o.certificate_lost else {
+            continue;
+        };
+        match mode {
+            ModeName::Nominal => by_mode.nominal += 1,
+            ModeName::Override => by_mode.r#override += 1,
+            ModeName::MinimumRisk => by_mode.minimum_risk += 1,
+            ModeName::Uncertified => by_mode.uncertified += 1,
+        }
+        match half {
+            Half::Front => by_mode.front += 1,
+            Half::Rear => by_mode.rear += 1,
+            Half::Domain => by_mode.domain += 1,
+        }
+    }
     let worst = outcomes
         .iter()
-        .min_by(|a, b| {
-            let ga = a.1.min_gap_leader.min(a.1.min_gap_follower);
-            let gb = b.1.min_gap_leader.min(b.1.min_gap_follower);
-            ga.total_cmp(&gb)
-        })
+        .min_by(|a, b| a.1.min_margin.total_cmp(&b.1.min_margin))
         .map_or(template.seed, |(s, _)| *s);
     let summary = GroupSummary {
-        start: template.start,
         leader: template.leader,
         follower: template.follower,
+        in_model: template.follower.in_model(),
         episodes: outcomes.len(),
-        collisions,
-        collisions_unavoidable,
-        collision_fraction: collisions as f64 / n as f64,
-        min_gap_leader: outcomes
-            .iter()
-            .map(|(_, o)| o.min_gap_leader)
-            .fold(f32::INFINITY, f32::min),
-        min_gap_follower: outcomes
-            .iter()
-            .map(|(_, o)| o.min_gap_follower)
-            .fold(f32::INFINITY, f32::min),
-        mean_override_share: outcomes.iter().map(|(_, o)| o.override_share).sum::<f32>() / n as f32,
-        mean_minimum_risk_share: outcomes
-            .iter()
-            .map(|(_, o)| o.minimum_risk_share)
-            .sum::<f32>()
-            / n as f32,
-        uncertified_episodes: outcomes
-            .iter()
-            .filter(|(_, o)| o.uncertified_share > 0.0)
-            .count() as f64
-            / n as f64,
+        collisions: count(&|o| o.collided),
+        collisions_unavoidable: count(&|o| o.collided && o.unavoidable_from.is_some()),
+        certificate_losses: count(&|o| o.certificate_lost.is_some()),
+        certificate_losses_by_mode: by_mode,
+        humans_made_unavoidable: count(&|o| o.unavoidable_from.is_some()),
+        min_margin: least(&|o| o.min_margin),
+        min_front_margin: least(&|o| o.min_half_margins.0),
+        min_rear_margin: least(&|o| o.min_half_margins.1),
+        min_gap_leader: least(&|o| o.min_gap_leader),
+        min_gap_follower: least(&|o| o.min_gap_follower),
+        mean_override_share: mean(&|o| o.override_share),
+        mean_minimum_risk_share: mean(&|o| o.minimum_risk_share),
+        mean_uncertified_share: mean(&|o| o.uncertified_share),
         max_jerk: outcomes.iter().map(|(_, o)| o.max_jerk).fold(0.0, f32::max),
+        mean_leader_stops: mean(&|o| o.leader_stops as f32),
+        standstill_starts: count(&|o| o.initial[4] == 0.0),
         worst_seed: worst,
     };
     (summary, outcomes)

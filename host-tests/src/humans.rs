@@ -1,5 +1,6 @@
-//! The human drivers: leaders and followers that play by the game's model, and a follower that
-//! does not.
+//! The human drivers: leaders and followers that play by the table's model, and a follower that
+//! does not. Their bounds, IDM and speed limit come from the table's header
+//! ([`Game::ThreeCarSplit`]), so the campaign tests the model the certificate was made for.
 
 use rand::Rng;
 use serde::Serialize;
@@ -7,18 +8,19 @@ use table_format::{Game, IdmParameters, Table};
 
 use crate::sim::Car;
 
-/// What the leader does.
+/// What the leader does. Every leader keeps its speed in `[0, max_speed]`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Leader {
-    /// Cruises, then brakes as hard as the model allows until it stops.
+    /// Cruises for 2 s, then brakes as hard as the model allows until it stops, and stays.
+    /// (The front game's worst case: hardest braking is the leader's saddle-point strategy.)
     HardBrake,
-    /// Stop-and-go waves: braking and accelerating at the model's limits, period 12 s.
+    /// Stop-and-go: brakes as hard as the model allows to standstill, waits 1-5 s, pulls away
+    /// at 50-100 % of its largest acceleration to a speed drawn in [5, 30] m/s, cruises 2-8 s,
+    /// and again; several stops per minute.
     StopAndGo,
     /// A new random acceleration within the bounds every second.
     Random,
-    /// The game's worst case `d1*`: brake where `dV/dv_g1 > 0`, accelerate elsewhere.
-    WorstCase,
 }
 
 /// What the follower does.
@@ -29,58 +31,100 @@ pub enum Follower {
     IdmFixed,
     /// IDM with a time gap drawn once per episode in the range.
     IdmRandom,
-    /// IDM whose time gap jumps between the range's ends every 3 s.
+    /// IDM whose time gap jumps between the range's ends after random holds of 0.2-4 s.
     IdmSwitching,
-    /// IDM with the game's worst-case time gap: `T_min` where `dV/dv_g2 > 0`, else `T_max`.
+    /// IDM with the rear game's worst-case time gap: `T_max` where `dW/dv_follower > 0`, else
+    /// `T_min` (the IDM's acceleration is non-increasing in `T`).
     IdmWorstCase,
-    /// Breaks the model: any acceleration within the bounds, chosen adversarially: the paper's
-    /// baseline follower playing its worst case `u3* = a_max` where `dV/dv_g2 > 0` (eq. 8).
-    /// The baseline value is non-decreasing in `v_g2` (an ego faster than its follower is
-    /// never worse off), so `dV/dv_g2 >= 0` and the worst case is full acceleration throughout:
-    /// the follower closes in on the ego as hard as the bounds allow.
+    /// Breaks the model: the largest acceleration the bounds allow, always (the paper's
+    /// baseline follower's worst case).
     Unbounded,
 }
 
-/// The follower's IDM when the table's game has none (baseline and two-car tables): Treiber &
-/// Kesting's highway values with the paper's zero jam distance.
-const FALLBACK_IDM: IdmParameters = IdmParameters {
-    max_acceleration: 1.0,
-    comfortable_deceleration: 1.5,
-    desired_speed: 33.3,
-    exponent: 4,
-    jam_distance: 0.0,
-};
+impl Follower {
+    /// Whether the follower keeps to the table's model.
+    pub fn in_model(self) -> bool {
+        self != Follower::Unbounded
+    }
+}
+
+/// The table's model of the humans.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HumanModel {
+    /// The leader's acceleration bounds, m/s^2.
+    pub leader: (f32, f32),
+    /// The follower's IDM output is clipped to these, m/s^2.
+    pub follower: (f32, f32),
+    /// The follower's IDM.
+    pub idm: IdmParameters,
+    /// The IDM time gap's range, s.
+    pub time_gap: (f32, f32),
+    /// Every speed lies in `[0, max_speed]`, m/s.
+    pub max_speed: f32,
+}
+
+impl HumanModel {
+    /// The model of a split table, `None` for any other game.
+    pub fn of(table: &Table<'_>) -> Option<HumanModel> {
+        match table.header().game {
+            Game::ThreeCarSplit {
+                leader,
+                follower_clip,
+                idm,
+                time_gap,
+                max_speed,
+                ..
+            } => Some(HumanModel {
+                leader: (leader.min, leader.max),
+                follower: (follower_clip.min, follower_clip.max),
+                idm,
+                time_gap: (time_gap.min, time_gap.max),
+                max_speed,
+            }),
+            _ => None,
+        }
+    }
+}
 
 /// The two human accelerations per period.
 pub struct Humans<'t> {
     table: &'t Table<'t>,
+    model: HumanModel,
     leader: Leader,
     follower: Follower,
-    leader_bounds: (f32, f32),
-    follower_bounds: (f32, f32),
-    idm: IdmParameters,
-    time_gap_range: (f32, f32),
     episode_time_gap: f32,
+    /// Random leader: the current acceleration and when it is next drawn.
     random_accel: f32,
     next_random: f32,
+    /// Stop-and-go leader: the phase and when it ends (or the target speed).
+    phase: Phase,
+    phase_until: f32,
+    target_speed: f32,
+    pull_away: f32,
+    /// Switching follower: the current time gap and when it next jumps.
+    switching_time_gap: f32,
+    next_switch: f32,
 }
 
-/// `dV/dv_g1` and `dV/dv_g2` of the table at `z` by central differences over half a cell.
-pub fn speed_gradient(table: &Table<'_>, z: [f32; 4]) -> Option<(f32, f32)> {
-    let axes = &table.header().axes;
-    let diff = |k: usize| -> Option<f32> {
-        let a = axes.get(k)?;
-        let h = 0.5 * a.uniform_spacing();
-        let (mut lo, mut hi) = (z, z);
-        lo[k] = (z[k] - h).max(a.min);
-        hi[k] = (z[k] + h).min(a.max);
-        let span = hi[k] - lo[k];
-        if span <= 0.0 {
-            return None;
-        }
-        Some((table.value_at(&hi).ok()? - table.value_at(&lo).ok()?) / span)
-    };
-    Some((diff(1)?, diff(3)?))
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Phase {
+    Braking,
+    Standing,
+    PullingAway,
+    Cruising,
+}
+
+/// `dW/dv_follower` of the rear table at `(gap_follower, follower_speed, ego_speed)` by a
+/// difference over 0.25 m/s (one-sided at the speed limits); `None` outside the grid.
+pub fn follower_speed_gradient(table: &Table<'_>, z: [f32; 3]) -> Option<f32> {
+    let axis = table.axis_bounds(1)?;
+    let lo = (z[1] - 0.125).max(axis.min);
+    let hi = (z[1] + 0.125).min(axis.max);
+    if hi <= lo {
+        return None;
+    }
+    let at = |v: f32| table.value_at(&[z[0], v, z[2]]).ok();
+    Some((at(hi)? - at(lo)?) / (hi - lo))
 }
 
 /// The IDM acceleration (Treiber et al. 2000) of a vehicle at `speed` behind a vehicle at
@@ -99,86 +143,64 @@ pub fn idm(p: &IdmParameters, speed: f32, leader_speed: f32, gap: f32, time_gap:
     p.max_acceleration * (1.0 - (speed / p.desired_speed).powi(i32::from(p.exponent)) - interaction)
 }
 
+/// `a` limited so that a car at `v` stays in `[0, v_max]` over a period `h` (the plant stops
+/// cars at zero by itself).
+fn within_speed_limit(a: f32, v: f32, v_max: f32, h: f32) -> f32 {
+    if a > 0.0 {
+        a.min(((v_max - v) / h).max(0.0))
+    } else {
+        a
+    }
+}
+
 impl<'t> Humans<'t> {
     /// The hardest braking the model allows the leader and the follower (positive, m/s^2).
     pub fn hardest_braking(&self) -> (f32, f32) {
-        (-self.leader_bounds.0, -self.follower_bounds.0)
+        (-self.model.leader.0, -self.model.follower.0)
     }
 
-    /// The humans of one episode, with the bounds and IDM of the table's game.
+    /// The humans of one episode, with the model of the table's game (`None` for a table that
+    /// is not a split table).
     pub fn new(
         table: &'t Table<'t>,
         leader: Leader,
         follower: Follower,
         rng: &mut impl Rng,
-    ) -> Self {
-        let (leader_bounds, follower_bounds, idm, time_gap) = match table.header().game {
-            Game::ThreeCarIdm {
-                leader,
-                follower_clip,
-                idm,
-                time_gap,
-                ..
-            }
-            // (5-D tables are refused by the campaign; their humans have the same bounds.)
-            | Game::ThreeCarIdmSpeeds {
-                leader,
-                follower_clip,
-                idm,
-                time_gap,
-                ..
-            } => (leader, follower_clip, idm, time_gap),
-            Game::ThreeCarBaseline {
-                leader, follower, ..
-            } => (
-                leader,
-                follower,
-                FALLBACK_IDM,
-                table_format::Bounds::new(1.0, 2.0),
-            ),
-            // Rear tables have no leader; the campaign refuses them like two-car tables.
-            Game::RearIdm { ego: leader, .. } | Game::TwoCar { leader, .. } => (
-                leader,
-                leader,
-                FALLBACK_IDM,
-                table_format::Bounds::new(1.0, 2.0),
-            ),
-        };
+    ) -> Option<Self> {
+        let model = HumanModel::of(table)?;
+        let (tmin, tmax) = model.time_gap;
         let episode_time_gap = match follower {
-            Follower::IdmRandom => rng.random_range(time_gap.min..=time_gap.max),
-            _ => 0.5 * (time_gap.min + time_gap.max),
+            Follower::IdmRandom => rng.random_range(tmin..=tmax),
+            _ => 0.5 * (tmin + tmax),
         };
-        Humans {
+        Some(Humans {
             table,
+            model,
             leader,
             follower,
-            leader_bounds: (leader_bounds.min, leader_bounds.max),
-            follower_bounds: (follower_bounds.min, follower_bounds.max),
-            idm,
-            time_gap_range: (time_gap.min, time_gap.max),
             episode_time_gap,
             random_accel: 0.0,
             next_random: 0.0,
-        }
+            phase: Phase::Cruising,
+            phase_until: rng.random_range(0.0..4.0),
+            target_speed: 0.0,
+            pull_away: 0.0,
+            switching_time_gap: if rng.random::<bool>() { tmin } else { tmax },
+            next_switch: rng.random_range(0.2..4.0),
+        })
     }
 
-    /// The leader's and the follower's accelerations at time `t` (held for one period).
-    pub fn accelerations(&mut self, t: f32, cars: [Car; 3], rng: &mut impl Rng) -> (f32, f32) {
+    /// The leader's and the follower's accelerations at time `t`, held for a period `h`.
+    pub fn accelerations(
+        &mut self,
+        t: f32,
+        h: f32,
+        cars: [Car; 3],
+        rng: &mut impl Rng,
+    ) -> (f32, f32) {
         let [leader, ego, follower] = cars;
-        let z = [
-            leader.x - ego.x,
-            leader.v - ego.v,
-            ego.x - follower.x,
-            ego.v - follower.v,
-        ];
-        // The table's gradient, four lookups, computed once and only when a worst case needs it.
-        let mut cached: Option<Option<(f32, f32)>> = None;
-        let mut gradient = || {
-            *cached.get_or_insert_with(|| {
-                clamp_into(self.table, z).and_then(|z| speed_gradient(self.table, z))
-            })
-        };
-        let (lmin, lmax) = self.leader_bounds;
+        let m = self.model;
+        let (lmin, lmax) = m.leader;
         let a_leader = match self.leader {
             Leader::HardBrake => {
                 if t < 2.0 {
@@ -187,16 +209,7 @@ impl<'t> Humans<'t> {
                     lmin
                 }
             }
-            Leader::StopAndGo => {
-                let phase = (t / 12.0).fract();
-                if phase < 0.35 {
-                    lmin
-                } else if phase < 0.7 {
-                    lmax
-                } else {
-                    0.0
-                }
-            }
+            Leader::StopAndGo => self.stop_and_go(t, leader.v, rng),
             Leader::Random => {
                 if t >= self.next_random {
                     self.random_accel = rng.random_range(lmin..=lmax);
@@ -204,38 +217,67 @@ impl<'t> Humans<'t> {
                 }
                 self.random_accel
             }
-            Leader::WorstCase => match gradient() {
-                Some((p2, _)) if p2 > 0.0 => lmin,
-                Some(_) => lmax,
-                None => lmin,
-            },
         };
-        let (fmin, fmax) = self.follower_bounds;
-        let (tmin, tmax) = self.time_gap_range;
-        let idm_with = |time_gap: f32| {
-            idm(&self.idm, follower.v, ego.v, ego.x - follower.x, time_gap).clamp(fmin, fmax)
-        };
+        let (fmin, fmax) = m.follower;
+        let (tmin, tmax) = m.time_gap;
+        let gap = ego.x - follower.x;
+        let idm_with =
+            |time_gap: f32| idm(&m.idm, follower.v, ego.v, gap, time_gap).clamp(fmin, fmax);
         let a_follower = match self.follower {
             Follower::IdmFixed | Follower::IdmRandom => idm_with(self.episode_time_gap),
-            Follower::IdmSwitching => idm_with(if (t / 6.0).fract() < 0.5 { tmin } else { tmax }),
-            Follower::IdmWorstCase => match gradient() {
-                Some((_, p4)) if p4 > 0.0 => idm_with(tmin),
-                _ => idm_with(tmax),
-            },
+            Follower::IdmSwitching => {
+                if t >= self.next_switch {
+                    self.switching_time_gap = if self.switching_time_gap == tmin {
+                        tmax
+                    } else {
+                        tmin
+                    };
+                    self.next_switch = t + rng.random_range(0.2..4.0);
+                }
+                idm_with(self.switching_time_gap)
+            }
+            Follower::IdmWorstCase => {
+                let z = [gap.min(self.table_gap_max()), follower.v, ego.v];
+                match follower_speed_gradient(self.table, z) {
+                    Some(p) if p > 0.0 => idm_with(tmax),
+                    _ => idm_with(tmin),
+                }
+            }
             Follower::Unbounded => fmax,
         };
-        (a_leader, a_follower)
+        (
+            within_speed_limit(a_leader, leader.v, m.max_speed, h),
+            within_speed_limit(a_follower, follower.v, m.max_speed, h),
+        )
     }
-}
 
-/// `z` clamped onto the table's grid (`None` if not finite).
-pub fn clamp_into(table: &Table<'_>, z: [f32; 4]) -> Option<[f32; 4]> {
-    let mut out = z;
-    for (x, a) in out.iter_mut().zip(table.header().axes.iter()) {
-        if !x.is_finite() {
-            return None;
-        }
-        *x = x.clamp(a.min, a.max);
+    fn table_gap_max(&self) -> f32 {
+        self.table.axis_bounds(0).map_or(f32::INFINITY, |b| b.max)
     }
-    Some(out)
+
+    fn stop_and_go(&mut self, t: f32, speed: f32, rng: &mut impl Rng) -> f32 {
+        let (lmin, lmax) = self.model.leader;
+        loop {
+            match self.phase {
+                Phase::Cruising if t >= self.phase_until => self.phase = Phase::Braking,
+                Phase::Cruising => return 0.0,
+                Phase::Braking if speed <= 0.0 => {
+                    self.phase = Phase::Standing;
+                    self.phase_until = t + rng.random_range(1.0..5.0);
+                }
+                Phase::Braking => return lmin,
+                Phase::Standing if t >= self.phase_until => {
+                    self.phase = Phase::PullingAway;
+                    self.target_speed = rng.random_range(5.0..30.0f32).min(self.model.max_speed);
+                    self.pull_away = rng.random_range(0.5..=1.0) * lmax;
+                }
+                Phase::Standing => return 0.0,
+                Phase::PullingAway if speed >= self.target_speed => {
+                    self.phase = Phase::Cruising;
+                    self.phase_until = t + rng.random_range(2.0..8.0);
+                }
+                Phase::PullingAway => return self.pull_away,
+            }
+        }
+    }
 }

@@ -4,9 +4,10 @@
 //! integrates a leader, the ego and a follower exactly between the firmware's 20 ms samples and
 //! finds collisions inside each interval, not only at the samples; [`humans`] plays leaders and
 //! followers that keep to the game's model (bounded leader, IDM follower with its time gap in
-//! range) and a follower that does not (the paper's baseline); [`campaign`] samples starts
-//! inside the table's certified safe set or just outside it and reports collisions, minimum
-//! gaps, time under override and jerk. The ego is `firmware::Controller` itself, on the same
+//! range, leaders that stop to standstill and go again) and a follower that does not (the
+//! paper's baseline); [`campaign`] samples starts over the whole certified set, standstill
+//! included, and reports collisions, certificate losses (the true state leaving the certified
+//! set), minimum gaps, time under override and jerk. The ego is `firmware::Controller` itself, on the same
 //! table bytes the target runs.
 #![warn(missing_docs)]
 
@@ -14,6 +15,6 @@ pub mod campaign;
 pub mod humans;
 pub mod sim;
 
-pub use campaign::{run_episode, run_group, Episode, GroupSummary, Outcome, Start};
+pub use campaign::{run_episode, run_group, Episode, GroupSummary, Outcome};
 pub use humans::{Follower, Leader};
 pub use sim::SensorModel;

@@ -1,50 +1,31 @@
-//! Closed-loop checks on small campaigns (seconds of CI time; the full campaign is
-//! `host-tests/benches/campaign.sh`). The default table certifies 20 s; the firmware uses it
-//! receding (the same table at every instant), which a finite-horizon value does not certify
-//! for its whole horizon, so episodes here run half of it, 10 s.
+//! Closed-loop checks on small campaigns of 120 s episodes (the full campaign is
+//! `host-tests/benches/campaign.sh`): the firmware on its default table, from starts over the
+//! whole certified set, standstill included.
 
-use host_tests::campaign::{run_episode, run_group, Episode};
-use host_tests::{Follower, Leader, SensorModel, Start};
+use host_tests::campaign::{run_episode, run_group, Episode, GroupSummary};
+use host_tests::{Follower, Leader, SensorModel};
 use table_format::Table;
 
 fn table() -> Table<'static> {
     Table::parse(firmware::DEFAULT_TABLE).unwrap()
 }
 
-fn group(
-    start: Start,
-    leader: Leader,
-    follower: Follower,
-    episodes: usize,
-    seed: u64,
-) -> (usize, usize) {
-    group_over(start, leader, follower, episodes, seed, 10.0)
-}
-
-fn group_over(
-    start: Start,
-    leader: Leader,
-    follower: Follower,
-    episodes: usize,
-    seed: u64,
-    seconds: f32,
-) -> (usize, usize) {
+fn group(leader: Leader, follower: Follower, episodes: usize, seed: u64) -> GroupSummary {
     let t = table();
     let template = Episode {
-        start,
         leader,
         follower,
-        seconds,
+        seconds: 120.0,
         sensors: SensorModel::IDEAL,
         seed,
     };
-    let (summary, _) = run_group(&t, firmware::DEFAULT_TABLE, template, episodes, &|| {});
-    (summary.episodes, summary.collisions)
+    run_group(&t, firmware::DEFAULT_TABLE, template, episodes, &|| {}).0
 }
 
 #[test]
-fn certified_starts_survive_humans_that_keep_to_the_model() {
+fn certified_starts_stay_certified_for_120_s_against_humans_that_keep_to_the_model() {
     let mut total = 0;
+    let mut standstill_starts = 0;
     for (i, leader) in [Leader::StopAndGo, Leader::Random, Leader::HardBrake]
         .into_iter()
         .enumerate()
@@ -58,95 +39,81 @@ fn certified_starts_survive_humans_that_keep_to_the_model() {
         .into_iter()
         .enumerate()
         {
-            let (n, collisions) = group(
-                Start::Certified,
-                leader,
-                follower,
-                25,
-                1000 * (4 * i + j) as u64 + 7,
+            let s = group(leader, follower, 12, 1000 * (4 * i + j) as u64 + 7);
+            assert_eq!(s.episodes, 12, "could not sample certified starts");
+            assert_eq!(s.collisions, 0, "{leader:?} leader, {follower:?} follower");
+            assert_eq!(
+                s.certificate_losses, 0,
+                "{leader:?} leader, {follower:?} follower: the certificate was lost ({:?})",
+                s.certificate_losses_by_mode
             );
-            assert_eq!(n, 25, "could not sample certified starts");
-            assert_eq!(collisions, 0, "{leader:?} leader, {follower:?} follower");
-            total += n;
+            if leader == Leader::StopAndGo {
+                assert!(
+                    s.mean_leader_stops >= 3.0,
+                    "the stop-and-go leader stopped {} times in 120 s",
+                    s.mean_leader_stops
+                );
+            }
+            standstill_starts += s.standstill_starts;
+            total += s.episodes;
         }
     }
-    assert_eq!(total, 300);
+    assert_eq!(total, 144);
+    assert!(standstill_starts > 0, "no start at standstill");
 }
 
 #[test]
-fn starts_just_outside_the_safe_set_collide_under_worst_case_humans() {
-    // Over the table's horizon (20 s): a start it does not certify is one the worst case can
-    // bring to a collision within that time.
-    let (n, collisions) = group_over(
-        Start::JustOutside,
-        Leader::WorstCase,
-        Follower::IdmWorstCase,
-        40,
-        99,
-        20.0,
-    );
-    let fraction = collisions as f64 / n as f64;
-    println!("just outside, worst-case humans, 20 s: {collisions} of {n}");
-    assert!(
-        fraction > 0.5,
-        "only {fraction} collide: the set would be needlessly conservative"
-    );
-}
-
-#[test]
-fn without_the_idm_structure_certified_starts_are_not_safe() {
-    // The paper's point: against a follower free to accelerate (the baseline), the table's
-    // certificate means nothing; many certified starts end in a collision.
-    let (n, collisions) = group(
-        Start::Certified,
-        Leader::WorstCase,
-        Follower::Unbounded,
-        40,
-        5,
-    );
-    println!("certified starts, unbounded follower: {collisions} of {n}");
-    assert!(collisions as f64 / n as f64 > 0.2);
-    // Given time, none is: a leader braking to a stop and the baseline's worst-case follower
-    // (full acceleration) close the space between them whatever the ego does.
-    let (n, collisions) = group_over(
-        Start::Certified,
-        Leader::HardBrake,
-        Follower::Unbounded,
-        30,
-        11,
-        30.0,
-    );
+fn a_follower_outside_the_model_breaks_the_certificate() {
+    // The paper's point: against a follower free to accelerate (the baseline), the certificate
+    // means nothing. The campaign must see it: every episode loses the rear half, and most
+    // collide.
+    let s = group(Leader::StopAndGo, Follower::Unbounded, 30, 5);
     println!(
-        "certified starts, hard-braking leader, unbounded follower, 30 s: {collisions} of {n}"
+        "unbounded follower: {} collisions, {} losses in {}",
+        s.collisions, s.certificate_losses, s.episodes
     );
-    assert_eq!(collisions, n, "a start survived the baseline's worst case");
+    assert_eq!(s.certificate_losses, s.episodes);
+    assert_eq!(s.certificate_losses_by_mode.rear, s.episodes);
+    assert!(s.collisions as f64 / s.episodes as f64 > 0.5);
 }
 
 #[test]
-fn sensor_noise_latency_and_dropouts_are_survived_or_reported() {
+fn sensor_latency_is_outside_the_certificate_and_the_campaign_says_so() {
+    // The certificate assumes current, exact measurements (delays are issue 11). With 40 ms of
+    // latency a stop-and-go leader defeats it, and the campaign must see that: every collision
+    // comes after a certificate loss, never unannounced, and stale tracks are reported as
+    // faults.
     let t = table();
-    let noisy = SensorModel {
-        gap_noise: 0.2,
-        speed_noise: 0.05,
+    let late = SensorModel {
+        gap_noise: 0.0,
+        speed_noise: 0.0,
         latency_periods: 2,
         dropout: 0.05,
     };
-    let mut collisions = 0;
-    for seed in 0..20 {
+    let (mut collisions, mut losses, mut stale) = (0, 0, 0);
+    for seed in 0..40 {
         let e = Episode {
-            start: Start::Certified,
-            leader: Leader::Random,
+            leader: Leader::StopAndGo,
             follower: Follower::IdmRandom,
-            seconds: 10.0,
-            sensors: noisy,
+            seconds: 120.0,
+            sensors: late,
             seed,
         };
         let o = run_episode(&t, firmware::DEFAULT_TABLE, &e, None).unwrap();
-        collisions += usize::from(o.collided);
-        assert_eq!(
-            o.minimum_risk_share, 0.0,
-            "5% dropouts never make data stale"
-        );
+        losses += usize::from(o.certificate_lost.is_some());
+        stale += usize::from(o.minimum_risk_share > 0.0);
+        if let Some(at) = o.collision_time {
+            collisions += 1;
+            let lost = o
+                .certificate_lost
+                .expect("a collision without a certificate loss");
+            assert!(lost.0 <= at, "lost at {} s, collided at {at} s", lost.0);
+        }
     }
-    assert_eq!(collisions, 0);
+    println!("latency 40 ms, 5 % dropouts: {collisions} collisions, {losses} losses, {stale} with stale tracks in 40");
+    assert!(
+        losses > 0,
+        "latency never defeated the certificate: the loss detector is suspect"
+    );
+    assert!(stale > 0, "4 dropouts in a row never made a track stale");
 }

@@ -90,7 +90,7 @@ fn main() {
     for (k, path) in rears.iter().enumerate() {
         let bytes = std::fs::read(path).expect("rear table");
         let rear = Table::parse(&bytes).expect("rear table parses");
-        let Game::RearIdm {
+        let Game::ThreeCarSplit {
             ego, follower_clip, ..
         } = rear.header().game
         else {

@@ -737,8 +737,9 @@ pub(crate) fn idm_parameters(idm: IdmConfig) -> table_format::IdmParameters {
     }
 }
 
-/// The built-in configs that `cargo run -p solver` runs with no `--config`: the paper's three
-/// results and the firmware's default table. The same files are under `solver/configs/`.
+/// The built-in level-set configs that `cargo run -p solver` runs with no `--config`: the
+/// paper's results and the 4-D table the firmware ran before the split certificate. The same
+/// files are under `solver/configs/`.
 pub fn builtin() -> Vec<(&'static str, &'static str)> {
     vec![
         ("two-car.toml", include_str!("../configs/two-car.toml")),
@@ -759,8 +760,17 @@ pub fn builtin() -> Vec<(&'static str, &'static str)> {
             include_str!("../configs/three-car-idm-speeds.toml"),
         ),
         (
-            "firmware-default.toml",
-            include_str!("../configs/firmware-default.toml"),
+            "three-car-idm-4d-table.toml",
+            include_str!("../configs/three-car-idm-4d-table.toml"),
         ),
     ]
+}
+
+/// The built-in rear-game configs (`solver/configs/rear/`), run by the main job after
+/// [`builtin`]: the firmware's deployed table.
+pub fn builtin_rear() -> Vec<(&'static str, &'static str)> {
+    vec![(
+        "rear/deployment.toml",
+        include_str!("../configs/rear/deployment.toml"),
+    )]
 }

@@ -1,15 +1,17 @@
 //! `cargo run -p solver --release [-- --config FILE ... --out DIR]`
 //!
 //! With no `--config` and no `--rear`, runs the built-in configs (`solver/configs/*.toml`): the
-//! paper's three results and the firmware's default table. `--rear FILE` runs a rear-game config
-//! (`solver/configs/rear/*.toml`) through the sampled-data iteration into a version-2 table.
+//! paper's results, the former 4-D firmware table, and the firmware's deployed table
+//! (`solver/configs/rear/deployment.toml`, written to `DIR/deployment/table.bin`). `--rear FILE`
+//! runs a rear-game config (`solver/configs/rear/*.toml`) through the sampled-data iteration
+//! into a version-2 table.
 
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
-use solver::config::{builtin, Config};
+use solver::config::{builtin, builtin_rear, Config};
 use solver::rear::{run_rear, RearConfig};
 use solver::run::{run, Event};
 
@@ -33,12 +35,29 @@ struct Args {
 
 fn main() -> Result<()> {
     let args = Args::parse();
-    for path in &args.rears {
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        let config =
-            RearConfig::from_toml(&text).with_context(|| format!("in {}", path.display()))?;
-        eprintln!("== {} ({})", config.name, path.display());
+    let defaults = args.rears.is_empty() && args.configs.is_empty();
+    let mut rears: Vec<(String, String)> = args
+        .rears
+        .iter()
+        .map(|path| {
+            std::fs::read_to_string(path)
+                .with_context(|| format!("reading {}", path.display()))
+                .map(|text| (path.display().to_string(), text))
+        })
+        .collect::<Result<_>>()?;
+    let rears_first = !rears.is_empty();
+    if defaults {
+        rears = builtin_rear()
+            .into_iter()
+            .map(|(name, text)| (format!("built-in {name}"), text.to_string()))
+            .collect();
+    }
+    if !rears_first {
+        run_configs(&args)?;
+    }
+    for (source, text) in &rears {
+        let config = RearConfig::from_toml(text).with_context(|| format!("in {source}"))?;
+        eprintln!("== {} ({source})", config.name);
         let s = run_rear(&config, &args.out)?;
         println!(
             "{}: {} x {} x {} breakpoints, {} iterations ({}), residual {:.1e} m, {:.1} s; \
@@ -61,9 +80,15 @@ fn main() -> Result<()> {
         );
         println!("  wrote {}", args.out.join(&config.name).display());
     }
-    if !args.rears.is_empty() && args.configs.is_empty() {
-        return Ok(());
+    if rears_first && !args.configs.is_empty() {
+        run_configs(&args)?;
     }
+    Ok(())
+}
+
+/// Runs the level-set configs: `--config` files, or the built-in ones when neither `--config`
+/// nor `--rear` is given.
+fn run_configs(args: &Args) -> Result<()> {
     let configs: Vec<(String, Config)> = if args.configs.is_empty() {
         builtin()
             .into_iter()

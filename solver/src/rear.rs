@@ -1,5 +1,5 @@
 //! The rear game's pipeline: a `[rear]` TOML config -> the sampled-data value on breakpoint
-//! axes -> a version-2 `RearIdm` table with its summary.
+//! axes -> a version-2 `ThreeCarSplit` table with its summary.
 //!
 //! One responsibility: turn a rear config into files. The game is [`crate::games::RearIdm`],
 //! the scheme [`crate::semi_lagrangian`]; why the split and why that scheme is written there.
@@ -38,6 +38,9 @@ pub struct PiecewiseAxis {
 pub struct RearGameConfig {
     /// The ego's acceleration band `[-beta, a_max]`, m/s^2.
     pub ego: Range,
+    /// The leader's acceleration bounds, m/s^2: `min` is its hardest braking, which the front
+    /// value in closed form assumes (the table records it; the rear iteration does not use it).
+    pub leader: Range,
     /// The follower's IDM output is clipped to these bounds, m/s^2.
     pub follower: Range,
     /// The IDM's parameters.
@@ -147,6 +150,11 @@ impl RearConfig {
             "the band [-beta, a_max] needs min < 0 <= max",
         )?;
         check(
+            g.leader.min < 0.0 && g.leader.max >= 0.0 && g.leader.min.is_finite(),
+            "game.leader",
+            "needs min < 0 <= max (min is the leader's hardest braking)",
+        )?;
+        check(
             g.follower.min < 0.0 && g.follower.max >= 0.0 && g.follower.min.is_finite(),
             "game.follower",
             "needs min < 0 <= max",
@@ -215,8 +223,9 @@ impl RearConfig {
     pub fn game_description(&self) -> Game {
         let b = |r: Range| Bounds::new(r.min as f32, r.max as f32);
         let g = &self.game;
-        Game::RearIdm {
+        Game::ThreeCarSplit {
             ego: b(g.ego),
+            leader: b(g.leader),
             follower_clip: b(g.follower),
             idm: idm_parameters(g.idm),
             time_gap: b(g.time_gap),
@@ -259,6 +268,10 @@ pub struct RearSummary {
     pub plateau: f32,
     /// Per equal speed of both cars, the smallest gap with `W` above 0.5 m (m; `None`: none).
     pub smallest_gap_at_equal_speeds: Vec<(f32, Option<f32>)>,
+    /// The smallest value on the grid's top `gap_follower` face, m. A follower farther back
+    /// than the grid is safe until it crosses that face, where its value is at least this: the
+    /// firmware takes it as the value of a follower beyond the grid (or of none).
+    pub top_face_min: f32,
     /// Share of nodes with `W > 0`.
     pub safe_share: f64,
     /// Table size, bytes.
@@ -361,6 +374,10 @@ pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverEr
         solve_seconds,
         plateau: at(10.0, 0.0, 0.0),
         smallest_gap_at_equal_speeds,
+        top_face_min: result.values[result.values.len() - points[1] * points[2]..]
+            .iter()
+            .copied()
+            .fold(f32::INFINITY, f32::min),
         safe_share: result.values.iter().filter(|&&w| w > 0.0).count() as f64
             / result.values.len() as f64,
         table_bytes: bytes.len(),

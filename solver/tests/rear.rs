@@ -9,6 +9,7 @@ table_bits = 16
 
 [game]
 ego = { min = -3.5, max = 2.0 }
+leader = { min = -6.0, max = 2.0 }
 follower = { min = -6.0, max = 2.0 }
 time_gap = { min = 1.0, max = 2.0 }
 max_speed = 10.0
@@ -33,7 +34,7 @@ fn a_rear_run_writes_a_table_that_reads_back_its_value() {
     let bytes = std::fs::read(out.join("rear-small/table.bin")).unwrap();
     let table = Table::parse(&bytes).unwrap();
     let h = table.header();
-    assert!(matches!(h.game, Game::RearIdm { .. }));
+    assert!(matches!(h.game, Game::ThreeCarSplit { .. }));
     assert_eq!(h.policy, PolicyEncoding::None);
     assert!(h.axes.iter().all(|a| a.spacing == Spacing::Listed));
     assert_eq!(h.error_bound.interpolation, 0.0);
@@ -68,6 +69,7 @@ fn a_rear_run_writes_a_table_that_reads_back_its_value() {
 fn bad_rear_configs_name_the_key() {
     let cases = [
         ("ego = { min = -3.5, max = 2.0 }", "ego = { min = 0.5, max = 2.0 }", "game.ego"),
+        ("leader = { min = -6.0, max = 2.0 }", "leader = { min = 0.0, max = 2.0 }", "game.leader"),
         ("max_speed = 10.0", "max_speed = 12.0", "grid.follower_speed"),
         ("period = 0.2", "period = 0.0", "solve.period"),
         ("[[1.0, 0.5], [4.0, 0.5], [30.0, 1.0]]", "[[1.0, 0.5], [0.5, 0.5]]", "grid.gap_follower.pieces[1]"),

@@ -202,15 +202,23 @@ pub enum Game {
         /// The largest speed of any vehicle, m/s.
         max_speed: f32,
     },
-    /// The rear part of the split three-car game (format version 2): an IDM follower behind an
-    /// ego whose acceleration is any value in `ego` (the band `[-beta, a_max]` of one braking
-    /// level `beta`), both adversarial. Three axes in absolute speeds: `gap_follower` [m],
-    /// `follower_speed` [m/s], `ego_speed` [m/s], every speed in `[0, max_speed]`. Its value
-    /// bounds the rear gap from below for as long as the ego keeps its acceleration in the
-    /// band, whatever else it does (see `table_format::front` for the other half).
-    RearIdm {
+    /// The split three-car certificate (format version 2): three-car safety from a rear table
+    /// and a front closed form, for one braking level `beta = -ego.min`.
+    ///
+    /// The table holds the rear value `W_beta` on three axes in absolute speeds: `gap_follower`
+    /// [m], `follower_speed` [m/s], `ego_speed` [m/s], every speed in `[0, max_speed]`: an IDM
+    /// follower (time gap adversarial in `time_gap`, output clipped to `follower_clip`) behind an
+    /// ego whose acceleration anywhere in the band `ego = [-beta, a_max]` is adversarial too, so
+    /// the value bounds the rear gap for as long as the ego keeps its acceleration in the band,
+    /// whatever else it does. The front value needs no table: it is
+    /// [`crate::front::front_value`] with the leader braking at `-leader.min` and the ego at
+    /// `beta`. Where both are positive the ego keeps both gaps for ever (braking at `beta` when
+    /// the front demands it), see `solver::games::rear_idm`.
+    ThreeCarSplit {
         /// The ego's acceleration band, m/s^2: `min = -beta`.
         ego: Bounds,
+        /// The leader's acceleration bounds, m/s^2: `min` is its hardest braking.
+        leader: Bounds,
         /// The follower's IDM output is clipped to these bounds, m/s^2.
         follower_clip: Bounds,
         /// The follower's IDM.
@@ -234,8 +242,8 @@ pub enum GameKind {
     ThreeCarIdm,
     /// [`Game::ThreeCarIdmSpeeds`].
     ThreeCarIdmSpeeds,
-    /// [`Game::RearIdm`].
-    RearIdm,
+    /// [`Game::ThreeCarSplit`].
+    ThreeCarSplit,
 }
 
 impl Game {
@@ -246,7 +254,7 @@ impl Game {
             Game::ThreeCarBaseline { .. } => GameKind::ThreeCarBaseline,
             Game::ThreeCarIdm { .. } => GameKind::ThreeCarIdm,
             Game::ThreeCarIdmSpeeds { .. } => GameKind::ThreeCarIdmSpeeds,
-            Game::RearIdm { .. } => GameKind::RearIdm,
+            Game::ThreeCarSplit { .. } => GameKind::ThreeCarSplit,
         }
     }
 
@@ -256,7 +264,7 @@ impl Game {
         match self {
             Game::TwoCar { .. } => 2,
             Game::ThreeCarIdmSpeeds { .. } => 5,
-            Game::RearIdm { .. } => 3,
+            Game::ThreeCarSplit { .. } => 3,
             _ => 4,
         }
     }
@@ -268,7 +276,32 @@ impl Game {
             | Game::ThreeCarBaseline { ego, .. }
             | Game::ThreeCarIdm { ego, .. }
             | Game::ThreeCarIdmSpeeds { ego, .. }
-            | Game::RearIdm { ego, .. } => *ego,
+            | Game::ThreeCarSplit { ego, .. } => *ego,
+        }
+    }
+
+    /// The front model of a [`Game::ThreeCarSplit`] table: the leader braking at `-leader.min`,
+    /// the ego at `beta = -ego.min` after holding `response_acceleration` for `response_time`
+    /// seconds. `None` for every other game.
+    pub fn front_model(
+        &self,
+        response_time: f32,
+        response_acceleration: f32,
+    ) -> Option<crate::front::FrontModel> {
+        match self {
+            Game::ThreeCarSplit {
+                ego,
+                leader,
+                max_speed,
+                ..
+            } => Some(crate::front::FrontModel {
+                leader_braking: -leader.min,
+                ego_braking: -ego.min,
+                response_time,
+                response_acceleration,
+                max_speed: *max_speed,
+            }),
+            _ => None,
         }
     }
 
@@ -319,8 +352,9 @@ impl Game {
                     && max_speed.is_finite()
                     && *max_speed > 0.0
             }
-            Game::RearIdm {
+            Game::ThreeCarSplit {
                 ego,
+                leader,
                 follower_clip,
                 idm,
                 time_gap,
@@ -328,6 +362,8 @@ impl Game {
             } => {
                 ego.is_valid()
                     && ego.min < 0.0
+                    && leader.is_valid()
+                    && leader.min < 0.0
                     && idm_follower_is_valid(follower_clip, time_gap, idm)
                     && max_speed.is_finite()
                     && *max_speed > 0.0

@@ -256,6 +256,19 @@ impl<'a> Table<'a> {
             .map(|g| crate::Bounds::new(g.trusted.0, g.trusted.1))
     }
 
+    /// The coordinate of node `index` on `axis`: the listed breakpoint, or `min + index *
+    /// spacing` on a uniform axis (`None` past the last axis or node).
+    pub fn breakpoint(&self, axis: usize, index: usize) -> Option<f32> {
+        let a = self.header.axes.get(axis).filter(|_| axis < self.dims)?;
+        if index >= a.points as usize {
+            return None;
+        }
+        match a.spacing {
+            crate::Spacing::Listed => le_f32(self.geometry.get(axis)?.breakpoints, index * 4),
+            crate::Spacing::Uniform => Some(a.uniform_coordinate(u32::try_from(index).ok()?)),
+        }
+    }
+
     /// The grid's extent on `axis` (`None` past the last axis).
     pub fn axis_bounds(&self, axis: usize) -> Option<crate::Bounds> {
         self.geometry

@@ -481,8 +481,9 @@ fn listed_table(f: impl Fn(f32, f32, f32) -> f32, bits: ValueBits) -> (Vec<u8>, 
         }
     }
     let bytes = encode(&TableContents {
-        game: Game::RearIdm {
+        game: Game::ThreeCarSplit {
             ego: Bounds::new(-3.5, 2.0),
+            leader: Bounds::new(-6.0, 2.0),
             follower_clip: Bounds::new(-6.0, 2.0),
             idm: table_format::IdmParameters {
                 max_acceleration: 1.0,

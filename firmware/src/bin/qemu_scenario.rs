@@ -1,8 +1,14 @@
 //! A closed-loop scenario on the emulated Cortex-M4F (`qemu-system-arm -machine mps2-an386`):
-//! three cars on a lane for 30 s of simulated time, the ego driven by the firmware's
+//! three cars on a lane for 60 s of simulated time, the ego driven by the firmware's
 //! `Controller` on the default table at 50 Hz, a small plant model integrated exactly between
-//! samples. Prints a summary over semihosting and exits with status 0 when no gap closed, no
-//! fault occurred and the nominal law drove part of the time; 1 otherwise.
+//! samples. The leader stops to standstill twice, once braking as hard as the table's model
+//! allows, and goes again; the follower drives by the table's IDM; for 0.3 s the leader track
+//! is flagged invalid. So every path of the control step runs: nominal, override (braking at
+//! the certificate's level) and the minimum-risk manoeuvre, and the instruction counter's worst
+//! case covers them all. Prints a summary over semihosting and exits with status 0 when no gap
+//! closed, each of the three modes ran, the minimum-risk manoeuvre ran exactly in the fault
+//! window, and the certificate's margin never fell below `-CERTIFICATE_TOLERANCE` outside it;
+//! 1 otherwise.
 //!
 //! It also measures the stack one control step uses (the stack below the caller is painted
 //! before the first step and scanned after the last), and brackets every step with two marker
@@ -18,7 +24,9 @@ use core::panic::PanicInfo;
 
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
-use firmware::{Config, Controller, Inputs, Measurement, Mode, Track, DEFAULT_TABLE};
+use firmware::{
+    Config, Controller, Inputs, Measurement, Mode, Track, CERTIFICATE_TOLERANCE, DEFAULT_TABLE,
+};
 
 /// Marks the start of a control step for the instruction counter.
 #[no_mangle]
@@ -80,43 +88,39 @@ fn lowest_gap(g: f32, dv: f32, da: f32, h: f32) -> f32 {
     low
 }
 
-/// The leader's acceleration programme: cruise, brake, recover, a slow wave, brake again.
+/// The leader's acceleration programme: cruise, a hard stop at the model's limit (6 m/s^2),
+/// stand, pull away to 20 m/s, cruise, a gentle stop (2 m/s^2), stand, pull away.
 fn leader_acceleration(t: f32, v: f32) -> f32 {
     let a = if t < 5.0 {
         0.0
-    } else if t < 8.0 {
-        -1.5
-    } else if t < 12.0 {
-        1.0
-    } else if t < 20.0 {
-        // A triangle wave of period 6 s between -1 and 1 (no trigonometry needed).
-        let phase = (t - 12.0) / 6.0;
-        let frac = phase - (phase as u32) as f32;
-        if frac < 0.5 {
-            4.0 * frac - 1.0
-        } else {
-            3.0 - 4.0 * frac
-        }
-    } else if t < 24.0 {
-        -1.5
+    } else if t < 14.0 {
+        -6.0
+    } else if t < 26.0 {
+        1.5
+    } else if t < 32.0 {
+        0.0
+    } else if t < 46.0 {
+        -2.0
     } else {
-        0.8
+        1.0
     };
-    // The leader keeps to a highway speed band.
-    if (v <= 17.0 && a < 0.0) || (v >= 34.0 && a > 0.0) {
+    // Speeds stay in [0, 25] m/s (the plant stops a braking car at zero).
+    if v >= 25.0 && a > 0.0 {
+        0.0
+    } else if t >= 14.0 && t < 26.0 && v >= 20.0 {
         0.0
     } else {
         a
     }
 }
 
-/// The follower: the IDM (a = 1, b = 1.5, v0 = 33.3 m/s, s0 = 2 m, T = 1.2 s), clipped to the
-/// game's bounds.
+/// The follower: the table's IDM (a = 1, b = 1.5, v0 = 33.3 m/s, s0 = 2 m) with a time gap of
+/// 1.5 s, clipped to the table's bounds [-6, 2].
 fn follower_acceleration(follower: Car, ego: Car) -> f32 {
     let gap = ego.x - follower.x;
     let v = follower.v;
     let two_sqrt_ab = 2.449_489_8; // 2 sqrt(1.0 * 1.5)
-    let dynamic = v * 1.2 + v * (v - ego.v) / two_sqrt_ab;
+    let dynamic = v * 1.5 + v * (v - ego.v) / two_sqrt_ab;
     let desired = 2.0 + if dynamic > 0.0 { dynamic } else { 0.0 };
     let r = v / 33.3;
     let free = r * r * r * r;
@@ -126,24 +130,28 @@ fn follower_acceleration(follower: Car, ego: Car) -> f32 {
         100.0
     };
     let a = 1.0 - free - interaction;
-    if a < -1.5 {
-        -1.5
-    } else if a > 1.5 {
-        1.5
+    if a < -6.0 {
+        -6.0
+    } else if a > 2.0 {
+        2.0
     } else {
         a
     }
 }
+
+/// The fault window: the leader track is flagged invalid, s.
+const FAULT: (f32, f32) = (50.0, 50.3);
 
 #[entry]
 fn main() -> ! {
     let config = Config::default();
     let mut controller = Controller::new(DEFAULT_TABLE, config);
     let h = config.period_us as f32 * 1e-6;
-    let steps = 1500u32; // 30 s
-    let mut leader = Car { x: 100.0, v: 25.0 };
+    let steps = 3000u32; // 60 s
+    let mut leader = Car { x: 120.0, v: 25.0 };
     let mut ego = Car { x: 50.0, v: 25.0 };
     let mut follower = Car { x: 20.0, v: 25.0 };
+    let (mut min_margin, mut misplaced_minimum_risk) = (f32::INFINITY, 0u32);
     let (mut nominal, mut overridden, mut minimum_risk) = (0u32, 0u32, 0u32);
     let (mut min_front, mut min_rear) = (f32::INFINITY, f32::INFINITY);
     let mut max_brake = 0.0f32;
@@ -176,9 +184,32 @@ fn main() -> ! {
             ego_speed: Measurement::new(ego.v, now_us),
             now_us,
         };
+        let mut inputs = inputs;
+        let in_fault_window = t >= FAULT.0 && t < FAULT.1;
+        if in_fault_window {
+            inputs.leader.valid = false;
+        }
         hjacc_step_begin();
         let command = controller.step(black_box(&inputs));
         hjacc_step_end();
+        if (command.mode == Mode::MinimumRisk) != in_fault_window {
+            misplaced_minimum_risk += 1;
+        }
+        if !in_fault_window {
+            let state = [
+                leader.x - ego.x,
+                leader.v,
+                ego.x - follower.x,
+                follower.v,
+                ego.v,
+            ];
+            let margin = controller
+                .certificate(state)
+                .map_or(f32::NEG_INFINITY, |c| c.margin());
+            if margin < min_margin {
+                min_margin = margin;
+            }
+        }
         match command.mode {
             Mode::Nominal => nominal += 1,
             Mode::Override => overridden += 1,
@@ -217,12 +248,17 @@ fn main() -> ! {
     let stack_bytes = used_words * 4;
 
     hprintln!(
-        "hjacc qemu scenario: {} steps ({} s), nominal {}, override {}, minimum-risk {}",
+        "hjacc qemu scenario: {} steps ({} s), nominal {}, override {}, minimum-risk {} (outside the fault window: {})",
         steps,
         steps as f32 * h,
         nominal,
         overridden,
-        minimum_risk
+        minimum_risk,
+        misplaced_minimum_risk
+    );
+    hprintln!(
+        "smallest certificate margin outside the fault window: {} m",
+        min_margin
     );
     hprintln!(
         "min gap front {} m, rear {} m, max braking {} m/s^2, final speeds {} {} {} m/s",
@@ -237,7 +273,13 @@ fn main() -> ! {
         "stack used by the control loop (painted, 8 KiB window): {} bytes",
         stack_bytes
     );
-    let ok = min_front > 0.0 && min_rear > 0.0 && minimum_risk == 0 && nominal > 0;
+    let ok = min_front > 0.0
+        && min_rear > 0.0
+        && nominal > 0
+        && overridden > 0
+        && minimum_risk > 0
+        && misplaced_minimum_risk == 0
+        && min_margin > -CERTIFICATE_TOLERANCE;
     hprintln!("result: {}", if ok { "PASS" } else { "FAIL" });
     debug::exit(if ok {
         debug::EXIT_SUCCESS

@@ -865,12 +865,13 @@ impl AnyGame {
                 max_speed,
                 min_gap,
             }),
-            G::RearIdm {
+            G::ThreeCarSplit {
                 ego,
                 follower_clip,
                 idm,
                 time_gap,
                 max_speed,
+                ..
             } => AnyGame::Rear(RearIdm {
                 ego: Accel::from(ego),
                 follower_clip: Accel::from(follower_clip),
