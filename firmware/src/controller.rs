@@ -23,9 +23,11 @@
 //! behaviour, the period included, and every state the period can reach has a front value at
 //! least as large (the reached state's worst case is one of the behaviours the look-ahead
 //! took the minimum over). So if the look-ahead exceeds `front_margin` the nominal command is
-//! applied ([`Mode::Nominal`]); otherwise the ego brakes at `beta` ([`Mode::Override`]), along
-//! which the front value never decreases (checked by property tests in `table_format::front`).
-//! Either way a certified state's front value stays above `front_margin`. No monotonicity of
+//! applied ([`Mode::Nominal`]); otherwise ([`Mode::Override`]) a gentler braking the
+//! look-ahead passes (a secant step between the refused command and `beta`), or braking at
+//! `beta` itself, along which the front value never decreases (checked by property tests in
+//! `table_format::front`). Either way a certified state's front value stays above
+//! `front_margin`. No monotonicity of
 //! the table is used: the rear value is a property of the band, and the front value is exact.
 //!
 //! # The domain
@@ -36,10 +38,12 @@
 //! farther than any gap (or none) has an infinite front value. A measured speed of a human
 //! slightly below zero is taken as zero (a slower follower and a faster leader are never
 //! worse). An ego or follower faster than `max_speed`, or a follower gap below the grid, is
-//! outside the domain: [`Fault::OutsideDomain`], [`Mode::Uncertified`], with the nominal law.
-//! Its braking, like every command's, is at most `beta`, which spares the follower: a rear
-//! table certifies nothing unless the follower can out-brake the band (measured: with the
-//! follower's braking equal to `beta` the rear value's plateau is -0.99 m, README).
+//! outside the domain: [`Fault::OutsideDomain`], [`Mode::Uncertified`], with the nominal law as
+//! the minimum-risk behaviour: its set speed (30 m/s by default, below the table's 35) slows
+//! an ego that is too fast back into the domain, and its braking, like every command's, is at
+//! most `beta`, which spares the follower: a rear table certifies nothing unless the follower
+//! can out-brake the band (measured: with the follower's braking equal to `beta` the rear
+//! value's plateau is -0.99 m, README).
 //!
 //! # Faults and the minimum-risk manoeuvre
 //! A table that does not parse or is not a split table, a measurement the sensor flags
@@ -126,7 +130,8 @@ pub enum Mode {
     /// The nominal ACC law; the look-ahead showed the front value stays above the margin
     /// through the next period.
     Nominal,
-    /// Braking at the certificate's level `beta`: the look-ahead refused the nominal command.
+    /// The look-ahead refused the nominal command: the gentlest braking it passes, at most
+    /// `beta`.
     Override,
     /// The minimum-risk manoeuvre after a fault.
     MinimumRisk,
@@ -517,20 +522,28 @@ impl<'t> Controller<'t> {
             }
         };
         let h = self.config.period_us as f32 * 1e-6;
-        // The look-ahead (module docs): the front value with the nominal command held for one
-        // period before braking at beta.
-        let ahead = front_value(
-            leader.gap,
-            leader_speed,
-            ego_speed,
-            &model.front(h, nominal),
-        );
-        let (acceleration, mode) = if ahead > self.config.front_margin {
+        // The look-ahead (module docs): the front value with a command held for one period
+        // before braking at beta.
+        let margin_front = self.config.front_margin;
+        let ahead = |u: f32| front_value(leader.gap, leader_speed, ego_speed, &model.front(h, u));
+        // Braking at beta from now is the front value itself (no response needed).
+        let front = front_value(leader.gap, leader_speed, ego_speed, &model.front(0.0, 0.0));
+        let at_nominal = ahead(nominal);
+        let (acceleration, mode) = if at_nominal > margin_front {
             (nominal, Mode::Nominal)
         } else {
-            (model.ego.min, Mode::Override)
+            (
+                least_braking(
+                    nominal,
+                    at_nominal,
+                    model.ego.min,
+                    front,
+                    margin_front,
+                    |u| ahead(u) > margin_front,
+                ),
+                Mode::Override,
+            )
         };
-        let front = front_value(leader.gap, leader_speed, ego_speed, &model.front(0.0, 0.0));
         let margin = self.certificate_of(front, rear, &model).margin();
         // Diagnostics: the state itself is no longer certified (logged once per excursion).
         let outside = margin.is_nan() || margin <= 0.0;
@@ -588,4 +601,42 @@ fn rear_value(
     table
         .value_at(&[gap_follower, follower_speed, ego_speed])
         .map_err(|_| Fault::OutsideDomain { axis: 0 })
+}
+
+/// The override's command: a gentler braking than `beta_command` where one passes the
+/// look-ahead, else `beta_command` itself.
+///
+/// The look-ahead's front value `F(u)` (the command `u` held for a period, then braking at
+/// beta) is non-increasing in `u`: a harder-accelerating ego is ahead of a gentler one at every
+/// instant. It is known at the refused command (`F(refused) <= margin`) and at `beta_command`
+/// (`F(beta) = front`, braking from now). Over one period it is nearly affine in `u` (the
+/// extra speed `(u + beta) h` is what matters), so the secant's root, pulled 10% towards
+/// `beta`, is a candidate; it is used only if the look-ahead passes it, else the midpoint
+/// between it and `beta`, else `beta`. Two evaluations at most (the control step's budget:
+/// each costs about 560 instructions on the Cortex-M4F). Whatever is returned either passed the
+/// look-ahead or is the braking at beta, which keeps a certified front value (module docs).
+/// Braking no harder than needed spares the follower and the jerk.
+fn least_braking(
+    refused: f32,
+    at_refused: f32,
+    beta_command: f32,
+    front: f32,
+    margin: f32,
+    passes: impl Fn(f32) -> bool,
+) -> f32 {
+    let drop = front - at_refused;
+    if !(front > margin && drop > 0.0) {
+        return beta_command;
+    }
+    let share = 0.9 * (front - margin) / drop;
+    let candidate = beta_command + math::clamp(share, 0.0, 1.0) * (refused - beta_command);
+    if passes(candidate) {
+        return candidate;
+    }
+    let halfway = 0.5 * (beta_command + candidate);
+    if passes(halfway) {
+        halfway
+    } else {
+        beta_command
+    }
 }

@@ -92,6 +92,24 @@ fn closing_fast_on_the_leader_brakes_at_the_certificates_level() {
 }
 
 #[test]
+fn near_the_margin_the_override_brakes_no_harder_than_needed() {
+    let (beta, _, _) = band_and_leader();
+    let c = controller();
+    // Both at 25 m/s, the gap placed 0.05 m above the margin (37 m): the nominal law's -2.9
+    // m/s^2 for another period would take the front value below the margin, braking at beta is
+    // more than needed.
+    let offset = c.certificate([0.0, 25.0, 1e9, 0.0, 25.0]).unwrap().front;
+    let gap = 0.05 - offset;
+    let mut c = controller();
+    let cmd = c.step(&inputs((gap, 0.0), (40.0, 0.0), 25.0));
+    assert_eq!(cmd.mode, Mode::Override, "{cmd:?}");
+    assert!(
+        cmd.acceleration > beta && cmd.acceleration < -2.9,
+        "{cmd:?}"
+    );
+}
+
+#[test]
 fn a_margin_larger_than_the_front_value_overrides_the_same_state() {
     let state = inputs((60.0, 0.0), (40.0, 0.0), 25.0);
     let cmd = controller().step(&state);

@@ -180,7 +180,7 @@ fn plot_trace(path: &std::path::Path, title: &str, trace: &Trace) -> Result<()> 
         .label("certificate margin [m]")
         .legend(line(GREEN));
     for (mode, colour, label) in [
-        (ModeName::Override, MAGENTA, "override (braking at beta)"),
+        (ModeName::Override, MAGENTA, "override"),
         (ModeName::MinimumRisk, CYAN, "minimum-risk manoeuvre"),
         (
             ModeName::Uncertified,

@@ -21,7 +21,7 @@ python3 - "$out/deployment/summary.json" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))
 print(f"nodes {s['points']}, iterations {s['iterations']}, converged {s['converged']}, "
-      f"residual {s['residual']:.2e} m, change over the last tenth {s['change_over_last_tenth']:.4f} m, "
+      f"residual {s['residual']:.2e} m, change over the last tenth {s['change_over_last_tenth']:.4f} m (safe set changed on at most {100 * s['safe_set_change_bound']:.3f}% of the nodes), "
       f"plateau {s['plateau']:.3f} m, beyond-grid value {s['top_face_min']:.3f} m, "
       f"safe share {s['safe_share']:.3f}, table {s['table_bytes']} bytes")
 PY

@@ -2,14 +2,16 @@
 //! sensitivity to the bounds: the leader's hardest braking `b_L`, the ego's braking level
 //! `beta` and the follower's hardest braking (one rear table per pair).
 //!
-//! `cargo run -p solver --release --example split_volume -- PLOT.png REAR_TABLE...`
+//! `cargo run -p solver --release --example split_volume -- PLOT.png FOUR_D_TABLE REAR_TABLE...`
+//! (`solver/benches/sensitivity.sh` runs it on the deployment and sensitivity tables).
 //!
 //! A state `(gap_leader, leader_speed, gap_follower, follower_speed, ego_speed)` is certified by
-//! - the 4-D table (`firmware/tables/default.bin`, the paper's bounds, horizon 20 s, ego speed
-//!   assumed at least 15 m/s): in its trusted box, table value above its error bound;
-//! - the split certificate at braking level `beta` (the rear table's band): the front value in
-//!   closed form is positive for a leader braking at `b_L`, and the rear table's value, less its
-//!   quantization error, is above `REAR_LEVEL`.
+//! - the 4-D table (`out/three-car-idm-4d-table/table.bin`, the firmware's table before the
+//!   split: the paper's bounds, horizon 20 s, ego speed assumed at least 15 m/s): in its trusted
+//!   box, table value above its error bound;
+//! - the split certificate at braking level `beta` (the rear table's band), with the firmware's
+//!   default levels: the front value in closed form for a leader braking at `b_L` is above
+//!   `FRONT_LEVEL`, and the rear table's value, less its error bound, above `REAR_LEVEL`.
 //!
 //! Samples (200,000, fixed seed) are uniform over gaps in [0, 75] m, relative speeds in
 //! [-15, 15] m/s and every speed in [0, 35] m/s (the 4-D grid's box), for ego speeds in
@@ -20,8 +22,10 @@ use solver::output::draw_curves;
 use table_format::front::{front_value, FrontModel};
 use table_format::{Game, Table};
 
-/// The rear value the split certificate asks for, m.
-const REAR_LEVEL: f32 = 0.5;
+/// The front value the split certificate asks for, m (the firmware's `front_margin`).
+const FRONT_LEVEL: f32 = 0.5;
+/// The rear value the split certificate asks for, m (the firmware's `rear_margin`).
+const REAR_LEVEL: f32 = 0.0;
 const SAMPLES: usize = 200_000;
 
 /// A sampled state: gaps and speeds.
@@ -52,16 +56,13 @@ fn samples(low_ego_speed: f32) -> Vec<State> {
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let (plot, rears) = args
-        .split_first()
-        .filter(|(_, r)| !r.is_empty())
-        .expect("usage: split_volume PLOT.png REAR_TABLE...");
-    let default_table = std::fs::read(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../firmware/tables/default.bin"
-    ))
-    .expect("firmware/tables/default.bin");
-    let four = Table::parse(&default_table).expect("default table");
+    let [plot, four_path, rears @ ..] = args.as_slice() else {
+        panic!("usage: split_volume PLOT.png FOUR_D_TABLE REAR_TABLE...");
+    };
+    assert!(!rears.is_empty(), "no rear table given");
+    let four_bytes = std::fs::read(four_path).expect("the 4-D table");
+    let four = Table::parse(&four_bytes).expect("the 4-D table parses");
+    assert_eq!(four.dims(), 4, "{four_path} is not a 4-D table");
     let bound = four.header().error_bound.total();
     let leader_brakings = [3.5f32, 4.0, 5.0, 6.0, 7.0, 8.0];
     let sets = [("15-35", samples(15.0)), ("0-35", samples(0.0))];
@@ -117,7 +118,9 @@ fn main() {
                 .map(|(_, states)| {
                     let n = states
                         .iter()
-                        .filter(|s| front_value(s.x1, s.vl, s.ve, &model) > 0.0 && rear_ok(s))
+                        .filter(|s| {
+                            front_value(s.x1, s.vl, s.ve, &model) > FRONT_LEVEL && rear_ok(s)
+                        })
                         .count();
                     100.0 * n as f64 / states.len() as f64
                 })

@@ -61,7 +61,9 @@ fn main() -> Result<()> {
         let s = run_rear(&config, &args.out)?;
         println!(
             "{}: {} x {} x {} breakpoints, {} iterations ({}), residual {:.1e} m, {:.1} s; \
-             plateau {:.3} m; table {} bytes (quantization {:.4} m)",
+             over the last tenth at most {:.4} m per node, the safe set on at most {:.3}% of \
+             the nodes; plateau {:.3} m; beyond the grid {:.3} m; table {} bytes (quantization \
+             {:.4} m)",
             s.name,
             s.points[0],
             s.points[1],
@@ -74,7 +76,10 @@ fn main() -> Result<()> {
             },
             s.residual,
             s.solve_seconds,
+            s.change_over_last_tenth,
+            100.0 * s.safe_set_change_bound,
             s.plateau,
+            s.top_face_min,
             s.table_bytes,
             s.quantization_error
         );

@@ -262,6 +262,10 @@ pub struct RearSummary {
     /// A bound on how much any node changed over the last tenth of the iterations: the sum of
     /// the per-iteration largest changes, m.
     pub change_over_last_tenth: f32,
+    /// A bound on how much the safe set changed over the last tenth of the iterations: the
+    /// share of nodes within `change_over_last_tenth` of zero (no other node can have changed
+    /// sign).
+    pub safe_set_change_bound: f64,
     /// Wall time of the iteration, s.
     pub solve_seconds: f64,
     /// The value at rest with the follower 10 m back (the plateau `s0` is its exact value).
@@ -371,6 +375,12 @@ pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverEr
         converged: result.converged,
         residual: result.residual,
         change_over_last_tenth,
+        safe_set_change_bound: result
+            .values
+            .iter()
+            .filter(|w| w.abs() <= change_over_last_tenth)
+            .count() as f64
+            / result.values.len() as f64,
         solve_seconds,
         plateau: at(10.0, 0.0, 0.0),
         smallest_gap_at_equal_speeds,
