@@ -19,7 +19,8 @@
 //! sampled-data approximation, see `solver::semi_lagrangian`, and what that leaves unproven is
 //! issue 11's verify). The front half decides the command. The nominal ACC law's command `u`
 //! is held for one period `h`; the look-ahead computes `front_value` with a *response* of `u`
-//! for `h` before the braking at `beta`. That is the smallest front gap over every leader
+//! for `h` before the braking at `beta` (plus the delays, see below). That is the smallest
+//! front gap over every leader
 //! behaviour, the period included, and every state the period can reach has a front value at
 //! least as large (the reached state's worst case is one of the behaviours the look-ahead
 //! took the minimum over). So if the look-ahead exceeds `front_margin` the nominal command is
@@ -29,6 +30,31 @@
 //! `table_format::front`). Either way a certified state's front value stays above
 //! `front_margin`. No monotonicity of
 //! the table is used: the rear value is a property of the band, and the front value is exact.
+//!
+//! # Delays: the measurements' age, the actuator's dead time and lag
+//! The configuration declares the actuator's dead time `D` (a command acts `D` after it is
+//! issued, at most 100 ms) and the time constant `tau` of its first-order lag (at most 0.3 s);
+//! measurements are accepted up to `stale_periods` periods old. The front is argued from the
+//! leader track's measurement time `t_m`, not from now: the front value is a minimum over
+//! every leader behaviour from `t_m` on, so what the leader did since is covered. The ego's
+//! speed at `t_m` comes from its own measurement, moved to `t_m` within the accelerations the
+//! ego can have had in between (the highest speed for the ego, the lowest for the leader).
+//!
+//! The ego's acceleration is bounded through the commands the controller has issued, which it
+//! keeps (a sliding-window maximum over the stale limit, `D` and `5 tau`). Until braking at
+//! beta takes full effect, the acceleration is at most `pending`: the largest command issued
+//! since `t_m - D - 5 tau`, plus what older commands can still pass through the lag (at most
+//! `e^-5` of the band's width); before the controller's first command it is the band's
+//! largest. A braking command issued at `t_b` takes full effect, in the sense that matters
+//! here, at `t_b + D + tau`: a first-order lag's speed never exceeds that of the step delayed
+//! by `tau` (see `table_format::front`). So the **certified front value** is
+//! `front_value` at the state of `t_m` with a response of `pending` until `t_b + D + tau`,
+//! where `t_b` is when the current run of commands at beta began, or now. The **look-ahead**
+//! of a command `u` uses a response of `max(pending, u)` until `now + h + D + tau`. Why it is
+//! invariant: at the next step the certified value's response ends at the same instant (either
+//! the braking run goes on from the same `t_b`, or `u` was held and the run starts at
+//! `now + h`), with a `pending` no larger, from a later state that one of the behaviours the
+//! look-ahead took the minimum over has reached; so it is at least the look-ahead's value.
 //!
 //! # The domain
 //! The rear table covers `gap_follower` up to its last breakpoint, and speeds in
@@ -56,8 +82,11 @@
 //!
 //! # What is assumed
 //! The humans keep to the table's model (the leader brakes at most `-leader.min`, the follower
-//! drives by the IDM with its time gap in range); the measurements are exact and current, and
-//! the ego's acceleration is its command (delays and actuator lag are issue 11).
+//! drives by the IDM with its time gap in range); the measurements are exact and time-stamped
+//! on the controller's clock, at most the stale limit old; the actuator is a dead time and a
+//! first-order lag no slower than the configuration declares, and brakes at beta when told
+//! to. Noise is not in the argument. The rear table is the sampled-data value, checked along
+//! trajectories but not proven cell by cell (issue 11's `verify`).
 
 use heapless::Deque;
 use table_format::front::{front_value, FrontModel};
@@ -98,7 +127,52 @@ pub struct Config {
     pub mrm_gentle_deceleration: f32,
     /// "Close" for the follower in the minimum-risk manoeuvre, m.
     pub follower_close_gap: f32,
+    /// The actuator's dead time the certificate covers, microseconds (at most
+    /// [`MAX_DEAD_TIME_US`]): a command acts this long after it is issued.
+    pub actuator_dead_time_us: u32,
+    /// The time constant of the actuator's first-order lag the certificate covers,
+    /// microseconds (at most [`MAX_ACTUATOR_LAG_US`]): `a' = (command - a) / lag`.
+    pub actuator_lag_us: u32,
 }
+
+impl Config {
+    /// Whether the configuration lies within the limits the certificate is argued for: a period
+    /// of 10 to 100 ms, a stale limit of 1 to [`MAX_STALE_PERIODS`] periods, a dead time and a
+    /// lag within their limits, finite non-negative margins and gains.
+    pub fn is_valid(&self) -> bool {
+        let finite_non_negative = [
+            self.set_speed,
+            self.time_gap,
+            self.standstill_gap,
+            self.gap_gain,
+            self.rel_speed_gain,
+            self.speed_gain,
+            self.front_margin,
+            self.rear_margin,
+            self.mrm_deceleration,
+            self.mrm_gentle_deceleration,
+            self.follower_close_gap,
+        ]
+        .iter()
+        .all(|x| math::is_finite(*x) && *x >= 0.0);
+        finite_non_negative
+            && (MIN_PERIOD_US..=MAX_PERIOD_US).contains(&self.period_us)
+            && (1..=MAX_STALE_PERIODS).contains(&self.stale_periods)
+            && self.actuator_dead_time_us <= MAX_DEAD_TIME_US
+            && self.actuator_lag_us <= MAX_ACTUATOR_LAG_US
+    }
+}
+
+/// The largest actuator dead time a configuration may declare, microseconds.
+pub const MAX_DEAD_TIME_US: u32 = 100_000;
+/// The largest actuator lag time constant a configuration may declare, microseconds.
+pub const MAX_ACTUATOR_LAG_US: u32 = 300_000;
+/// The smallest control period a configuration may declare, microseconds.
+pub const MIN_PERIOD_US: u32 = 10_000;
+/// The largest control period a configuration may declare, microseconds.
+pub const MAX_PERIOD_US: u32 = 100_000;
+/// The largest `stale_periods` a configuration may declare.
+pub const MAX_STALE_PERIODS: u32 = 10;
 
 impl Default for Config {
     fn default() -> Self {
@@ -116,9 +190,15 @@ impl Default for Config {
             mrm_deceleration: 2.0,
             mrm_gentle_deceleration: 1.0,
             follower_close_gap: 15.0,
+            actuator_dead_time_us: MAX_DEAD_TIME_US,
+            actuator_lag_us: MAX_ACTUATOR_LAG_US,
         }
     }
 }
+
+/// e^-5: what a first-order lag still passes on, after five time constants, of a command older
+/// than that.
+const LAG_TAIL: f32 = 0.006_737_947;
 
 /// ISO 15622 acceleration limits for ACC, m/s^2.
 pub const ISO_15622_LIMITS: (f32, f32) = (-3.5, 2.0);
@@ -172,6 +252,9 @@ pub enum Fault {
     },
     /// The clock went backwards.
     ClockWentBackwards,
+    /// The configuration is outside the limits the certificate is argued for (period, stale
+    /// limit, dead time or lag above their limits, a negative or non-finite value).
+    InvalidConfig,
 }
 
 /// One control step's output.
@@ -275,6 +358,81 @@ pub struct Controller<'t> {
     last_now_us: u64,
     margin_lost: bool,
     events: Deque<Event, 32>,
+    issued: IssuedCommands,
+    /// When the current run of commands braking at beta began (`None`: the last command was
+    /// not braking at beta): the braking is under way since then, not only from now.
+    braking_since_us: Option<u64>,
+}
+
+/// One command the controller issued.
+#[derive(Debug, Clone, Copy)]
+struct Issued {
+    at_us: u64,
+    acceleration: f32,
+}
+
+/// The commands issued over the last `memory_us`, kept as a sliding-window maximum (each entry
+/// larger than every later one), so that the largest is the front entry: O(1) per step. Up to
+/// `MEMORY` entries: at the smallest period (10 ms) and the largest stale limit, dead time and
+/// lag, the memory is 10 x 100 + 100 + 5 x 300 = 2,600 ms, 260 commands.
+struct IssuedCommands {
+    window: Deque<Issued, 272>,
+    /// The first command issued since boot (or since the window overflowed): before it, what
+    /// the actuator did is unknown.
+    first_at_us: Option<u64>,
+}
+
+impl IssuedCommands {
+    fn push(&mut self, at_us: u64, acceleration: f32, memory_us: u64) {
+        while self
+            .window
+            .front()
+            .is_some_and(|e| e.at_us.saturating_add(memory_us) < at_us)
+        {
+            self.window.pop_front();
+        }
+        while self
+            .window
+            .back()
+            .is_some_and(|e| e.acceleration <= acceleration)
+        {
+            self.window.pop_back();
+        }
+        if self
+            .window
+            .push_back(Issued {
+                at_us,
+                acceleration,
+            })
+            .is_err()
+        {
+            // Cannot happen within the validated limits; if it did, forget and start again
+            // (the largest acceleration is then assumed until the window refills).
+            self.window.clear();
+            self.first_at_us = None;
+        }
+        if self.first_at_us.is_none() {
+            self.first_at_us = Some(at_us);
+        }
+    }
+
+    /// An upper bound of every command issued since `span_us` before `at_us`: the window's
+    /// largest, or `unknown` if the first command recorded is later than that (before it, what
+    /// the actuator did is not known).
+    fn largest_since(&self, at_us: u64, span_us: u64, unknown: f32) -> f32 {
+        let known = self
+            .first_at_us
+            .is_some_and(|t| t.saturating_add(span_us) <= at_us);
+        let largest = self
+            .window
+            .front()
+            .map_or(f32::NEG_INFINITY, |e| e.acceleration);
+        if known {
+            largest
+        } else {
+            math::max(largest, unknown)
+        }
+    }
 }
 
 fn model_of(table: &Table<'_>) -> Result<Model, Fault> {
@@ -327,9 +485,13 @@ impl<'t> Controller<'t> {
     /// three-car table, leaves the controller in the minimum-risk manoeuvre for good, with the
     /// reason in every command.
     pub fn new(table_bytes: &'t [u8], config: Config) -> Self {
-        let table = Table::parse(table_bytes)
-            .map_err(Fault::Table)
-            .and_then(|t| model_of(&t).map(|m| (t, m)));
+        let table = if config.is_valid() {
+            Table::parse(table_bytes)
+                .map_err(Fault::Table)
+                .and_then(|t| model_of(&t).map(|m| (t, m)))
+        } else {
+            Err(Fault::InvalidConfig)
+        };
         if let Err(fault) = &table {
             log_warn!("table refused: {}", fault);
         }
@@ -344,7 +506,21 @@ impl<'t> Controller<'t> {
             last_now_us: 0,
             margin_lost: false,
             events: Deque::new(),
+            issued: IssuedCommands {
+                window: Deque::new(),
+                first_at_us: None,
+            },
+            braking_since_us: None,
         }
+    }
+
+    /// How far back the issued commands matter: the stale limit, the dead time and five lag
+    /// time constants, microseconds.
+    fn memory_us(&self) -> u64 {
+        let c = &self.config;
+        u64::from(c.period_us) * u64::from(c.stale_periods)
+            + u64::from(c.actuator_dead_time_us)
+            + 5 * u64::from(c.actuator_lag_us)
     }
 
     /// The table, if it was accepted.
@@ -372,10 +548,27 @@ impl<'t> Controller<'t> {
     /// outside the domain or without a table. For tests and campaigns, which judge the
     /// certificate on the state the firmware cannot see exactly.
     pub fn certificate(&self, state: [f32; 5]) -> Option<Certificate> {
+        self.certificate_with_response(state, 0.0, 0.0)
+    }
+
+    /// [`Controller::certificate`] for an ego whose acceleration is at most
+    /// `response_acceleration` for `response_time` seconds before braking at beta takes effect
+    /// (its actuator's dead time and lag, with the commands still in its pipeline).
+    pub fn certificate_with_response(
+        &self,
+        state: [f32; 5],
+        response_time: f32,
+        response_acceleration: f32,
+    ) -> Option<Certificate> {
         let (table, model) = self.table.as_ref().ok()?;
         let [gap_leader, leader_speed, gap_follower, follower_speed, ego_speed] = state;
         let rear = rear_value(table, model, gap_follower, follower_speed, ego_speed).ok()?;
-        let front = front_value(gap_leader, leader_speed, ego_speed, &model.front(0.0, 0.0));
+        let front = front_value(
+            gap_leader,
+            leader_speed,
+            ego_speed,
+            &model.front(response_time, response_acceleration),
+        );
         Some(self.certificate_of(front, rear, model))
     }
 
@@ -410,8 +603,21 @@ impl<'t> Controller<'t> {
             log_info!("mode {} (fault {})", command.mode, command.fault);
         }
         self.mode = command.mode;
-        if inputs.now_us > self.last_now_us {
+        if inputs.now_us >= self.last_now_us {
             self.last_now_us = inputs.now_us;
+            // Every command goes to the actuator: the look-ahead of later steps must know it.
+            let memory = self.memory_us();
+            self.issued
+                .push(inputs.now_us, command.acceleration, memory);
+            let at_beta = self
+                .table
+                .as_ref()
+                .is_ok_and(|(_, m)| command.acceleration <= m.ego.min);
+            self.braking_since_us = match (at_beta, self.braking_since_us) {
+                (true, Some(since)) => Some(since),
+                (true, None) => Some(inputs.now_us),
+                (false, _) => None,
+            };
         }
         command
     }
@@ -506,9 +712,8 @@ impl<'t> Controller<'t> {
         }
         let ego_speed = ego.value;
         let nominal = self.nominal(leader, ego_speed, model.ego);
-        // Absolute speeds; a human measured slightly below zero is taken at rest (a slower
-        // follower and a faster leader are never worse).
-        let leader_speed = math::max(ego_speed + leader.rel_speed, 0.0);
+        // The follower's absolute speed; measured slightly below zero it is taken at rest (a
+        // slower follower is never worse).
         let follower_speed = math::max(ego_speed - follower.rel_speed, 0.0);
         let rear = match rear_value(table, &model, follower.gap, follower_speed, ego_speed) {
             Ok(w) => w,
@@ -521,13 +726,60 @@ impl<'t> Controller<'t> {
                 }
             }
         };
-        let h = self.config.period_us as f32 * 1e-6;
-        // The look-ahead (module docs): the front value with a command held for one period
-        // before braking at beta.
-        let margin_front = self.config.front_margin;
-        let ahead = |u: f32| front_value(leader.gap, leader_speed, ego_speed, &model.front(h, u));
-        // Braking at beta from now is the front value itself (no response needed).
-        let front = front_value(leader.gap, leader_speed, ego_speed, &model.front(0.0, 0.0));
+        let c = &self.config;
+        let h = c.period_us as f32 * 1e-6;
+        // The delays (module docs): the front is argued from the leader track's measurement
+        // time `t_m`. Until the ego's braking at beta takes full effect (the measurement's age,
+        // the dead time, and one lag time constant after a braking command is issued), its
+        // acceleration is at most `pending`: the largest command issued since `t_m`, less the
+        // dead time and five lag time constants, plus what older commands can still add
+        // through the lag (at most e^-5 of the band's width).
+        let t_m = inputs.leader.timestamp_us;
+        let t_0 = math_min_u64(t_m, ego.timestamp_us);
+        let dead_us = u64::from(c.actuator_dead_time_us);
+        let lag = c.actuator_lag_us as f32 * 1e-6;
+        let tail = if c.actuator_lag_us > 0 {
+            LAG_TAIL * (model.ego.max - model.ego.min)
+        } else {
+            0.0
+        };
+        let span = dead_us + 5 * u64::from(c.actuator_lag_us);
+        let pending = self.issued.largest_since(t_0, span, model.ego.max) + tail;
+        // The ego's speed at `t_m`, from its own measurement, within the accelerations it can
+        // have had in between: the highest for the ego's motion, the lowest for the leader's
+        // speed (a faster ego and a slower leader are never better).
+        let (ego_low, ego_high) = if ego.timestamp_us <= t_m {
+            let dt = (t_m - ego.timestamp_us) as f32 * 1e-6;
+            (ego_speed + model.ego.min * dt, ego_speed + pending * dt)
+        } else {
+            let dt = (ego.timestamp_us - t_m) as f32 * 1e-6;
+            (ego_speed - pending * dt, ego_speed - model.ego.min * dt)
+        };
+        let ego_low = math::max(ego_low, 0.0);
+        let ego_high = math::max(ego_high, 0.0);
+        let leader_at_m = math::max(ego_low + leader.rel_speed, 0.0);
+        let age = (now - t_m) as f32 * 1e-6;
+        let dead = dead_us as f32 * 1e-6;
+        // The certified front value: braking at beta, commanded since the current run of such
+        // commands began, or from now.
+        let braking_from = self.braking_since_us.unwrap_or(now);
+        let braking_age = (math_min_u64(braking_from, now).saturating_sub(t_m)) as f32 * 1e-6;
+        let front = front_value(
+            leader.gap,
+            leader_at_m,
+            ego_high,
+            &model.front(braking_age + dead + lag, pending),
+        );
+        // The look-ahead (module docs): `u` held for one period before the braking at beta.
+        let margin_front = c.front_margin;
+        let ahead = |u: f32| {
+            front_value(
+                leader.gap,
+                leader_at_m,
+                ego_high,
+                &model.front(age + h + dead + lag, math::max(pending, u)),
+            )
+        };
         let at_nominal = ahead(nominal);
         let (acceleration, mode) = if at_nominal > margin_front {
             (nominal, Mode::Nominal)
@@ -638,5 +890,14 @@ fn least_braking(
         halfway
     } else {
         beta_command
+    }
+}
+
+/// The smaller of two `u64` (no `Ord::min`, to keep the step's code obvious).
+fn math_min_u64(a: u64, b: u64) -> u64 {
+    if a < b {
+        a
+    } else {
+        b
     }
 }

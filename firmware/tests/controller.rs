@@ -29,8 +29,18 @@ fn inputs(leader: (f32, f32), follower: (f32, f32), ego_speed: f32) -> Inputs {
     }
 }
 
+/// The ideal plant: no actuator dead time or lag (the certificate's own tests; the delays have
+/// theirs below).
+fn ideal() -> Config {
+    Config {
+        actuator_dead_time_us: 0,
+        actuator_lag_us: 0,
+        ..Config::default()
+    }
+}
+
 fn controller() -> Controller<'static> {
-    Controller::new(DEFAULT_TABLE, Config::default())
+    Controller::new(DEFAULT_TABLE, ideal())
 }
 
 fn fault_of(c: Command) -> Fault {
@@ -101,7 +111,19 @@ fn near_the_margin_the_override_brakes_no_harder_than_needed() {
     let offset = c.certificate([0.0, 25.0, 1e9, 0.0, 25.0]).unwrap().front;
     let gap = 0.05 - offset;
     let mut c = controller();
-    let cmd = c.step(&inputs((gap, 0.0), (40.0, 0.0), 25.0));
+    // Measured now (a measurement's age is inside the look-ahead), after one earlier step, so
+    // that the controller knows what its actuator was last told (before its first command it
+    // must assume the largest acceleration).
+    let mut now = inputs((gap, 0.0), (40.0, 0.0), 25.0);
+    now.leader.timestamp_us = NOW;
+    now.ego_speed.timestamp_us = NOW;
+    let mut before = now;
+    before.now_us = NOW - 20_000;
+    before.leader.timestamp_us = NOW - 20_000;
+    before.follower.timestamp_us = NOW - 20_000;
+    before.ego_speed.timestamp_us = NOW - 20_000;
+    c.step(&before);
+    let cmd = c.step(&now);
     assert_eq!(cmd.mode, Mode::Override, "{cmd:?}");
     assert!(
         cmd.acceleration > beta && cmd.acceleration < -2.9,
@@ -119,7 +141,7 @@ fn a_margin_larger_than_the_front_value_overrides_the_same_state() {
         + Config::default().front_margin;
     let strict = Config {
         front_margin: front + 1.0,
-        ..Config::default()
+        ..ideal()
     };
     let cmd = Controller::new(DEFAULT_TABLE, strict).step(&state);
     assert_eq!(cmd.mode, Mode::Override, "{cmd:?}");
@@ -300,7 +322,7 @@ fn minimum_risk_minds_the_follower_and_its_limits() {
     assert_eq!(controller().step(&bad).acceleration, -1.0);
     let harsh = Config {
         mrm_deceleration: 9.0,
-        ..Config::default()
+        ..ideal()
     };
     let mut c = Controller::new(DEFAULT_TABLE, harsh);
     assert_eq!(c.config().mrm_deceleration, 4.0);
@@ -365,7 +387,7 @@ proptest! {
         leader_accel in 0.0f32..=1.0,
     ) {
         let (beta, a_max, leader_braking) = band_and_leader();
-        let config = Config::default();
+        let config = ideal();
         let mut c = controller();
         // The front value is the gap plus a function of the speeds: place the state `above`
         // metres over the margin, where the look-ahead's work is.
@@ -393,4 +415,84 @@ proptest! {
             prop_assert_eq!(cmd.mode, Mode::Nominal);
         }
     }
+}
+
+#[test]
+fn actuator_delays_make_the_look_ahead_cautious_until_the_commands_are_known() {
+    // Cruising 10 m above the front margin: the ideal plant drives nominally at once.
+    let offset = controller()
+        .certificate([0.0, 25.0, 1e9, 0.0, 25.0])
+        .unwrap()
+        .front;
+    let state = inputs((10.0 - offset, 0.0), (40.0, 0.0), 25.0);
+    assert_eq!(controller().step(&state).mode, Mode::Nominal);
+    // With the default dead time (100 ms) and lag (0.3 s), a controller that has issued no
+    // command yet must assume the actuator may still be accelerating at a_max for half a
+    // second: at 25 m/s that costs about 20 m of front value, and it brakes.
+    let mut c = Controller::new(DEFAULT_TABLE, Config::default());
+    let first = c.step(&state);
+    assert_eq!(first.mode, Mode::Override, "{first:?}");
+    // Once its own commands cover the dead time, five lag time constants and the stale limit
+    // (1.7 s), it knows better; the same gap, kept, is driven nominally again.
+    let mut last = first;
+    for k in 1..=150u64 {
+        let mut i = state;
+        i.now_us = NOW + k * 20_000;
+        i.leader.timestamp_us = i.now_us;
+        i.follower.timestamp_us = i.now_us;
+        i.ego_speed.timestamp_us = i.now_us;
+        last = c.step(&i);
+    }
+    assert_eq!(last.mode, Mode::Nominal, "{last:?}");
+}
+
+#[test]
+fn the_measurements_age_is_inside_the_look_ahead() {
+    // The same measurement, fresh or 100 ms old (the stale limit): the older one leaves the
+    // leader 100 ms more to brake unseen, so its front margin is smaller.
+    let fresh = inputs((40.0, -3.0), (40.0, 0.0), 25.0);
+    let mut old = fresh;
+    old.leader.timestamp_us = NOW - 100_000;
+    old.ego_speed.timestamp_us = NOW - 100_000;
+    let m_fresh = controller().step(&fresh).margin.unwrap();
+    let m_old = controller().step(&old).margin.unwrap();
+    assert!(m_old < m_fresh - 0.5, "{m_old} vs {m_fresh}");
+}
+
+#[test]
+fn a_configuration_outside_the_certificates_limits_is_refused() {
+    for bad in [
+        Config {
+            actuator_dead_time_us: 150_000,
+            ..Config::default()
+        },
+        Config {
+            actuator_lag_us: 400_000,
+            ..Config::default()
+        },
+        Config {
+            period_us: 1_000,
+            ..Config::default()
+        },
+        Config {
+            stale_periods: 0,
+            ..Config::default()
+        },
+        Config {
+            front_margin: -1e9,
+            ..Config::default()
+        },
+        Config {
+            rear_margin: f32::NAN,
+            ..Config::default()
+        },
+    ] {
+        assert!(!bad.is_valid(), "{bad:?}");
+        let mut c = Controller::new(DEFAULT_TABLE, bad);
+        assert_eq!(
+            fault_of(c.step(&inputs((60.0, 0.0), (40.0, 0.0), 25.0))),
+            Fault::InvalidConfig
+        );
+    }
+    assert!(Config::default().is_valid());
 }

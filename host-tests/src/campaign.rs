@@ -20,7 +20,14 @@ use serde::Serialize;
 use table_format::Table;
 
 use crate::humans::{Follower, HumanModel, Humans, Leader};
-use crate::sim::{humans_make_a_collision_unavoidable, lowest_gap, Car, SensorModel, Sensors};
+use crate::sim::{
+    humans_make_a_collision_unavoidable, lowest_gap, Actuator, ActuatorModel, Car, SensorModel,
+    Sensors,
+};
+
+/// Sub-steps per control period in the plant: the actuator's lag changes the ego's
+/// acceleration within a period (5 ms steps against a lag of 0.3 s).
+const SUB_STEPS: u32 = 4;
 
 /// One episode's setting.
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -33,6 +40,11 @@ pub struct Episode {
     pub seconds: f32,
     /// Sensors.
     pub sensors: SensorModel,
+    /// The ego's actuator.
+    pub actuator: ActuatorModel,
+    /// The firmware's configuration.
+    #[serde(skip)]
+    pub config: Config,
     /// Seed of the episode's random numbers.
     pub seed: u64,
 }
@@ -127,6 +139,8 @@ pub struct TracePoint {
     pub mode: ModeName,
     /// The certificate margin at the true state, m.
     pub margin: f32,
+    /// The certificate margin the firmware computed from its measurements (NaN: none), m.
+    pub firmware_margin: f32,
 }
 
 /// A recorded trajectory.
@@ -143,13 +157,15 @@ pub fn state_of([leader, ego, follower]: [Car; 3]) -> [f32; 5] {
     ]
 }
 
-/// Draws an initial state over the whole certified set (`margin > 0`): each speed is zero with
-/// probability 0.15 and uniform in `[0, max_speed]` otherwise; gaps are uniform in `[0, 150]`
-/// m ahead and over the rear grid behind. `None` after 10,000 rejected draws.
+/// Draws an initial state over the whole certified set (`margin > 0` for an actuator at rest
+/// that takes `response_time` to brake): each speed is zero with probability 0.15 and uniform
+/// in `[0, max_speed]` otherwise; gaps are uniform in `[0, 150]` m ahead and over the rear grid
+/// behind. `None` after 10,000 rejected draws.
 pub fn sample_start(
     controller: &Controller<'_>,
     model: &HumanModel,
     gap_max: f32,
+    response_time: f32,
     rng: &mut impl Rng,
 ) -> Option<([Car; 3], f32)> {
     let vmax = model.max_speed;
@@ -165,7 +181,7 @@ pub fn sample_start(
         let gap_leader = rng.random_range(0.0..=150.0f32);
         let gap_follower = rng.random_range(0.0..=gap_max);
         let state = [gap_leader, vl, gap_follower, vf, ve];
-        if let Some(certificate) = controller.certificate(state) {
+        if let Some(certificate) = controller.certificate_with_response(state, response_time, 0.0) {
             let margin = certificate.margin();
             if margin > 0.0 {
                 let ego = Car { x: 0.0, v: ve };
@@ -193,15 +209,17 @@ pub fn run_episode(
     trace: Option<&mut Trace>,
 ) -> Option<Outcome> {
     let mut rng = StdRng::seed_from_u64(episode.seed);
-    let config = Config::default();
+    let config = episode.config;
     let mut controller = Controller::new(bytes, config);
     let model = HumanModel::of(table)?;
     let gap_max = table.axis_bounds(0)?.max;
+    let response_time = episode.actuator.dead_time + episode.actuator.lag;
     let ([mut leader, mut ego, mut follower], initial_margin) =
-        sample_start(&controller, &model, gap_max, &mut rng)?;
+        sample_start(&controller, &model, gap_max, response_time, &mut rng)?;
     let initial = state_of([leader, ego, follower]);
     let mut humans = Humans::new(table, episode.leader, episode.follower, &mut rng)?;
     let mut sensors = Sensors::new(episode.sensors);
+    let mut actuator = Actuator::new(episode.actuator);
     let h = config.period_us as f32 * 1e-6;
     let steps = (episode.seconds / h).round() as u64;
     let (mut min_front, mut min_rear) = (f32::INFINITY, f32::INFINITY);
@@ -231,7 +249,13 @@ pub fn run_episode(
         }
         let inputs = sensors.measure(now_us, [leader, ego, follower], &mut rng);
         let command = controller.step(&inputs);
-        let certificate = controller.certificate(state_of([leader, ego, follower]));
+        // The certificate at the true state, with what the actuator has yet to do.
+        let (response_time, response_acceleration) = actuator.response(t, model.band_min);
+        let certificate = controller.certificate_with_response(
+            state_of([leader, ego, follower]),
+            response_time,
+            response_acceleration,
+        );
         let m = certificate.map_or(f32::NEG_INFINITY, |c| c.margin());
         min_margin = min_margin.min(m);
         if let Some(c) = certificate {
@@ -257,31 +281,44 @@ pub fn run_episode(
             max_jerk = max_jerk.max((a_ego - prev).abs() / h);
         }
         last_accel = Some(a_ego);
+        actuator.request(t, a_ego);
         let (a_leader, a_follower) = humans.accelerations(t, h, [leader, ego, follower], &mut rng);
-        let front = lowest_gap(leader, a_leader, ego, a_ego, h);
-        let rear = lowest_gap(ego, a_ego, follower, a_follower, h);
-        min_front = min_front.min(front);
-        min_rear = min_rear.min(rear);
+        // The period in sub-steps: the ego's acceleration follows the actuator within it.
+        let before = [leader, ego, follower];
+        let mut collided = false;
+        for j in 0..SUB_STEPS {
+            let dt = h / SUB_STEPS as f32;
+            let a_actual = actuator.advance(t + j as f32 * dt, dt);
+            let front = lowest_gap(leader, a_leader, ego, a_actual, dt);
+            let rear = lowest_gap(ego, a_actual, follower, a_follower, dt);
+            min_front = min_front.min(front);
+            min_rear = min_rear.min(rear);
+            if front <= 0.0 || rear <= 0.0 {
+                collided = true;
+                break;
+            }
+            leader.advance(a_leader, dt);
+            ego.advance(a_actual, dt);
+            follower.advance(a_follower, dt);
+        }
         if let Some(tr) = trace.as_deref_mut() {
+            let [l, e, f] = before;
             tr.push(TracePoint {
                 t,
-                gap_leader: leader.x - ego.x,
-                gap_follower: ego.x - follower.x,
-                speeds: [leader.v, ego.v, follower.v],
+                gap_leader: l.x - e.x,
+                gap_follower: e.x - f.x,
+                speeds: [l.v, e.v, f.v],
                 command: a_ego,
                 mode: command.mode.into(),
                 margin: m,
+                firmware_margin: command.margin.unwrap_or(f32::NAN),
             });
         }
-        if front <= 0.0 || rear <= 0.0 {
+        if collided {
             collision_time = Some(t);
             break;
         }
-        let moving = leader.v > 0.0;
-        leader.advance(a_leader, h);
-        ego.advance(a_ego, h);
-        follower.advance(a_follower, h);
-        if moving && leader.v <= 0.0 {
+        if before[0].v > 0.0 && leader.v <= 0.0 {
             leader_stops += 1;
         }
     }

@@ -61,6 +61,8 @@ pub struct HumanModel {
     pub time_gap: (f32, f32),
     /// Every speed lies in `[0, max_speed]`, m/s.
     pub max_speed: f32,
+    /// The ego's band's lowest command, `-beta`, m/s^2.
+    pub band_min: f32,
 }
 
 impl HumanModel {
@@ -68,13 +70,14 @@ impl HumanModel {
     pub fn of(table: &Table<'_>) -> Option<HumanModel> {
         match table.header().game {
             Game::ThreeCarSplit {
+                ego,
                 leader,
                 follower_clip,
                 idm,
                 time_gap,
                 max_speed,
-                ..
             } => Some(HumanModel {
+                band_min: ego.min,
                 leader: (leader.min, leader.max),
                 follower: (follower_clip.min, follower_clip.max),
                 idm,

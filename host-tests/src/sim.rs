@@ -71,6 +71,113 @@ pub fn humans_make_a_collision_unavoidable(
     follower_stop >= leader_stop
 }
 
+/// The ego's actuator: a dead time, then a first-order lag, between the firmware's command and
+/// the car's acceleration.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ActuatorModel {
+    /// Dead time, s.
+    pub dead_time: f32,
+    /// First-order lag time constant, s (0: none).
+    pub lag: f32,
+}
+
+impl ActuatorModel {
+    /// The acceleration is the command, at once.
+    pub const IDEAL: ActuatorModel = ActuatorModel {
+        dead_time: 0.0,
+        lag: 0.0,
+    };
+}
+
+/// The actuator's state: commands in the dead-time pipeline, the one in force, and the
+/// acceleration the lag has reached.
+#[derive(Debug, Clone)]
+pub struct Actuator {
+    model: ActuatorModel,
+    pipeline: std::collections::VecDeque<(f32, f32)>,
+    in_force: f32,
+    acceleration: f32,
+}
+
+impl Actuator {
+    /// At rest: no command in force, zero acceleration.
+    pub fn new(model: ActuatorModel) -> Self {
+        Actuator {
+            model,
+            pipeline: std::collections::VecDeque::new(),
+            in_force: 0.0,
+            acceleration: 0.0,
+        }
+    }
+
+    /// The firmware issues `command` at time `t`; it takes force at `t + dead_time`.
+    pub fn request(&mut self, t: f32, command: f32) {
+        self.pipeline.push_back((t + self.model.dead_time, command));
+    }
+
+    /// Moves from `t` to `t + dt`: takes the commands due by `t` into force, then lets the lag
+    /// act for `dt`. Returns the mean acceleration over the interval (the exact integral of the
+    /// lag's exponential, divided by `dt`).
+    pub fn advance(&mut self, t: f32, dt: f32) -> f32 {
+        while self.pipeline.front().is_some_and(|(at, _)| *at <= t + 1e-6) {
+            if let Some((_, c)) = self.pipeline.pop_front() {
+                self.in_force = c;
+            }
+        }
+        let c = self.in_force;
+        if self.model.lag <= 0.0 {
+            self.acceleration = c;
+            return c;
+        }
+        let decay = (-dt / self.model.lag).exp();
+        let start = self.acceleration;
+        self.acceleration = c + (start - c) * decay;
+        c + (start - c) * self.model.lag * (1.0 - decay) / dt
+    }
+
+    /// The acceleration the lag has reached.
+    pub fn acceleration(&self) -> f32 {
+        self.acceleration
+    }
+
+    /// The response the certificate allows for, at `now`, if braking at `braking` (the band's
+    /// lowest command) is commanded from now on: `(response_time, response_acceleration)`,
+    /// such that the acceleration is at most `response_acceleration` until `response_time`
+    /// from now and the braking then acts in full (a first-order lag's speed never exceeds
+    /// that of a step delayed by its time constant, see `table_format::front`). Braking
+    /// already in the pipeline counts from when it takes force.
+    pub fn response(&self, now: f32, braking: f32) -> (f32, f32) {
+        // The trailing run of braking commands in the pipeline, and whether the one in force
+        // is braking too.
+        let run = self
+            .pipeline
+            .iter()
+            .rev()
+            .take_while(|(_, c)| *c <= braking)
+            .count();
+        let before_run = self.pipeline.len() - run;
+        let all_braking = before_run == 0 && self.in_force <= braking;
+        let braking_takes_force = if all_braking {
+            now
+        } else if run > 0 {
+            self.pipeline
+                .get(before_run)
+                .map_or(now + self.model.dead_time, |(at, _)| *at)
+        } else {
+            now + self.model.dead_time
+        };
+        let pending = self.pipeline.iter().take(before_run).map(|(_, c)| *c).fold(
+            self.acceleration
+                .max(if all_braking { braking } else { self.in_force }),
+            f32::max,
+        );
+        (
+            (braking_takes_force - now).max(0.0) + self.model.lag,
+            pending,
+        )
+    }
+}
+
 /// Sensor imperfections.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct SensorModel {
@@ -165,6 +272,43 @@ impl Sensors {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_actuator_waits_out_its_dead_time_then_lags() {
+        let mut a = Actuator::new(ActuatorModel {
+            dead_time: 0.1,
+            lag: 0.3,
+        });
+        a.request(0.0, -3.0);
+        // Nothing for 100 ms.
+        for k in 0..10 {
+            assert_eq!(a.advance(k as f32 * 0.01, 0.01), 0.0);
+        }
+        // Then an exponential approach: after one time constant, 1 - 1/e of the way.
+        let mut t = 0.1;
+        while t < 0.4 - 1e-4 {
+            a.advance(t, 0.01);
+            t += 0.01;
+        }
+        assert!(
+            (a.acceleration() + 3.0 * (1.0 - (-1.0f32).exp())).abs() < 0.02,
+            "{}",
+            a.acceleration()
+        );
+        // Braking in force: a lag's time constant more, from the acceleration reached.
+        let (time, accel) = a.response(0.4, -3.0);
+        assert!(
+            (time - 0.3).abs() < 1e-6 && accel == a.acceleration(),
+            "{time} {accel}"
+        );
+        // A command to accelerate in the pipeline: the braking acts after it, a dead time on.
+        a.request(0.4, 1.0);
+        let (time, accel) = a.response(0.4, -3.0);
+        assert!((time - 0.4).abs() < 1e-6 && accel == 1.0, "{time} {accel}");
+        a.request(0.42, -3.0);
+        let (time, accel) = a.response(0.42, -3.0);
+        assert!((time - 0.4).abs() < 1e-5 && accel == 1.0, "{time} {accel}");
+    }
 
     #[test]
     fn a_follower_that_cannot_stop_short_of_the_leader_makes_a_collision_unavoidable() {

@@ -273,6 +273,10 @@ fn main() -> ! {
         "stack used by the control loop (painted, 8 KiB window): {} bytes",
         stack_bytes
     );
+    hprintln!(
+        "controller state (its command history, event log and table view): {} bytes",
+        core::mem::size_of::<Controller<'static>>()
+    );
     let ok = min_front > 0.0
         && min_rear > 0.0
         && nominal > 0
