@@ -72,13 +72,17 @@
 //! value's plateau is -0.99 m, README).
 //!
 //! # Faults and the minimum-risk manoeuvre
-//! A table that does not parse or is not a split table, a measurement the sensor flags
-//! invalid, a non-finite or physically impossible value, a measurement older than
-//! `stale_periods` periods, or a clock that went backwards: each is a [`Fault`], reported in
-//! the command and logged, and the command is the minimum-risk manoeuvre: a controlled
-//! deceleration of `mrm_deceleration` (default 2 m/s^2, at most 4), softened to
-//! `mrm_gentle_deceleration` when the follower is known, close and closing, so as not to provoke
-//! a rear-end collision. Clamped into the band, like every other command.
+//! A table that does not parse, is not a split table or whose band does not fit the vehicle's
+//! [`Envelope`], a configuration outside its limits, a measurement the sensor flags invalid, a
+//! non-finite or physically impossible value, a measurement older than `stale_periods`
+//! periods, or a clock that jumps (backwards, or forwards by more than
+//! [`MAX_STEP_GAP_PERIODS`] periods): each is a [`Fault`], reported in the command and logged,
+//! and the command is the minimum-risk manoeuvre: a controlled deceleration of
+//! `mrm_deceleration` (default 2 m/s^2, at most 4), softened to `mrm_gentle_deceleration` when
+//! the follower is known, close and closing, so as not to provoke a rear-end collision. A clock
+//! jump is never latched: the new time is adopted, the command history forgotten, and the
+//! manoeuvre ends after [`CLOCK_RECOVERY_PERIODS`] good periods. Every command, in every mode,
+//! is clamped into the envelope, and (with a table) into the band.
 //!
 //! # What is assumed
 //! The humans keep to the table's model (the leader brakes at most `-leader.min`, the follower
@@ -133,6 +137,54 @@ pub struct Config {
     /// The time constant of the actuator's first-order lag the certificate covers,
     /// microseconds (at most [`MAX_ACTUATOR_LAG_US`]): `a' = (command - a) / lag`.
     pub actuator_lag_us: u32,
+    /// The vehicle's own limits, whatever the table says.
+    pub envelope: Envelope,
+}
+
+/// The vehicle's envelope: what the firmware may command and the speeds it may certify, set by
+/// the integrator for the car, not by the table. Every command, in every mode, is clamped into
+/// it, and a table whose band does not fit inside it is refused at load
+/// ([`Fault::TableOutsideEnvelope`]): clamping the table's braking level instead would void
+/// the certificate, which assumes the ego brakes at `beta` when told to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Envelope {
+    /// The hardest braking the firmware may command, m/s^2 (negative).
+    pub min_acceleration: f32,
+    /// The largest acceleration the firmware may command, m/s^2 (positive).
+    pub max_acceleration: f32,
+    /// Ego speeds above this are outside the certified domain, whatever the table covers, m/s.
+    pub max_speed: f32,
+}
+
+impl Default for Envelope {
+    /// ISO 15622's limits for an ACC at speed (-3.5 and 2 m/s^2), up to 35 m/s.
+    fn default() -> Self {
+        Envelope {
+            min_acceleration: ISO_15622_LIMITS.0,
+            max_acceleration: ISO_15622_LIMITS.1,
+            max_speed: 35.0,
+        }
+    }
+}
+
+impl Envelope {
+    fn is_valid(&self) -> bool {
+        math::is_finite(self.min_acceleration)
+            && math::is_finite(self.max_acceleration)
+            && math::is_finite(self.max_speed)
+            && self.min_acceleration < 0.0
+            && self.max_acceleration > 0.0
+            && self.max_speed > 0.0
+    }
+
+    /// `a` within the envelope (NaN becomes the hardest braking).
+    fn clamp(&self, a: f32) -> f32 {
+        if a.is_nan() {
+            return self.min_acceleration;
+        }
+        math::clamp(a, self.min_acceleration, self.max_acceleration)
+    }
 }
 
 impl Config {
@@ -160,6 +212,7 @@ impl Config {
             && (1..=MAX_STALE_PERIODS).contains(&self.stale_periods)
             && self.actuator_dead_time_us <= MAX_DEAD_TIME_US
             && self.actuator_lag_us <= MAX_ACTUATOR_LAG_US
+            && self.envelope.is_valid()
     }
 }
 
@@ -192,9 +245,17 @@ impl Default for Config {
             follower_close_gap: 15.0,
             actuator_dead_time_us: MAX_DEAD_TIME_US,
             actuator_lag_us: MAX_ACTUATOR_LAG_US,
+            envelope: Envelope::default(),
         }
     }
 }
+
+/// A gap between two steps longer than this many periods is a clock jump.
+pub const MAX_STEP_GAP_PERIODS: u64 = 10;
+/// After a clock jump, the minimum-risk manoeuvre lasts for the step of the jump and this many
+/// good periods after it; the command history is forgotten (the actuator's state is then
+/// assumed unknown until it is known again, see the module docs).
+pub const CLOCK_RECOVERY_PERIODS: u32 = 5;
 
 /// e^-5: what a first-order lag still passes on, after five time constants, of a command older
 /// than that.
@@ -250,18 +311,25 @@ pub enum Fault {
         /// The axis.
         axis: u8,
     },
-    /// The clock went backwards.
+    /// The clock went backwards. Recovers after [`CLOCK_RECOVERY_PERIODS`] good periods.
     ClockWentBackwards,
     /// The configuration is outside the limits the certificate is argued for (period, stale
-    /// limit, dead time or lag above their limits, a negative or non-finite value).
+    /// limit, dead time or lag above their limits, a negative or non-finite value, an envelope
+    /// without braking or acceleration).
     InvalidConfig,
+    /// The table's band of ego accelerations does not fit inside the vehicle's envelope.
+    TableOutsideEnvelope,
+    /// The clock jumped forward by more than [`MAX_STEP_GAP_PERIODS`] periods since the last
+    /// step. Recovers after [`CLOCK_RECOVERY_PERIODS`] good periods.
+    ClockJumped,
 }
 
 /// One control step's output.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Command {
-    /// Requested acceleration, m/s^2 (negative: braking). Always finite, always in the band.
+    /// Requested acceleration, m/s^2 (negative: braking). Always finite, always in the
+    /// vehicle's envelope, and in the table's band when a table was accepted.
     pub acceleration: f32,
     /// Which law produced it.
     pub mode: Mode,
@@ -329,6 +397,8 @@ struct Model {
     /// The leader's hardest braking, positive.
     leader_braking: f32,
     max_speed: f32,
+    /// The fastest ego the controller certifies: the table's and the envelope's limit.
+    max_ego_speed: f32,
     /// The rear grid's lowest and highest gap, m.
     gap_min: f32,
     gap_max: f32,
@@ -355,7 +425,10 @@ pub struct Controller<'t> {
     table: Result<(Table<'t>, Model), Fault>,
     config: Config,
     mode: Mode,
-    last_now_us: u64,
+    /// The time of the last step (`None` before the first).
+    last_now_us: Option<u64>,
+    /// Periods of the minimum-risk manoeuvre left after a clock jump, and its fault.
+    clock_recovery: (u32, Fault),
     margin_lost: bool,
     events: Deque<Event, 32>,
     issued: IssuedCommands,
@@ -416,6 +489,12 @@ impl IssuedCommands {
         }
     }
 
+    /// Forgets every command: what the actuator was told is unknown from here on.
+    fn forget(&mut self) {
+        self.window.clear();
+        self.first_at_us = None;
+    }
+
     /// An upper bound of every command issued since `span_us` before `at_us`: the window's
     /// largest, or `unknown` if the first command recorded is later than that (before it, what
     /// the actuator did is not known).
@@ -435,7 +514,7 @@ impl IssuedCommands {
     }
 }
 
-fn model_of(table: &Table<'_>) -> Result<Model, Fault> {
+fn model_of(table: &Table<'_>, envelope: &Envelope) -> Result<Model, Fault> {
     let header = table.header();
     let Game::ThreeCarSplit {
         ego,
@@ -453,6 +532,9 @@ fn model_of(table: &Table<'_>) -> Result<Model, Fault> {
     ) else {
         return Err(Fault::WrongGame);
     };
+    if ego.min < envelope.min_acceleration || ego.max > envelope.max_acceleration {
+        return Err(Fault::TableOutsideEnvelope);
+    }
     // The rear table must cover every speed the game allows: the domain check below relies on
     // it.
     let covers = |b: Bounds| b.min <= 0.0 && b.max >= max_speed;
@@ -473,6 +555,7 @@ fn model_of(table: &Table<'_>) -> Result<Model, Fault> {
         ego,
         leader_braking: -leader.min,
         max_speed,
+        max_ego_speed: math::min(max_speed, envelope.max_speed),
         gap_min: gaps.min,
         gap_max: gaps.max,
         beyond_grid,
@@ -488,7 +571,7 @@ impl<'t> Controller<'t> {
         let table = if config.is_valid() {
             Table::parse(table_bytes)
                 .map_err(Fault::Table)
-                .and_then(|t| model_of(&t).map(|m| (t, m)))
+                .and_then(|t| model_of(&t, &config.envelope).map(|m| (t, m)))
         } else {
             Err(Fault::InvalidConfig)
         };
@@ -503,7 +586,8 @@ impl<'t> Controller<'t> {
             table,
             config,
             mode: Mode::MinimumRisk,
-            last_now_us: 0,
+            last_now_us: None,
+            clock_recovery: (0, Fault::ClockJumped),
             margin_lost: false,
             events: Deque::new(),
             issued: IssuedCommands {
@@ -593,32 +677,54 @@ impl<'t> Controller<'t> {
     /// instructions per step) are measured on.
     #[inline(never)]
     pub fn step(&mut self, inputs: &Inputs) -> Command {
-        let command = self.decide(inputs);
+        let now = inputs.now_us;
+        // The clock: a step earlier than the last, or more than MAX_STEP_GAP_PERIODS periods
+        // after it, is a jump. The new time is adopted (so a jump never latches), the command
+        // history is forgotten (its time stamps belong to the old time line), and the
+        // minimum-risk manoeuvre lasts CLOCK_RECOVERY_PERIODS good periods more.
+        let max_gap = MAX_STEP_GAP_PERIODS * u64::from(self.config.period_us);
+        let jump = match self.last_now_us {
+            Some(last) if now < last => Some(Fault::ClockWentBackwards),
+            Some(last) if now - last > max_gap => Some(Fault::ClockJumped),
+            _ => None,
+        };
+        self.last_now_us = Some(now);
+        let command = if let Some(fault) = jump {
+            self.issued.forget();
+            self.braking_since_us = None;
+            self.clock_recovery = (CLOCK_RECOVERY_PERIODS, fault);
+            self.minimum_risk(inputs, fault)
+        } else if self.clock_recovery.0 > 0 {
+            self.clock_recovery.0 -= 1;
+            self.minimum_risk(inputs, self.clock_recovery.1)
+        } else {
+            self.decide(inputs)
+        };
+        let command = Command {
+            acceleration: self.config.envelope.clamp(command.acceleration),
+            ..command
+        };
         if command.mode != self.mode {
             self.log(Event::ModeChanged {
-                at_us: inputs.now_us,
+                at_us: now,
                 to: command.mode,
                 fault: command.fault,
             });
             log_info!("mode {} (fault {})", command.mode, command.fault);
         }
         self.mode = command.mode;
-        if inputs.now_us >= self.last_now_us {
-            self.last_now_us = inputs.now_us;
-            // Every command goes to the actuator: the look-ahead of later steps must know it.
-            let memory = self.memory_us();
-            self.issued
-                .push(inputs.now_us, command.acceleration, memory);
-            let at_beta = self
-                .table
-                .as_ref()
-                .is_ok_and(|(_, m)| command.acceleration <= m.ego.min);
-            self.braking_since_us = match (at_beta, self.braking_since_us) {
-                (true, Some(since)) => Some(since),
-                (true, None) => Some(inputs.now_us),
-                (false, _) => None,
-            };
-        }
+        // Every command goes to the actuator: the look-ahead of later steps must know it.
+        let memory = self.memory_us();
+        self.issued.push(now, command.acceleration, memory);
+        let at_beta = self
+            .table
+            .as_ref()
+            .is_ok_and(|(_, m)| command.acceleration <= m.ego.min);
+        self.braking_since_us = match (at_beta, self.braking_since_us) {
+            (true, Some(since)) => Some(since),
+            (true, None) => Some(now),
+            (false, _) => None,
+        };
         command
     }
 
@@ -682,9 +788,6 @@ impl<'t> Controller<'t> {
             Err(f) => return self.minimum_risk(inputs, *f),
         };
         let now = inputs.now_us;
-        if now < self.last_now_us {
-            return self.minimum_risk(inputs, Fault::ClockWentBackwards);
-        }
         let leader = match self.check_track(
             &inputs.leader,
             now,
@@ -844,7 +947,7 @@ fn rear_value(
     if !(follower_speed >= 0.0 && follower_speed <= model.max_speed) {
         return Err(Fault::OutsideDomain { axis: 1 });
     }
-    if !(ego_speed >= 0.0 && ego_speed <= model.max_speed) {
+    if !(ego_speed >= 0.0 && ego_speed <= model.max_ego_speed) {
         return Err(Fault::OutsideDomain { axis: 2 });
     }
     if gap_follower > model.gap_max {

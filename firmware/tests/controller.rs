@@ -496,3 +496,94 @@ fn a_configuration_outside_the_certificates_limits_is_refused() {
     }
     assert!(Config::default().is_valid());
 }
+
+/// The inputs of `state` measured at `now_us`.
+fn at(state: Inputs, now_us: u64) -> Inputs {
+    let mut i = state;
+    i.now_us = now_us;
+    i.leader.timestamp_us = now_us;
+    i.follower.timestamp_us = now_us;
+    i.ego_speed.timestamp_us = now_us;
+    i
+}
+
+#[test]
+fn a_clock_jump_is_a_fault_that_recovers_never_latches() {
+    let state = inputs((60.0, 0.0), (40.0, 0.0), 25.0);
+    for jump in [3_600_000_000u64, u64::MAX - NOW - 1_000_000] {
+        let mut c = controller();
+        let mut now = NOW;
+        assert_eq!(c.step(&at(state, now)).mode, Mode::Nominal);
+        // Forwards by an hour (or to the end of time): a fault, then CLOCK_RECOVERY_PERIODS
+        // good periods of the minimum-risk manoeuvre, then the nominal law again.
+        now += jump;
+        assert_eq!(fault_of(c.step(&at(state, now))), Fault::ClockJumped);
+        for _ in 0..firmware::controller::CLOCK_RECOVERY_PERIODS {
+            now += 20_000;
+            assert_eq!(fault_of(c.step(&at(state, now))), Fault::ClockJumped);
+        }
+        now += 20_000;
+        let back = c.step(&at(state, now));
+        assert_ne!(back.mode, Mode::MinimumRisk, "{back:?}");
+        // And backwards, to where it was: the same.
+        now = NOW + 40_000;
+        assert_eq!(fault_of(c.step(&at(state, now))), Fault::ClockWentBackwards);
+        let mut last = None;
+        for _ in 0..=firmware::controller::CLOCK_RECOVERY_PERIODS {
+            now += 20_000;
+            last = Some(c.step(&at(state, now)));
+        }
+        assert_ne!(last.unwrap().mode, Mode::MinimumRisk, "{last:?}");
+    }
+}
+
+#[test]
+fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
+    use firmware::controller::Envelope;
+    // A vehicle that may brake at only 3 m/s^2: the table's 3.5 does not fit, and clamping it
+    // would void the certificate, so the table is refused.
+    let soft = Config {
+        envelope: Envelope {
+            min_acceleration: -3.0,
+            ..Envelope::default()
+        },
+        ..ideal()
+    };
+    let mut c = Controller::new(DEFAULT_TABLE, soft);
+    assert!(c.table().is_none());
+    let cmd = c.step(&inputs((60.0, 0.0), (40.0, 0.0), 25.0));
+    assert_eq!(fault_of(cmd), Fault::TableOutsideEnvelope);
+    // A harsh minimum-risk deceleration (4 m/s^2) is held to the envelope too, table or not.
+    let harsh = Config {
+        mrm_deceleration: 4.0,
+        envelope: Envelope {
+            min_acceleration: -3.0,
+            ..Envelope::default()
+        },
+        ..ideal()
+    };
+    let mut c = Controller::new(DEFAULT_TABLE, harsh);
+    assert_eq!(
+        c.step(&inputs((60.0, 0.0), (40.0, 0.0), 25.0)).acceleration,
+        -3.0
+    );
+    // The envelope's speed limit narrows the certified domain below the table's 35 m/s.
+    let slow = Config {
+        envelope: Envelope {
+            max_speed: 20.0,
+            ..Envelope::default()
+        },
+        ..ideal()
+    };
+    let cmd = Controller::new(DEFAULT_TABLE, slow).step(&inputs((60.0, 0.0), (40.0, 0.0), 25.0));
+    assert_eq!(cmd.fault, Some(Fault::OutsideDomain { axis: 2 }));
+    // An envelope that cannot brake is not a configuration.
+    let bad = Config {
+        envelope: Envelope {
+            min_acceleration: 0.0,
+            ..Envelope::default()
+        },
+        ..ideal()
+    };
+    assert!(!bad.is_valid());
+}

@@ -206,7 +206,8 @@ impl<'a> Table<'a> {
         if self.header.quantization.bits == 8 {
             self.values.get(node).map(|&b| u16::from(b))
         } else {
-            le_u16(self.values, node * 2)
+            // (`checked_mul`: a huge index must be "past the last node", not an overflow.)
+            node.checked_mul(2).and_then(|at| le_u16(self.values, at))
         }
     }
 

@@ -573,3 +573,17 @@ fn bad_breakpoints_are_refused_by_writer_and_reader() {
     broken[block + 12..block + 16].copy_from_slice(&f32::NAN.to_le_bytes());
     assert!(Table::parse(&resign(broken)).is_err());
 }
+
+#[test]
+fn node_indices_past_the_end_are_none_not_an_overflow() {
+    // 16-bit values: the byte offset of a node is twice its index, which overflows for huge
+    // indices (a panic in debug builds, the wrong node in release before the fix).
+    let bytes = small();
+    let t = Table::parse(&bytes).unwrap();
+    let n = t.node_count();
+    assert!(t.value_at_node(n - 1).is_some());
+    for node in [n, usize::MAX / 2 + 1, usize::MAX - 1, usize::MAX] {
+        assert_eq!(t.value_at_node(node), None, "{node}");
+        assert_eq!(t.action_at_node(node), None, "{node}");
+    }
+}

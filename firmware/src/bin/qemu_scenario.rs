@@ -49,7 +49,7 @@ fn panic(_: &PanicInfo) -> ! {
 }
 
 const PAINT: u32 = 0xDEAD_BEEF;
-const PAINT_WORDS: usize = 2048; // 8 KiB below the caller's stack pointer
+const PAINT_WORDS: usize = 2048; // 8 KiB, up to the caller's stack pointer
 
 /// One vehicle: position of its front bumper (m) and speed (m/s).
 #[derive(Clone, Copy)]
@@ -158,7 +158,9 @@ fn main() -> ! {
 
     // Paint the stack below us.
     let sp = cortex_m::register::msp::read() as usize;
-    let bottom = (sp - 64 - PAINT_WORDS * 4) & !3;
+    // The window ends at the stack pointer itself: nothing of main's frame lies below it (Arm
+    // has no red zone), and every byte the control step pushes is counted.
+    let bottom = (sp - PAINT_WORDS * 4) & !3;
     for i in 0..PAINT_WORDS {
         unsafe { core::ptr::write_volatile((bottom + 4 * i) as *mut u32, PAINT) };
     }
