@@ -4,13 +4,28 @@
 //! # Frame layout (standard 11-bit identifiers, little-endian fields)
 //! | id | name | bytes |
 //! |---|---|---|
-//! | `0x120` | front track (leader) | 0-1 gap `u16` 0.01 m (`0xFFFF`: no vehicle), 2-3 relative speed `i16` 0.01 m/s (`v_leader - v_ego`), 4 flags (bit 0: valid), 5 rolling counter |
+//! | `0x120` | front track (leader) | 0-1 gap `u16` 0.01 m (`0xFFFF`: no vehicle), 2-3 relative speed `i16` 0.01 m/s (`v_leader - v_ego`), 4 flags (bit 0: valid), 5 age `u8` ms, 6 counter, 7 CRC |
 //! | `0x121` | rear track (follower) | as `0x120`, relative speed `v_ego - v_follower` |
-//! | `0x130` | ego speed | 0-1 speed `u16` 0.01 m/s, 2 flags (bit 0: valid), 3 rolling counter |
-//! | `0x200` | acceleration request (sent) | 0-1 acceleration `i16` 0.001 m/s^2, 2 mode (0 nominal, 1 override, 2 minimum risk, 3 uncertified), 3 rolling counter |
+//! | `0x130` | ego speed | 0-1 speed `u16` 0.01 m/s, 2 flags (bit 0: valid), 3 age `u8` ms, 4 counter, 5 CRC |
+//! | `0x200` | acceleration request (sent) | 0-1 acceleration `i16` 0.001 m/s^2, 2 mode (0 nominal, 1 override, 2 minimum risk, 3 uncertified), 3 counter, 4 CRC |
 //!
-//! A received frame is time-stamped with the clock value of the `read` that drained it; a frame
-//! with a wrong length is counted and ignored, so the old measurement ages until it is stale.
+//! # End-to-end protection (after AUTOSAR E2E profile 1)
+//! - **CRC**: CRC-8 SAE J1850 (polynomial 0x1D, initial value 0xFF, final XOR 0xFF, the
+//!   `crc` crate's `CRC_8_SAE_J1850`) over the identifier (two bytes, little-endian) and every
+//!   payload byte before the CRC. A frame whose CRC does not match is *corrupted*.
+//! - **Counter**: each sender increments its rolling counter by one per frame, wrapping at
+//!   255. Per identifier the receiver expects the next one: the same counter again is a
+//!   *repeated* frame; a jump of 2 to [`MAX_COUNTER_JUMP`] means frames were *lost* (counted,
+//!   the frame is used); a larger jump is *out of sequence* (the frame is not used, the
+//!   receiver resynchronises on it).
+//! - **Age**: the sender states how old its measurement is when it sends it (ms, up to
+//!   255); the measurement's time stamp is the reception time less that age, so the sensor's
+//!   latency is seen by the controller's staleness check and its look-ahead.
+//!
+//! A frame that is malformed (wrong length), corrupted, repeated or out of sequence is counted
+//! ([`CanBus::e2e`]) and not used: the measurement it would have refreshed keeps its old time
+//! stamp and ages until the controller's stale limit makes it a fault (the minimum-risk
+//! manoeuvre).
 
 use embedded_can::{Frame, Id, StandardId};
 
@@ -48,7 +63,9 @@ pub struct CanBus<C> {
     can: C,
     inputs: Inputs,
     counter: u8,
-    malformed: u32,
+    counts: E2eCounts,
+    /// The last counter accepted per identifier: front, rear, ego speed.
+    last_counters: [Option<u8>; 3],
 }
 
 fn never(now_us: u64) -> Inputs {
@@ -76,30 +93,80 @@ fn u16_at(data: &[u8], at: usize) -> Option<u16> {
     Some(u16::from_le_bytes([*data.get(at)?, *data.get(at + 1)?]))
 }
 
-/// Decodes a track frame's payload.
-pub fn decode_track(data: &[u8]) -> Option<(Track, bool)> {
-    if data.len() != 6 {
-        return None;
+/// The largest counter jump that still counts as frames lost, not out of sequence.
+pub const MAX_COUNTER_JUMP: u8 = 3;
+
+const CRC8: crc::Crc<u8> = crc::Crc::<u8>::new(&crc::CRC_8_SAE_J1850);
+
+/// The CRC of a frame with identifier `id` over `bytes` (every payload byte before the CRC).
+pub fn frame_crc(id: u16, bytes: &[u8]) -> u8 {
+    let mut digest = CRC8.digest();
+    digest.update(&id.to_le_bytes());
+    digest.update(bytes);
+    digest.finalize()
+}
+
+/// Why a received payload was not decoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FrameError {
+    /// Not the frame's length.
+    Length,
+    /// The CRC does not match.
+    Checksum,
+}
+
+/// A decoded sensor frame: the value, the sender's validity flag, the measurement's age when
+/// sent (ms) and the rolling counter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Received<T> {
+    /// The value.
+    pub value: T,
+    /// The sender's validity flag.
+    pub valid: bool,
+    /// How old the measurement was when it was sent, ms.
+    pub age_ms: u8,
+    /// The rolling counter.
+    pub counter: u8,
+}
+
+/// Checks length and CRC; returns the bytes before the CRC.
+fn checked(id: u16, data: &[u8], len: usize) -> Result<&[u8], FrameError> {
+    if data.len() != len {
+        return Err(FrameError::Length);
     }
-    let gap_raw = u16_at(data, 0)?;
-    let rel_raw = u16_at(data, 2)? as i16;
-    let valid = data.get(4)? & 1 == 1;
+    let (body, crc) = data.split_at(len - 1);
+    if crc.first() != Some(&frame_crc(id, body)) {
+        return Err(FrameError::Checksum);
+    }
+    Ok(body)
+}
+
+/// Decodes a track frame's payload (`id`: [`FRONT_TRACK_ID`] or [`REAR_TRACK_ID`]).
+pub fn decode_track(id: u16, data: &[u8]) -> Result<Received<Track>, FrameError> {
+    let body = checked(id, data, 8)?;
+    let field = |at| body.get(at).copied().ok_or(FrameError::Length);
+    let gap_raw = u16_at(body, 0).ok_or(FrameError::Length)?;
+    let rel_raw = i16::from_le_bytes([field(2)?, field(3)?]);
     let gap = if gap_raw == u16::MAX {
         f32::INFINITY
     } else {
         f32::from(gap_raw) * 0.01
     };
-    Some((
-        Track {
+    Ok(Received {
+        value: Track {
             gap,
             rel_speed: f32::from(rel_raw) * 0.01,
         },
-        valid,
-    ))
+        valid: field(4)? & 1 == 1,
+        age_ms: field(5)?,
+        counter: field(6)?,
+    })
 }
 
 /// Encodes a track (for simulations and tests of the other end).
-pub fn encode_track(track: &Track, valid: bool, counter: u8) -> [u8; 6] {
+pub fn encode_track(id: u16, track: &Track, valid: bool, age_ms: u8, counter: u8) -> [u8; 8] {
     let gap = if track.gap.is_infinite() && track.gap > 0.0 {
         u16::MAX
     } else {
@@ -108,19 +175,39 @@ pub fn encode_track(track: &Track, valid: bool, counter: u8) -> [u8; 6] {
     let rel = quantize_i16(track.rel_speed * 100.0);
     let [g0, g1] = gap.to_le_bytes();
     let [r0, r1] = rel.to_le_bytes();
-    [g0, g1, r0, r1, u8::from(valid), counter]
+    let body = [g0, g1, r0, r1, u8::from(valid), age_ms, counter];
+    let crc = frame_crc(id, &body);
+    [g0, g1, r0, r1, u8::from(valid), age_ms, counter, crc]
 }
 
 /// Decodes an ego-speed frame's payload.
-pub fn decode_ego_speed(data: &[u8]) -> Option<(f32, bool)> {
-    if data.len() != 4 {
-        return None;
-    }
-    Some((f32::from(u16_at(data, 0)?) * 0.01, data.get(2)? & 1 == 1))
+pub fn decode_ego_speed(data: &[u8]) -> Result<Received<f32>, FrameError> {
+    let body = checked(EGO_SPEED_ID, data, 6)?;
+    let field = |at| body.get(at).copied().ok_or(FrameError::Length);
+    Ok(Received {
+        value: f32::from(u16_at(body, 0).ok_or(FrameError::Length)?) * 0.01,
+        valid: field(2)? & 1 == 1,
+        age_ms: field(3)?,
+        counter: field(4)?,
+    })
+}
+
+/// Encodes an ego speed (for simulations and tests of the other end).
+pub fn encode_ego_speed(speed: f32, valid: bool, age_ms: u8, counter: u8) -> [u8; 6] {
+    let [s0, s1] = quantize_u16(speed * 100.0).to_le_bytes();
+    let body = [s0, s1, u8::from(valid), age_ms, counter];
+    [
+        s0,
+        s1,
+        u8::from(valid),
+        age_ms,
+        counter,
+        frame_crc(EGO_SPEED_ID, &body),
+    ]
 }
 
 /// Encodes an acceleration request's payload.
-pub fn encode_command(command: &Command, counter: u8) -> [u8; 4] {
+pub fn encode_command(command: &Command, counter: u8) -> [u8; 5] {
     let [a0, a1] = quantize_i16(command.acceleration * 1000.0).to_le_bytes();
     let mode = match command.mode {
         Mode::Nominal => 0,
@@ -128,7 +215,44 @@ pub fn encode_command(command: &Command, counter: u8) -> [u8; 4] {
         Mode::MinimumRisk => 2,
         Mode::Uncertified => 3,
     };
-    [a0, a1, mode, counter]
+    let body = [a0, a1, mode, counter];
+    [a0, a1, mode, counter, frame_crc(ACCEL_REQUEST_ID, &body)]
+}
+
+/// What the end-to-end checks refused or noticed so far.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct E2eCounts {
+    /// Frames of a wrong length.
+    pub malformed: u32,
+    /// Frames whose CRC did not match.
+    pub corrupted: u32,
+    /// Frames that repeated the last counter.
+    pub repeated: u32,
+    /// Frames missing between two accepted ones (counter jumps of 2 to `MAX_COUNTER_JUMP`).
+    pub lost: u32,
+    /// Frames whose counter jumped further (not used; the receiver resynchronised).
+    pub out_of_sequence: u32,
+}
+
+/// The counter check of one identifier: whether to use a frame with `counter`.
+fn sequence(last: &mut Option<u8>, counter: u8, counts: &mut E2eCounts) -> bool {
+    let Some(previous) = *last else {
+        *last = Some(counter);
+        return true;
+    };
+    let jump = counter.wrapping_sub(previous);
+    *last = Some(counter);
+    if jump == 0 {
+        counts.repeated = counts.repeated.saturating_add(1);
+        false
+    } else if jump <= MAX_COUNTER_JUMP {
+        counts.lost = counts.lost.saturating_add(u32::from(jump - 1));
+        true
+    } else {
+        counts.out_of_sequence = counts.out_of_sequence.saturating_add(1);
+        false
+    }
 }
 
 /// Rounds to the nearest `i16`, saturating; NaN becomes 0. The cast happens on a finite value
@@ -167,13 +291,19 @@ impl<C: embedded_can::nb::Can> CanBus<C> {
             can,
             inputs: never(0),
             counter: 0,
-            malformed: 0,
+            counts: E2eCounts::default(),
+            last_counters: [None; 3],
         }
     }
 
     /// Frames ignored for a wrong length so far.
     pub fn malformed_frames(&self) -> u32 {
-        self.malformed
+        self.counts.malformed
+    }
+
+    /// What the end-to-end checks refused or noticed so far.
+    pub fn e2e(&self) -> E2eCounts {
+        self.counts
     }
 
     /// Gives the bus back.
@@ -193,33 +323,56 @@ impl<C: embedded_can::nb::Can> CanBus<C> {
                 continue;
             };
             let data = frame.data();
-            match id.as_raw() {
-                FRONT_TRACK_ID | REAR_TRACK_ID => match decode_track(data) {
-                    Some((track, valid)) => {
-                        let m = Measurement {
-                            value: track,
-                            timestamp_us: now_us,
-                            valid,
-                        };
-                        if id.as_raw() == FRONT_TRACK_ID {
-                            self.inputs.leader = m;
-                        } else {
-                            self.inputs.follower = m;
-                        }
+            let raw = id.as_raw();
+            let slot = match raw {
+                FRONT_TRACK_ID => 0,
+                REAR_TRACK_ID => 1,
+                EGO_SPEED_ID => 2,
+                _ => continue,
+            };
+            let decoded = if raw == EGO_SPEED_ID {
+                decode_ego_speed(data).map(|r| (None, r.valid, r.age_ms, r.counter, r.value))
+            } else {
+                decode_track(raw, data).map(|r| (Some(r.value), r.valid, r.age_ms, r.counter, 0.0))
+            };
+            let (track, valid, age_ms, counter, speed) = match decoded {
+                Ok(d) => d,
+                Err(FrameError::Length) => {
+                    self.counts.malformed = self.counts.malformed.saturating_add(1);
+                    continue;
+                }
+                Err(FrameError::Checksum) => {
+                    self.counts.corrupted = self.counts.corrupted.saturating_add(1);
+                    continue;
+                }
+            };
+            let Some(last) = self.last_counters.get_mut(slot) else {
+                continue;
+            };
+            if !sequence(last, counter, &mut self.counts) {
+                continue;
+            }
+            let timestamp_us = now_us.saturating_sub(u64::from(age_ms) * 1000);
+            match track {
+                Some(value) => {
+                    let m = Measurement {
+                        value,
+                        timestamp_us,
+                        valid,
+                    };
+                    if raw == FRONT_TRACK_ID {
+                        self.inputs.leader = m;
+                    } else {
+                        self.inputs.follower = m;
                     }
-                    None => self.malformed = self.malformed.saturating_add(1),
-                },
-                EGO_SPEED_ID => match decode_ego_speed(data) {
-                    Some((speed, valid)) => {
-                        self.inputs.ego_speed = Measurement {
-                            value: speed,
-                            timestamp_us: now_us,
-                            valid,
-                        }
+                }
+                None => {
+                    self.inputs.ego_speed = Measurement {
+                        value: speed,
+                        timestamp_us,
+                        valid,
                     }
-                    None => self.malformed = self.malformed.saturating_add(1),
-                },
-                _ => {}
+                }
             }
         }
         Ok(())

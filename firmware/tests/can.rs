@@ -1,5 +1,6 @@
-//! The CAN driver against a mock bus: decoding, staleness through missing frames, malformed
-//! frames, and the request frame.
+//! The CAN driver against a mock bus: decoding, the sender's age in the time stamp, the
+//! end-to-end checks (CRC, rolling counter), staleness through missing frames, malformed frames,
+//! and the request frame.
 
 use std::collections::VecDeque;
 
@@ -84,31 +85,41 @@ fn push_all(bus: &mut CanBus<MockBus>, frames: Vec<MockFrame>) -> CanBus<MockBus
     CanBus::new(raw)
 }
 
+fn front(gap: f32, age_ms: u8, counter: u8) -> MockFrame {
+    let track = Track {
+        gap,
+        rel_speed: 0.0,
+    };
+    frame(
+        can::FRONT_TRACK_ID,
+        &can::encode_track(can::FRONT_TRACK_ID, &track, true, age_ms, counter),
+    )
+}
+
 fn healthy_frames() -> Vec<MockFrame> {
+    healthy_frames_counted(1)
+}
+
+fn healthy_frames_counted(counter: u8) -> Vec<MockFrame> {
     vec![
-        frame(
-            can::FRONT_TRACK_ID,
-            &can::encode_track(
-                &Track {
-                    gap: 60.0,
-                    rel_speed: 0.0,
-                },
-                true,
-                1,
-            ),
-        ),
+        front(60.0, 0, counter),
         frame(
             can::REAR_TRACK_ID,
             &can::encode_track(
+                can::REAR_TRACK_ID,
                 &Track {
                     gap: 40.0,
                     rel_speed: -0.5,
                 },
                 true,
-                1,
+                0,
+                counter,
             ),
         ),
-        frame(can::EGO_SPEED_ID, &[0xC4, 0x09, 1, 1]), // 25.00 m/s
+        frame(
+            can::EGO_SPEED_ID,
+            &can::encode_ego_speed(25.0, true, 0, counter),
+        ),
     ]
 }
 
@@ -126,32 +137,118 @@ fn frames_decode_into_inputs() {
 
 #[test]
 fn encoding_round_trips_and_saturates() {
+    let id = can::FRONT_TRACK_ID;
     for (gap, rel) in [(0.0f32, -12.34f32), (123.45, 7.5), (655.0, 0.0)] {
-        let (t, valid) = can::decode_track(&can::encode_track(
-            &Track {
-                gap,
-                rel_speed: rel,
-            },
-            true,
-            0,
-        ))
-        .unwrap();
-        assert!(valid);
-        assert!((t.gap - gap).abs() < 0.006 && (t.rel_speed - rel).abs() < 0.006);
+        let track = Track {
+            gap,
+            rel_speed: rel,
+        };
+        let r = can::decode_track(id, &can::encode_track(id, &track, true, 7, 9)).unwrap();
+        assert!(r.valid && r.age_ms == 7 && r.counter == 9);
+        assert!((r.value.gap - gap).abs() < 0.006 && (r.value.rel_speed - rel).abs() < 0.006);
     }
-    let (t, _) = can::decode_track(&can::encode_track(
+    let wild = Track {
+        gap: f32::INFINITY,
+        rel_speed: f32::NAN,
+    };
+    let r = can::decode_track(id, &can::encode_track(id, &wild, true, 0, 0)).unwrap();
+    assert!(r.value.gap.is_infinite());
+    assert_eq!(r.value.rel_speed, 0.0);
+    assert_eq!(can::decode_track(id, &[0; 5]), Err(can::FrameError::Length));
+    assert_eq!(can::decode_ego_speed(&[0; 8]), Err(can::FrameError::Length));
+    let speed = can::decode_ego_speed(&can::encode_ego_speed(25.0, true, 3, 4)).unwrap();
+    assert!((speed.value - 25.0).abs() < 0.006 && speed.age_ms == 3 && speed.counter == 4);
+}
+
+#[test]
+fn every_single_bit_flip_and_a_wrong_identifier_fail_the_crc() {
+    let id = can::FRONT_TRACK_ID;
+    let good = can::encode_track(
+        id,
         &Track {
-            gap: f32::INFINITY,
-            rel_speed: f32::NAN,
+            gap: 42.0,
+            rel_speed: -1.0,
         },
         true,
-        0,
-    ))
-    .unwrap();
-    assert!(t.gap.is_infinite());
-    assert_eq!(t.rel_speed, 0.0);
-    assert!(can::decode_track(&[0; 5]).is_none());
-    assert!(can::decode_ego_speed(&[0; 8]).is_none());
+        20,
+        17,
+    );
+    for byte in 0..good.len() {
+        for bit in 0..8 {
+            let mut bad = good;
+            bad[byte] ^= 1 << bit;
+            assert_eq!(
+                can::decode_track(id, &bad),
+                Err(can::FrameError::Checksum),
+                "byte {byte} bit {bit}"
+            );
+        }
+    }
+    // The rear track's frame on the front identifier (data identifier in the CRC).
+    assert_eq!(
+        can::decode_track(can::REAR_TRACK_ID, &good),
+        Err(can::FrameError::Checksum)
+    );
+    // The request frame's CRC, as the receiver will check it.
+    let cmd = firmware::Command {
+        acceleration: -1.25,
+        mode: Mode::Override,
+        fault: None,
+        margin: None,
+    };
+    let sent = can::encode_command(&cmd, 5);
+    assert_eq!(sent[4], can::frame_crc(can::ACCEL_REQUEST_ID, &sent[..4]));
+}
+
+#[test]
+fn the_senders_age_dates_the_measurement() {
+    let mut bus = CanBus::new(MockBus::default());
+    bus = push_all(&mut bus, vec![front(60.0, 80, 1)]);
+    let inputs = bus.read(1_000_000).unwrap();
+    assert_eq!(inputs.leader.timestamp_us, 1_000_000 - 80_000);
+}
+
+#[test]
+fn repeated_lost_corrupted_and_out_of_sequence_frames_are_counted_and_not_used() {
+    let mut bus = CanBus::new(MockBus::default());
+    let mut corrupted = front(10.0, 0, 2);
+    corrupted.data[0] ^= 0x10;
+    bus = push_all(
+        &mut bus,
+        vec![
+            front(60.0, 0, 1),  // accepted
+            front(10.0, 0, 1),  // repeated: not used
+            corrupted,          // corrupted: not used
+            front(59.0, 0, 3),  // one frame lost (2): used
+            front(10.0, 0, 40), // out of sequence: not used, resynchronised on 40
+            front(58.0, 0, 41), // in sequence again: used
+        ],
+    );
+    let inputs = bus.read(5_000).unwrap();
+    let e2e = bus.e2e();
+    assert_eq!(
+        e2e,
+        can::E2eCounts {
+            malformed: 0,
+            corrupted: 1,
+            repeated: 1,
+            lost: 1,
+            out_of_sequence: 1,
+        }
+    );
+    assert!((inputs.leader.value.gap - 58.0).abs() < 0.01, "{inputs:?}");
+    // Only repeats from here on (`push_all` starts a fresh driver: the first of the 20 frames is
+    // accepted, the 19 others repeat it): the track ages and goes stale, a fault with the
+    // minimum-risk manoeuvre.
+    let mut controller = Controller::new(DEFAULT_TABLE, Config::default());
+    let mut bus = push_all(&mut bus, vec![front(58.0, 0, 41); 20]);
+    let mut last = None;
+    for k in 1..=10u64 {
+        let inputs = bus.read(5_000 + k * 20_000).unwrap();
+        last = Some(controller.step(&inputs));
+    }
+    assert_eq!(bus.e2e().repeated, 19);
+    assert_eq!(last.unwrap().fault, Some(Fault::LeaderStale));
 }
 
 struct TestClock(u64);

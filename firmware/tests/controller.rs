@@ -587,3 +587,76 @@ fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
     };
     assert!(!bad.is_valid());
 }
+
+/// A valid, correctly checksummed split table with the given band (all values 1 m).
+fn split_table(ego: (f32, f32)) -> Vec<u8> {
+    use table_format::{Axis, Bounds, Horizon, HorizonStatus, Spacing, TableContents, ValueBits};
+    let axis = |name, unit, min, max| Axis {
+        name,
+        unit,
+        min,
+        max,
+        points: 3,
+        spacing: Spacing::Uniform,
+    };
+    let axes = [
+        axis("gap_follower", "m", -1.0, 149.0),
+        axis("follower_speed", "m/s", 0.0, 35.0),
+        axis("ego_speed", "m/s", 0.0, 35.0),
+    ];
+    let trusted: Vec<Bounds> = axes.iter().map(|a| Bounds::new(a.min, a.max)).collect();
+    let Game::ThreeCarSplit {
+        leader,
+        follower_clip,
+        idm,
+        time_gap,
+        max_speed,
+        ..
+    } = Table::parse(DEFAULT_TABLE).unwrap().header().game
+    else {
+        panic!("not a split table")
+    };
+    table_format::encode(&TableContents {
+        game: Game::ThreeCarSplit {
+            ego: Bounds::new(ego.0, ego.1),
+            leader,
+            follower_clip,
+            idm,
+            time_gap,
+            max_speed,
+        },
+        min_gap: 0.0,
+        horizon: Horizon {
+            seconds: 1.0,
+            status: HorizonStatus::Converged {
+                tolerance: 1e-5,
+                residual: 1e-6,
+            },
+        },
+        axes: &axes,
+        breakpoints: &[],
+        trusted_box: &trusted,
+        interpolation_error: 0.0,
+        value_bits: ValueBits::Sixteen,
+        values: &[1.0; 27],
+        accelerate: &[],
+    })
+    .unwrap()
+}
+
+#[test]
+fn a_checksummed_table_with_wild_ego_bounds_is_refused() {
+    // The audit's table: a valid CRC, the ego's bounds [-512, 131072] m/s^2. Before the
+    // envelope, the override commanded -512 and the nominal law +2; now it never loads.
+    for band in [(-512.0, 131_072.0), (-50.0, 50.0), (-3.5, 2.5), (-4.0, 2.0)] {
+        let bytes = split_table(band);
+        let mut c = Controller::new(&bytes, ideal());
+        assert!(c.table().is_none(), "{band:?}");
+        let cmd = c.step(&inputs((8.0, -4.0), (30.0, 0.0), 25.0));
+        assert_eq!(fault_of(cmd), Fault::TableOutsideEnvelope, "{band:?}");
+        assert!((-3.5..=2.0).contains(&cmd.acceleration), "{cmd:?}");
+    }
+    // The same table with the default table's band loads.
+    let bytes = split_table((-3.5, 2.0));
+    assert!(Controller::new(&bytes, ideal()).table().is_some());
+}

@@ -27,11 +27,14 @@ impl Sensors for Opaque {
         if black_box(false) {
             return Err(());
         }
-        let frame: [u8; 6] = black_box([0; 6]);
-        let (leader, leader_valid) = decode_track(black_box(&frame[..])).ok_or(())?;
-        let (follower, follower_valid) = decode_track(black_box(&frame[..])).ok_or(())?;
-        let speed: [u8; 4] = black_box([0; 4]);
-        let (ego, ego_valid) = decode_ego_speed(black_box(&speed[..])).ok_or(())?;
+        let frame: [u8; 8] = black_box([0; 8]);
+        let leader = decode_track(black_box(0x120), black_box(&frame[..])).map_err(|_| ())?;
+        let follower = decode_track(black_box(0x121), black_box(&frame[..])).map_err(|_| ())?;
+        let speed: [u8; 6] = black_box([0; 6]);
+        let ego = decode_ego_speed(black_box(&speed[..])).map_err(|_| ())?;
+        let (leader, leader_valid) = (leader.value, leader.valid);
+        let (follower, follower_valid) = (follower.value, follower.valid);
+        let (ego, ego_valid) = (ego.value, ego.valid);
         let stamp = black_box(now_us);
         Ok(Inputs {
             leader: Measurement {
