@@ -33,8 +33,21 @@ struct Args {
     quiet: bool,
 }
 
+/// Fails at once, naming the folder, if `out` cannot be written: a solve takes minutes, and
+/// its results must not be lost to a typo in `--out`.
+fn ensure_writable(out: &std::path::Path) -> Result<()> {
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("--out {}: cannot create the folder", out.display()))?;
+    let probe = out.join(".hjacc-write-probe");
+    std::fs::write(&probe, b"")
+        .with_context(|| format!("--out {}: the folder is not writable", out.display()))?;
+    std::fs::remove_file(&probe).ok();
+    Ok(())
+}
+
 fn main() -> Result<()> {
     let args = Args::parse();
+    ensure_writable(&args.out)?;
     let defaults = args.rears.is_empty() && args.configs.is_empty();
     let mut rears: Vec<(String, String)> = args
         .rears

@@ -16,7 +16,10 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 use table_format::{Axis, Bounds, Game, Horizon, HorizonStatus, Spacing, TableContents, ValueBits};
 
-use crate::config::{check, check_name, idm_parameters, IdmConfig, Range};
+use crate::config::{
+    check, check_memory, check_name, idm_parameters, parse_toml, IdmConfig, Range,
+    SAMPLED_BYTES_PER_NODE,
+};
 use crate::error::{ConfigError, SolverError};
 use crate::games::{Accel, Idm, RearIdm};
 use crate::output;
@@ -108,6 +111,18 @@ impl PiecewiseAxis {
         Breakpoints::piecewise(self.start as f32, &pieces)
     }
 
+    /// How many breakpoints the axis has, counted without making them (a spacing of 1e-9 m
+    /// must be refused, not allocated); `None` beyond `usize`.
+    fn count(&self) -> Option<usize> {
+        let mut at = self.start;
+        let mut n = 1f64;
+        for [end, spacing] in &self.pieces {
+            n += ((end - at) / spacing).ceil().max(0.0);
+            at = *end;
+        }
+        (n.is_finite() && n < usize::MAX as f64).then_some(n as usize)
+    }
+
     fn validate(&self, field: &str) -> Result<(), ConfigError> {
         check(
             self.start.is_finite() && !self.pieces.is_empty(),
@@ -134,8 +149,7 @@ impl PiecewiseAxis {
 impl RearConfig {
     /// Parses and validates a TOML document.
     pub fn from_toml(text: &str) -> Result<Self, ConfigError> {
-        let config: RearConfig =
-            toml::from_str(text).map_err(|e| ConfigError::new("document", e.to_string()))?;
+        let config: RearConfig = parse_toml(text)?;
         config.validate()?;
         Ok(config)
     }
@@ -186,6 +200,19 @@ impl RearConfig {
                 "must span [0, game.max_speed] (speeds are held in that range)",
             )?;
         }
+        let nodes = [
+            &self.grid.gap_follower,
+            &self.grid.follower_speed,
+            &self.grid.ego_speed,
+        ]
+        .iter()
+        .try_fold(1usize, |n, a| n.checked_mul(a.count()?));
+        check_memory(
+            nodes,
+            SAMPLED_BYTES_PER_NODE,
+            "grid",
+            "the breakpoints (larger spacings or shorter axes)",
+        )?;
         let s = &self.solve;
         check(
             s.period > 0.0 && s.period <= 1.0,

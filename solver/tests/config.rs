@@ -149,9 +149,51 @@ fn the_five_d_game_names_its_axes_and_speed_limit() {
 #[test]
 fn unknown_keys_and_syntax_errors_are_refused_with_a_location() {
     let base = idm();
-    let err = Config::from_toml(&base.replace("min_gap = 0.0", "min_gapp = 0.0")).unwrap_err();
+    let text = base.replace("min_gap = 0.0", "min_gapp = 0.0");
+    let err = Config::from_toml(&text).unwrap_err();
     assert!(err.reason.contains("min_gapp"), "{err}");
-    assert!(err.field.starts_with("near byte"), "{err}");
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("min_gapp"))
+        .unwrap()
+        + 1;
+    assert_eq!(err.field, "game.min_gapp", "{err}");
+    assert!(
+        err.reason.contains(&format!("(line {line}, column 1)")),
+        "{err}"
+    );
+    // A value of the wrong type: the key path and where it is.
+    let text = base.replacen("min = 1.0, max = 2.0", "min = \"one\", max = 2.0", 1);
+    let err = Config::from_toml(&text).unwrap_err();
+    let line = text.lines().position(|l| l.contains("\"one\"")).unwrap() + 1;
+    assert_eq!(err.field, "game.time_gap", "{err}");
+    assert!(
+        err.reason.contains(&format!("(line {line}, column ")),
+        "{err}"
+    );
     let missing = base.replace("time_gap = { min = 1.0, max = 2.0 }\n", "");
     assert_eq!(refused_field(&missing), "game.time_gap");
+}
+
+#[test]
+fn a_grid_too_large_for_memory_is_refused_before_anything_is_allocated() {
+    // The 2001-point grid that aborted on a 64 TB allocation: now one line naming the field.
+    let base = idm();
+    let huge = base.replace("points = 31", "points = 2001");
+    assert_ne!(huge, base, "the base config changed: adjust the test");
+    let err = Config::from_toml(&huge).unwrap_err();
+    assert_eq!(err.field, "grid", "{err}");
+    assert!(
+        err.reason.contains("TiB") && err.reason.contains("lower"),
+        "{err}"
+    );
+    println!("{err}");
+    // A rear config whose spacing would make a billion breakpoints.
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rear");
+    let text = std::fs::read_to_string(format!("{dir}/deployment.toml")).unwrap();
+    let fine = text.replacen("[150.0, 3.0]", "[150.0, 0.0001]", 1);
+    assert_ne!(fine, text);
+    let err = solver::rear::RearConfig::from_toml(&fine).unwrap_err();
+    assert_eq!(err.field, "grid", "{err}");
+    println!("{err}");
 }
