@@ -14,6 +14,27 @@ fn io_err(path: &Path, source: std::io::Error) -> SolverError {
     }
 }
 
+/// One axis of `value.npy`, as `axes.json` records it.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct AxisCoordinates {
+    /// The state variable.
+    pub name: String,
+    /// Its unit.
+    pub unit: String,
+    /// The coordinate of every node along the axis, in index order.
+    pub coordinates: Vec<f64>,
+}
+
+/// Writes `axes.json` beside `value.npy`: the array's axes in order, with their coordinates,
+/// so that `value[i, j, ...]` is the value at `(axes[0].coordinates[i], axes[1].coordinates[j],
+/// ...)` without rebuilding the grid from `summary.json`.
+pub fn write_axes(path: &Path, axes: &[AxisCoordinates]) -> Result<(), SolverError> {
+    write_json(
+        path,
+        &serde_json::json!({ "order": "C (the last axis varies fastest)", "axes": axes }),
+    )
+}
+
 /// Writes `values` as a little-endian f32 `.npy` array of `shape` (C order).
 pub fn write_npy(path: &Path, values: &[f32], shape: &[usize]) -> Result<(), SolverError> {
     let shape: Vec<u64> = shape.iter().map(|&s| s as u64).collect();

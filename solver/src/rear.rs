@@ -383,6 +383,14 @@ pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverEr
     output::write_bytes(&dir.join("table.bin"), &bytes)?;
     let points = [lists[0].len(), lists[1].len(), lists[2].len()];
     output::write_npy(&dir.join("value.npy"), &result.values, &points)?;
+    let axes: Vec<output::AxisCoordinates> = (0..3)
+        .map(|k| output::AxisCoordinates {
+            name: grid.name(k).to_string(),
+            unit: if k == 0 { "m" } else { "m/s" }.to_string(),
+            coordinates: lists[k].iter().map(|&x| f64::from(x)).collect(),
+        })
+        .collect();
+    output::write_axes(&dir.join("axes.json"), &axes)?;
 
     let at = |x: f32, vf: f32, ve: f32| grid.interpolate(&result.values, &[x, vf, ve]);
     let vmax = config.game.max_speed as f32;

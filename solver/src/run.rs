@@ -220,6 +220,16 @@ pub fn run(
         source: e,
     })?;
     output::write_npy(&dir.join("value.npy"), &solution.values, &grid.shape())?;
+    let axes: Vec<output::AxisCoordinates> = grid
+        .axes()
+        .iter()
+        .map(|a| output::AxisCoordinates {
+            name: a.name.clone(),
+            unit: a.unit.clone(),
+            coordinates: (0..a.points).map(|i| a.coordinate(i)).collect(),
+        })
+        .collect();
+    output::write_axes(&dir.join("axes.json"), &axes)?;
     if let Some((bytes, _)) = &table {
         output::write_bytes(&dir.join("table.bin"), bytes)?;
     }

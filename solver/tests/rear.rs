@@ -46,6 +46,20 @@ fn a_rear_run_writes_a_table_that_reads_back_its_value() {
         .chunks(4)
         .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect();
+    // axes.json gives value.npy's coordinates: the table's breakpoints, axis by axis.
+    let axes: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("rear-small/axes.json")).unwrap()).unwrap();
+    for k in 0..3 {
+        let a = &axes["axes"][k];
+        assert_eq!(a["name"], grid.name(k));
+        let coords: Vec<f32> = a["coordinates"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap() as f32)
+            .collect();
+        assert_eq!(coords, grid.axis(k), "axis {k}");
+    }
     let q = h.error_bound.quantization;
     for z in [
         [2.3f32, 0.3, 0.0],
