@@ -211,7 +211,13 @@ fn plot_trace(path: &std::path::Path, title: &str, trace: &Trace) -> Result<()> 
     Ok(())
 }
 
+/// The plots' font, shipped with the build: no system font or fontconfig needed.
+static PLOT_FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
 fn main() -> Result<()> {
+    plotters::style::register_font("sans-serif", FontStyle::Normal, PLOT_FONT).map_err(|_| {
+        anyhow::anyhow!("the bundled font assets/fonts/DejaVuSans.ttf does not parse")
+    })?;
     let Command::Campaign {
         episodes,
         seconds,

@@ -14,6 +14,27 @@ fn io_err(path: &Path, source: std::io::Error) -> SolverError {
     }
 }
 
+/// The plots' font, DejaVu Sans, shipped with the build (`assets/fonts`): no system font and
+/// no fontconfig are needed.
+pub static PLOT_FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+/// Registers [`PLOT_FONT`] as plotters' `sans-serif` (once; every plot calls it first).
+pub fn register_plot_font() -> Result<(), SolverError> {
+    static REGISTERED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, PLOT_FONT)
+            .is_ok()
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err(SolverError::Plot {
+            path: "assets/fonts/DejaVuSans.ttf".into(),
+            message: "the bundled font does not parse".into(),
+        })
+    }
+}
+
 /// One axis of `value.npy`, as `axes.json` records it.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct AxisCoordinates {
@@ -101,6 +122,7 @@ fn plot_err(path: &Path, e: impl std::fmt::Display) -> SolverError {
 
 /// Draws a [`CellMap`] into a PNG.
 pub fn draw_cell_map(path: &Path, map: &CellMap<'_>) -> Result<(), SolverError> {
+    register_plot_font()?;
     let root = BitMapBackend::new(path, (900, 760)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
     let (x0, x1) = (map.x.coords[0], *map.x.coords.last().unwrap_or(&1.0));
@@ -194,6 +216,7 @@ pub fn draw_curves(
     y_label: &str,
     curves: &[Curve<'_>],
 ) -> Result<(), SolverError> {
+    register_plot_font()?;
     let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
     let xs = curves.iter().flat_map(|c| c.2.iter().map(|p| p.0));
