@@ -34,6 +34,7 @@ impl Spatial {
 
 /// Computes `dm[j] = D-phi` and `dp[j] = D+phi` at every `j` of a row, where `rows[o][j]` is
 /// `phi` at offset `o - 3` along the axis from node `j`.
+#[inline(always)]
 pub fn derivatives_row(
     scheme: Spatial,
     rows: &[&[f32]; 7],
@@ -151,6 +152,7 @@ fn weno5_pair(v1: f32, v2: f32, v3: f32, v4: f32, v5: f32) -> (f32, f32) {
 /// neighbour at offset `o` (from -3 to 3) is `p[j + (o + 3) * stride]`, `p` holding
 /// `dm.len() + 6 * stride` samples. With WENO5 each window of differences is evaluated once
 /// for both the left derivative at one node and the right derivative at the node before it.
+#[inline(always)]
 pub fn derivatives_strided(
     scheme: Spatial,
     p: &[f32],

@@ -87,6 +87,7 @@ pub trait Dynamics: Sync {
     /// global dissipation, used unless `local`. The games override it with straight-line code
     /// that the compiler vectorises; this default is the scalar reference.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     fn lax_friedrichs_row(
         &self,
         z: &Vector,
@@ -201,6 +202,7 @@ impl Dynamics for TwoCar {
         -p[1] > 0.0
     }
 
+    #[inline(always)]
     fn lax_friedrichs_row(
         &self,
         _z: &Vector,
@@ -283,6 +285,7 @@ impl Dynamics for ThreeCarBaseline {
     fn ego_accelerates(&self, p: &Vector) -> bool {
         p[3] - p[1] > 0.0
     }
+    #[inline(always)]
     fn lax_friedrichs_row(
         &self,
         z: &Vector,
@@ -537,6 +540,7 @@ impl Dynamics for ThreeCarIdm {
         p[3] - p[1] > 0.0
     }
 
+    #[inline(always)]
     fn lax_friedrichs_row(
         &self,
         z: &Vector,
@@ -736,6 +740,7 @@ impl Dynamics for ThreeCarIdmSpeeds {
         p[4] > 0.0
     }
 
+    #[inline(always)]
     fn lax_friedrichs_row(
         &self,
         z: &Vector,

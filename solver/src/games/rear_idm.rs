@@ -134,6 +134,7 @@ impl Dynamics for RearIdm {
     /// way): the co-states in a WENO stencil near the rest point still straddle both inputs.
     /// Kept because it is the smaller consistent dissipation; the rear table comes from the
     /// sampled-data iteration instead ([`crate::semi_lagrangian`]).
+    #[inline(always)]
     fn lax_friedrichs_row(
         &self,
         z: &Vector,
