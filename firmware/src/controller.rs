@@ -838,7 +838,7 @@ impl<'t> Controller<'t> {
         // dead time and five lag time constants, plus what older commands can still add
         // through the lag (at most e^-5 of the band's width).
         let t_m = inputs.leader.timestamp_us;
-        let t_0 = math_min_u64(t_m, ego.timestamp_us);
+        let t_0 = t_m.min(ego.timestamp_us);
         let dead_us = u64::from(c.actuator_dead_time_us);
         let lag = c.actuator_lag_us as f32 * 1e-6;
         let tail = if c.actuator_lag_us > 0 {
@@ -866,7 +866,7 @@ impl<'t> Controller<'t> {
         // The certified front value: braking at beta, commanded since the current run of such
         // commands began, or from now.
         let braking_from = self.braking_since_us.unwrap_or(now);
-        let braking_age = (math_min_u64(braking_from, now).saturating_sub(t_m)) as f32 * 1e-6;
+        let braking_age = braking_from.min(now).saturating_sub(t_m) as f32 * 1e-6;
         let front = front_value(
             leader.gap,
             leader_at_m,
@@ -993,14 +993,5 @@ fn least_braking(
         halfway
     } else {
         beta_command
-    }
-}
-
-/// The smaller of two `u64` (no `Ord::min`, to keep the step's code obvious).
-fn math_min_u64(a: u64, b: u64) -> u64 {
-    if a < b {
-        a
-    } else {
-        b
     }
 }

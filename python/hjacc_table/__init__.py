@@ -239,8 +239,8 @@ class Table:
         return _f32(self.offset + _f32(self.scale * float(self._stored[node])))
 
     def values(self):
-        """Every node's dequantized value, shaped like the grid (a numpy array if numpy is
-        installed, else nested lists are not built: a flat list in C order)."""
+        """Every node's dequantized value: a float32 numpy array shaped like the grid if numpy
+        is installed, else a flat list in C order."""
         flat = [self.node_value(k) for k in range(self.nodes)]
         try:
             import numpy as np
