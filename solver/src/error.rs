@@ -55,6 +55,9 @@ pub enum SolverError {
         /// The plotting library's message.
         message: String,
     },
+    /// `verify` cannot check this table.
+    #[error("verify: {0}")]
+    Verify(String),
     /// The value function became NaN or infinite: the scheme is unstable for these settings.
     #[error("the value function became non-finite at t = {time:.3} s (unstable settings?)")]
     NonFinite {

@@ -22,5 +22,6 @@ pub mod run;
 pub mod scheme;
 pub mod semi_lagrangian;
 pub mod trusted;
+pub mod verify;
 
 pub use error::{ConfigError, SolverError};

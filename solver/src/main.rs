@@ -31,6 +31,31 @@ struct Args {
     /// No progress bars.
     #[arg(long)]
     quiet: bool,
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(clap::Subcommand, Debug)]
+enum Command {
+    /// Proves, cell by cell, that a rear table's certificate survives one control period
+    /// (`solver::verify`); writes `DIR/verify/<table>/report.json` and a plot of the
+    /// unproven cells.
+    Verify(VerifyArgs),
+}
+
+#[derive(clap::Args, Debug)]
+struct VerifyArgs {
+    /// The table (a ThreeCarSplit table, e.g. firmware/tables/default.bin).
+    table: PathBuf,
+    /// The control period, ms.
+    #[arg(long, default_value_t = 20.0)]
+    period_ms: f64,
+    /// The firmware's `rear_margin`, m (the level is the table's error bound plus this).
+    #[arg(long, default_value_t = 0.0)]
+    rear_margin: f64,
+    /// How many times a cell may be halved (axes in turn).
+    #[arg(long, default_value_t = 9)]
+    depth: u32,
 }
 
 /// Fails at once, naming the folder, if `out` cannot be written: a solve takes minutes, and
@@ -48,6 +73,9 @@ fn ensure_writable(out: &std::path::Path) -> Result<()> {
 fn main() -> Result<()> {
     let args = Args::parse();
     ensure_writable(&args.out)?;
+    if let Some(Command::Verify(v)) = &args.command {
+        return run_verify(v, &args.out);
+    }
     let defaults = args.rears.is_empty() && args.configs.is_empty();
     let mut rears: Vec<(String, String)> = args
         .rears
@@ -183,6 +211,56 @@ fn run_configs(args: &Args) -> Result<()> {
         println!(
             "  wrote {}",
             solver::run::folder(&args.out, config).display()
+        );
+    }
+    Ok(())
+}
+
+/// `verify`: reads the table, checks every cell, writes the report, and fails (non-zero exit)
+/// when a certified cell is unproven.
+fn run_verify(v: &VerifyArgs, out: &std::path::Path) -> Result<()> {
+    use solver::verify::{verify, RearTable, Settings};
+    let bytes =
+        std::fs::read(&v.table).with_context(|| format!("reading {}", v.table.display()))?;
+    let table = table_format::Table::parse(&bytes)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", v.table.display()))?;
+    let rear = RearTable::from_table(&table)?;
+    let settings = Settings {
+        period: v.period_ms * 1e-3,
+        rear_margin: v.rear_margin,
+        max_depth: v.depth,
+    };
+    let crc = table_format::CRC32.checksum(&bytes);
+    let report = verify(&rear, crc, &settings);
+    let stem = v
+        .table
+        .file_stem()
+        .map_or_else(|| "table".to_string(), |s| s.to_string_lossy().into_owned());
+    let dir = out.join("verify").join(stem);
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    solver::output::write_json(&dir.join("report.json"), &report)?;
+    solver::verify::plot(&rear, &report, &dir, &[0.1, 5.0, 15.0, 30.0], 60.0)?;
+    println!(
+        "{}: period {} ms, level {:.4} m: {} of {} certified cells proven ({:.3}%); unproven: \
+         {} tangency, {} resolution, {} collision; one-period dip at most {:.4} m; {:.1} s",
+        v.table.display(),
+        v.period_ms,
+        report.level,
+        report.proven,
+        report.certified,
+        100.0 * report.proven_share,
+        report.unproven_by_reason.tangency,
+        report.unproven_by_reason.resolution,
+        report.unproven_by_reason.collision,
+        report.dip,
+        report.seconds
+    );
+    println!("  wrote {}", dir.display());
+    if report.proven < report.certified {
+        anyhow::bail!(
+            "{} certified cells are not proven (see {})",
+            report.certified - report.proven,
+            dir.join("report.json").display()
         );
     }
     Ok(())

@@ -1,0 +1,352 @@
+//! `verify` against cases whose answer is known in closed form, against sampled trajectories,
+//! and on the firmware's table.
+
+use solver::verify::{
+    travel, verify, verify_cell, Interval, RearModel, RearTable, Reason, Settings, StateBox,
+    Verdict,
+};
+
+/// A follower that always brakes at 6 m/s^2 (its clip is the single point -6) behind an ego
+/// that never brakes (its band is [0, 2]); speeds in [0, 4] m/s.
+fn braking_follower() -> RearModel {
+    RearModel {
+        ego_min: 0.0,
+        ego_max: 2.0,
+        clip_min: -6.0,
+        clip_max: -6.0,
+        idm_a: 1.0,
+        idm_b: 1.5,
+        idm_v0: 33.3,
+        idm_delta: 4,
+        idm_s0: 2.0,
+        time_gap: Interval { lo: 1.0, hi: 2.0 },
+        max_speed: 4.0,
+        min_gap: 0.0,
+    }
+}
+
+const K: f64 = 0.3;
+const PERIOD: f64 = 0.1;
+
+/// `W = gap - K` on gaps 0, 0.25, ..., 10 m and speeds 0, 1, ..., 4 m/s: multilinear, so the
+/// table is exact. Certified: `gap > K` (no error bound, no margin).
+fn linear_table() -> RearTable {
+    let gaps: Vec<f64> = (0..=40).map(|i| 0.25 * f64::from(i)).collect();
+    let speeds: Vec<f64> = (0..=4).map(f64::from).collect();
+    let mut values = Vec::new();
+    for &g in &gaps {
+        for _ in &speeds {
+            for _ in &speeds {
+                values.push(g - K);
+            }
+        }
+    }
+    RearTable::new(
+        braking_follower(),
+        [gaps, speeds.clone(), speeds],
+        values,
+        0.0,
+    )
+    .expect("a valid table")
+}
+
+fn settings(depth: u32) -> Settings {
+    Settings {
+        period: PERIOD,
+        rear_margin: 0.0,
+        max_depth: depth,
+    }
+}
+
+/// The exact verdict of cell `(i, j, k)` of [`linear_table`]: the gap changes over the period by
+/// `ego distance - follower distance`, least at the ego's lowest speed (no acceleration) and the
+/// follower's highest (braking at 6). A cell wholly above the plane `gap = K` keeps its
+/// certificate iff its lowest gap stays above `K`; a cell the plane cuts keeps it iff that
+/// least change is positive (states arbitrarily close to the plane).
+fn expected(i: usize, j: usize, k: usize) -> &'static str {
+    let (g_lo, g_hi) = (0.25 * i as f64, 0.25 * (i + 1) as f64);
+    let (vf_hi, ve_lo) = ((j + 1) as f64, k as f64);
+    let change = ve_lo * PERIOD - travel(vf_hi, -6.0, PERIOD, 4.0).0;
+    if g_hi <= K {
+        "not certified"
+    } else if g_lo >= K {
+        if g_lo + change > K {
+            "proven"
+        } else {
+            "unproven"
+        }
+    } else if change > 0.0 {
+        "proven"
+    } else {
+        "unproven"
+    }
+}
+
+fn name(v: &Verdict) -> &'static str {
+    match v {
+        Verdict::NotCertified => "not certified",
+        Verdict::Proven => "proven",
+        Verdict::Unproven { .. } => "unproven",
+    }
+}
+
+#[test]
+fn a_hand_made_table_is_proven_exactly_where_it_is_invariant() {
+    let table = linear_table();
+    let level = 0.0;
+    let mut tally = [0usize; 3];
+    for i in 0..40 {
+        for j in 0..4 {
+            for k in 0..4 {
+                let v = verify_cell(&table, &table.cell(i, j, k), level, &settings(12));
+                assert_eq!(name(&v), expected(i, j, k), "cell ({i}, {j}, {k}): {v:?}");
+                tally[match name(&v) {
+                    "not certified" => 0,
+                    "proven" => 1,
+                    _ => 2,
+                }] += 1;
+            }
+        }
+    }
+    // Every kind occurs, so the comparison above means something.
+    assert!(tally.iter().all(|&n| n > 0), "{tally:?}");
+}
+
+#[test]
+fn the_cells_the_plane_cuts_with_a_closing_follower_are_tangent() {
+    let table = linear_table();
+    // Gap cell [0.25, 0.5] (the plane gap = 0.3 cuts it), follower 1-2 m/s, ego 0-1 m/s: the
+    // gap closes by up to 0.17 m in the period, which takes states just above the plane below
+    // it without a collision.
+    match verify_cell(&table, &table.cell(1, 1, 0), 0.0, &settings(12)) {
+        Verdict::Unproven { reason, deficit } => {
+            assert_eq!(reason, Reason::Tangency);
+            assert!(deficit > 0.0);
+        }
+        v => panic!("expected unproven, got {v:?}"),
+    }
+}
+
+#[test]
+fn raising_one_boundary_node_above_the_level_is_flagged() {
+    let mut table = linear_table();
+    // Before: the cell [0, 0.25] x [2, 3] x [1, 2] holds no certified state.
+    let cell = table.cell(0, 2, 1);
+    assert_eq!(
+        verify_cell(&table, &cell, 0.0, &settings(12)),
+        Verdict::NotCertified
+    );
+    // Raise its node (0.25, 3, 1) from -0.05 m to +0.5 m: states near it become certified, and
+    // the closing follower takes them towards gap 0, where the value is -0.3.
+    table.set_node(1, 3, 1, 0.5);
+    assert!(matches!(
+        verify_cell(&table, &cell, 0.0, &settings(12)),
+        Verdict::Unproven { .. }
+    ));
+}
+
+#[test]
+fn a_level_too_low_for_the_period_is_a_collision() {
+    // W = gap: certified means gap > level. At level 0 a follower closing at 4 m/s on a gap of
+    // 1 cm collides within the period; at a level of 0.5 m no certified state can (the
+    // closing distance in 0.1 s is below 0.4 m), and the cell is tangent instead.
+    let mut table = linear_table();
+    for i in 0..=40 {
+        for j in 0..=4 {
+            for k in 0..=4 {
+                table.set_node(i, j, k, 0.25 * i as f64);
+            }
+        }
+    }
+    let low = verify_cell(&table, &table.cell(0, 3, 0), 0.0, &settings(12));
+    assert!(
+        matches!(
+            low,
+            Verdict::Unproven {
+                reason: Reason::Collision,
+                ..
+            }
+        ),
+        "{low:?}"
+    );
+    let high = verify_cell(&table, &table.cell(2, 3, 0), 0.5, &settings(12));
+    assert!(
+        matches!(
+            high,
+            Verdict::Unproven {
+                reason: Reason::Tangency,
+                ..
+            }
+        ),
+        "{high:?}"
+    );
+}
+
+/// The IDM model of the deployment, for the sampled checks.
+fn deployment_model() -> RearModel {
+    RearModel {
+        ego_min: -3.5,
+        ego_max: 2.0,
+        clip_min: -6.0,
+        clip_max: 2.0,
+        idm_a: 1.0,
+        idm_b: 1.5,
+        idm_v0: 33.3,
+        idm_delta: 4,
+        idm_s0: 2.0,
+        time_gap: Interval { lo: 1.0, hi: 2.0 },
+        max_speed: 35.0,
+        min_gap: 0.0,
+    }
+}
+
+/// The follower's clipped IDM acceleration at a point, as the model states it.
+fn idm(m: &RearModel, gap: f64, vf: f64, ve: f64, t: f64) -> f64 {
+    let c = 2.0 * (m.idm_a * m.idm_b).sqrt();
+    let desired = m.idm_s0 + (vf * t + vf * (vf - ve) / c).max(0.0);
+    let interaction = if gap > 0.0 {
+        (desired / gap).powi(2)
+    } else {
+        f64::INFINITY
+    };
+    (m.idm_a * (1.0 - (vf / m.idm_v0).powi(m.idm_delta) - interaction))
+        .clamp(m.clip_min, m.clip_max)
+}
+
+#[test]
+fn reach_bounds_contain_sampled_trajectories() {
+    // Trajectories from random states of random boxes, with inputs that switch at random
+    // instants, integrated finely: every state at the end lies in the end box and every gap
+    // on the way above the least gap.
+    use rand::{Rng, SeedableRng};
+    let m = deployment_model();
+    let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+    for _ in 0..400 {
+        let g0 = rng.random_range(0.5..40.0);
+        let vf0 = rng.random_range(0.0..34.0);
+        let ve0 = rng.random_range(0.0..34.0);
+        let w = [
+            rng.random_range(0.01..1.0),
+            rng.random_range(0.01..1.0),
+            rng.random_range(0.01..1.0),
+        ];
+        let b = StateBox {
+            gap: Interval {
+                lo: g0,
+                hi: g0 + w[0],
+            },
+            follower_speed: Interval {
+                lo: vf0,
+                hi: (vf0 + w[1]).min(35.0),
+            },
+            ego_speed: Interval {
+                lo: ve0,
+                hi: (ve0 + w[2]).min(35.0),
+            },
+        };
+        let period = [0.02, 0.1, 0.3][rng.random_range(0..3)];
+        let reach = m.reach(&b, period);
+        for _ in 0..20 {
+            let mut g = rng.random_range(b.gap.lo..=b.gap.hi);
+            let mut vf = rng.random_range(b.follower_speed.lo..=b.follower_speed.hi);
+            let mut ve = rng.random_range(b.ego_speed.lo..=b.ego_speed.hi);
+            let steps = 400;
+            let dt = period / f64::from(steps);
+            let (mut ae, mut t) = (m.ego_min, m.time_gap.lo);
+            for _ in 0..steps {
+                if rng.random_bool(0.05) {
+                    ae = rng.random_range(m.ego_min..=m.ego_max);
+                    t = rng.random_range(m.time_gap.lo..=m.time_gap.hi);
+                }
+                let af = idm(&m, g, vf, ve, t);
+                let (de, ve1) = travel(ve, ae, dt, m.max_speed);
+                let (df, vf1) = travel(vf, af, dt, m.max_speed);
+                g += de - df;
+                ve = ve1;
+                vf = vf1;
+                // Integration error of the explicit step: far below these slacks.
+                assert!(
+                    g >= reach.least_gap - 1e-4,
+                    "gap {g} below {}",
+                    reach.least_gap
+                );
+            }
+            let e = reach.end;
+            for (x, i) in [(g, e.gap), (vf, e.follower_speed), (ve, e.ego_speed)] {
+                assert!(
+                    x >= i.lo - 1e-4 && x <= i.hi + 1e-4,
+                    "{x} outside {i:?} (box {b:?})"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_least_value_over_a_box_is_at_a_candidate_point() {
+    // The exact extremes against a dense sampling of a box spanning several cells.
+    let table = linear_table();
+    let mut t = table.clone();
+    for (n, (i, j, k)) in (0..=40)
+        .flat_map(|i| (0..=4).flat_map(move |j| (0..=4).map(move |k| (i, j, k))))
+        .enumerate()
+    {
+        t.set_node(i, j, k, ((n * 7919) % 101) as f64 * 0.01);
+    }
+    let b = StateBox {
+        gap: Interval { lo: 0.1, hi: 0.9 },
+        follower_speed: Interval { lo: 0.3, hi: 2.6 },
+        ego_speed: Interval { lo: 1.2, hi: 3.9 },
+    };
+    let e = t.extremes(&b);
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for a in 0..=40 {
+        for c in 0..=40 {
+            for d in 0..=40 {
+                let f = |i: Interval, s: i32| i.lo + (i.hi - i.lo) * f64::from(s) / 40.0;
+                let w = t.value_at([f(b.gap, a), f(b.follower_speed, c), f(b.ego_speed, d)]);
+                lo = lo.min(w);
+                hi = hi.max(w);
+            }
+        }
+    }
+    assert!(
+        e.lo <= lo + 1e-12 && e.hi >= hi - 1e-12,
+        "{e:?} vs sampled [{lo}, {hi}]"
+    );
+    assert!(
+        lo - e.lo < 0.02 && e.hi - hi < 0.02,
+        "{e:?} vs sampled [{lo}, {hi}]"
+    );
+}
+
+#[test]
+fn the_firmware_table_is_proven_everywhere_but_at_its_level_set() {
+    let bytes = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../firmware/tables/default.bin"
+    ))
+    .expect("the committed table");
+    let table = table_format::Table::parse(&bytes).expect("it parses");
+    let rear = RearTable::from_table(&table).expect("a split table");
+    let report = verify(
+        &rear,
+        table_format::CRC32.checksum(&bytes),
+        &Settings {
+            period: 0.02,
+            rear_margin: 0.0,
+            max_depth: 9,
+        },
+    );
+    assert!(report.certified > 500_000, "{}", report.certified);
+    assert!(report.proven_share > 0.97, "{}", report.proven_share);
+    // Every unproven cell straddles the level: the interior is proven.
+    for c in &report.unproven {
+        let w = rear.extremes(&c.cell);
+        assert!(
+            w.lo <= report.level && w.hi > report.level,
+            "an interior cell is unproven: {c:?}"
+        );
+    }
+}
