@@ -27,6 +27,7 @@ fn main() {
         time_gap: Accel { min: 1.0, max: 2.0 },
         max_speed: 8.0,
         min_gap: 0.0,
+        follower_robustness: 0.0,
     };
     println!("| spacing (m, m/s) | period (s) | nodes | iterations | wall (s) | W(10, 0, 0) | W(20, 5, 5) | W(3, 0, 0) |");
     println!("|---|---|---|---|---|---|---|---|");

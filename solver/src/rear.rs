@@ -56,6 +56,12 @@ pub struct RearGameConfig {
     /// `l = gap_follower - min_gap`, m.
     #[serde(default)]
     pub min_gap: f64,
+    /// The solve's follower accelerates this much more than the model (IDM and clip) allows,
+    /// m/s^2 (default 0). The table's header keeps the model; this only makes the solve's
+    /// adversary stronger, so that the model's trajectories gain on the table's value and
+    /// `verify` can close its proof at the level set (`solver::verify`).
+    #[serde(default)]
+    pub follower_robustness: f64,
 }
 
 /// The grid: three breakpoint axes in state order.
@@ -184,6 +190,11 @@ impl RearConfig {
             "must be > 0",
         )?;
         check(
+            g.follower_robustness.is_finite() && (0.0..=2.0).contains(&g.follower_robustness),
+            "game.follower_robustness",
+            "must be in [0, 2] m/s^2",
+        )?;
+        check(
             g.idm.jam_distance > 0.0,
             "game.idm.jam_distance",
             "must be > 0: with s0 = 0 a follower creeps into a stopped ego and nothing is safe for ever",
@@ -243,6 +254,7 @@ impl RearConfig {
             time_gap: accel(g.time_gap),
             max_speed: g.max_speed as f32,
             min_gap: g.min_gap as f32,
+            follower_robustness: g.follower_robustness as f32,
         }
     }
 

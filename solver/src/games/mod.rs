@@ -884,6 +884,7 @@ impl AnyGame {
                 time_gap: Accel::from(time_gap),
                 max_speed,
                 min_gap,
+                follower_robustness: 0.0,
             }),
         }
     }

@@ -52,6 +52,10 @@ pub struct RearIdm {
     pub max_speed: f32,
     /// `l(z) = gap_follower - min_gap`.
     pub min_gap: f32,
+    /// The sampled-data iteration's follower accelerates this much more than its model
+    /// (m/s^2, >= 0): a stronger adversary than the model, so that the model's own trajectories
+    /// gain on the value and `verify` finds slack at the level set (0: the model itself).
+    pub follower_robustness: f32,
 }
 
 impl RearIdm {
@@ -213,7 +217,17 @@ impl SampledGame for RearIdm {
         let vm = self.max_speed;
         let (mut x, mut vf, mut ve) = (z[0], z[1], z[2]);
         for _ in 0..steps as usize {
-            let uf = self.follower_acceleration(vf, ve, x, t);
+            let uf = if self.follower_robustness > 0.0 {
+                // The model's clipped IDM, pushed; `travel` holds the speed in [0, v_max] (a
+                // follower at rest whose IDM brakes harder than the push stays at rest).
+                let c = self.follower_clip;
+                self.idm
+                    .acceleration(vf.max(0.0), vf - ve, x, t)
+                    .clamp(c.min, c.max)
+                    + self.follower_robustness
+            } else {
+                self.follower_acceleration(vf, ve, x, t)
+            };
             // Each car's speed is clamped to [0, v_max] exactly within the sub-step.
             let (dve, nve) = travel(ve, ue, ds, vm);
             let (dvf, nvf) = travel(vf, uf, ds, vm);
@@ -266,6 +280,7 @@ mod tests {
             time_gap: Accel { min: 1.0, max: 2.0 },
             max_speed: 35.0,
             min_gap: 0.0,
+            follower_robustness: 0.0,
         }
     }
 
