@@ -214,7 +214,20 @@ fn plot_trace(path: &std::path::Path, title: &str, trace: &Trace) -> Result<()> 
 /// The plots' font, shipped with the build: no system font or fontconfig needed.
 static PLOT_FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
-fn main() -> Result<()> {
+/// Runs [`real_main`]; a user error (a bad flag, an empty group, a failed campaign) is
+/// one clean message on stderr and exit code 1, with or without `RUST_BACKTRACE` (anyhow's
+/// `Debug` output would print a backtrace of this function, which tells a user nothing).
+fn main() -> std::process::ExitCode {
+    match real_main() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn real_main() -> Result<()> {
     plotters::style::register_font("sans-serif", FontStyle::Normal, PLOT_FONT).map_err(|_| {
         anyhow::anyhow!("the bundled font assets/fonts/DejaVuSans.ttf does not parse")
     })?;

@@ -70,7 +70,20 @@ fn ensure_writable(out: &std::path::Path) -> Result<()> {
     Ok(())
 }
 
-fn main() -> Result<()> {
+/// Runs [`real_main`]; a user error (a bad config, an unwritable folder, an unproven table) is
+/// one clean message on stderr and exit code 1, with or without `RUST_BACKTRACE` (anyhow's
+/// `Debug` output would print a backtrace of this function, which tells a user nothing).
+fn main() -> std::process::ExitCode {
+    match real_main() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn real_main() -> Result<()> {
     let args = Args::parse();
     ensure_writable(&args.out)?;
     if let Some(Command::Verify(v)) = &args.command {

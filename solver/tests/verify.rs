@@ -350,3 +350,53 @@ fn the_firmware_table_is_proven_everywhere_but_at_its_level_set() {
         );
     }
 }
+
+#[test]
+fn the_command_writes_its_report_and_fails_cleanly_on_unproven_cells() {
+    let out = std::env::temp_dir().join(format!("hjacc-verify-cli-{}", std::process::id()));
+    let table = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../firmware/tables/default.bin"
+    );
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_solver"))
+        .args([
+            "--out",
+            out.to_str().expect("utf-8"),
+            "verify",
+            table,
+            "--depth",
+            "3",
+        ])
+        .env("RUST_BACKTRACE", "1")
+        .output()
+        .expect("the solver runs");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    // Unproven cells are a failure, told in one line, with no backtrace.
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.starts_with("error: ") && stderr.contains("not proven"),
+        "{stderr}"
+    );
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("verify/default/report.json")).expect("the report"),
+    )
+    .expect("JSON");
+    assert!(report["certified"].as_u64() > Some(500_000));
+    assert!(out.join("verify/default/verdicts-worst.png").exists());
+    // A missing table: one line too.
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_solver"))
+        .args([
+            "--out",
+            out.to_str().expect("utf-8"),
+            "verify",
+            "/nonexistent/table.bin",
+        ])
+        .env("RUST_BACKTRACE", "1")
+        .output()
+        .expect("the solver runs");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1));
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    std::fs::remove_dir_all(&out).ok();
+}
