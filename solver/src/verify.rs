@@ -50,6 +50,35 @@
 //! firmware evaluates `W` in `f32` within about `1e-6` m, which the level check absorbs with a
 //! `TOLERANCE` of `1e-5` m on both sides.
 //!
+//! # Why one period per state is enough
+//! A box is proven when *one* of the listed periods takes every certified state of it to a
+//! certified state, the gap above `min_gap` throughout. The period may differ from box to box:
+//! it is a function of the state only, never of the inputs to come. So from a certified state
+//! the times `t_{k+1} = t_k + P(x(t_k))` grow by at least the shortest period, every `x(t_k)` is
+//! certified, and the gap stays above `min_gap` in between: the rear is safe for ever. (The
+//! firmware re-checks every 20 ms; between the `t_k` the value may dip below the level, which
+//! changes what it reports, not what is proven.) A table solved with a follower stronger than
+//! its model (`follower_robustness`) lets the model's trajectories gain on the value at the
+//! level set, and a longer period gains more than the interval bounds lose, up to about 0.3 s.
+//!
+//! # The standstill lemma
+//! At a rest point behind the ego the follower is at rest with its IDM braking, the ego may stay
+//! at rest, and nothing moves: the level set passes through a continuum of equilibria, where no
+//! box proof closes. There a closed-form argument takes over. With the gap at most `G`, where
+//! `a (1 - (s0 / G)^2) <= a_min` (`G = s0 / sqrt(1 - a_min / a)`, 0.756 m for the deployment),
+//! the IDM asks for `a_min` or harder whatever the speeds and the time gap (`s* >= s0`), so the
+//! follower brakes at its clip `a_min` until it stops, and covers at most `v_f^2 / (2 |a_min|)`;
+//! the ego never moves backwards, and covers at least what braking at `beta` leaves it. So from
+//! a state whose least gap under those two motions exceeds `min_gap` the gap stays above
+//! `min_gap` for as long as it is at most `G`; it can only leave through
+//! `gap = G`, growing, with the follower no faster than it was and no faster than the ego. A
+//! sub-box at the finest depth with `gap <= G / 2` and that bound (sharpened by the ego's least
+//! travel, braking at `beta` from its lowest speed) is proven by the lemma when every state
+//! `(G, v_f, v_e >= v_f)` it can leave through is certified (checked once over slices of `v_f`
+//! up to the largest speed that passes, which bounds the lemma boxes' follower speed), and so
+//! lies in a box the periods prove (a lemma box has `gap <= G / 2`, so each stay in the
+//! lemma's region ends, if it ends, in a period's proof).
+//!
 //! # What is *not* provable this way, and why
 //! A box that straddles the level set `{W = level}` contains states with `W` below the level
 //! whose images the interval bounds must include. For a value function that is the infimum of
@@ -551,8 +580,10 @@ pub enum Reason {
 pub enum Verdict {
     /// No state of the cell is certified.
     NotCertified,
-    /// Every certified state of the cell stays certified through the period.
+    /// Every certified state of the cell stays certified through a period.
     Proven,
+    /// As [`Verdict::Proven`], with the standstill lemma for some of its sub-boxes.
+    ProvenAtStandstill,
     /// Some sub-box could not be decided at the finest depth.
     Unproven {
         /// The reason of the sub-box with the largest deficit.
@@ -563,10 +594,11 @@ pub enum Verdict {
 }
 
 /// The checker's settings.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Settings {
-    /// The period, s.
-    pub period: f64,
+    /// The periods a box may be advanced by, s: a box is proven when one of them takes every
+    /// certified state of it to a certified state (module docs: why one per state suffices).
+    pub periods: Vec<f64>,
     /// The firmware's `rear_margin`, m: the level is the table's error bound plus this.
     pub rear_margin: f64,
     /// How many times a cell may be halved (axes in turn).
@@ -574,17 +606,32 @@ pub struct Settings {
 }
 
 impl Default for Settings {
+    /// The firmware's period, and 0.1, 0.2 and 0.3 s (the longer ones let a table solved with
+    /// a follower stronger than its model gain the slack its level set needs); 21 halvings.
     fn default() -> Self {
         Settings {
-            period: 0.02,
+            periods: vec![0.02, 0.1, 0.2, 0.3],
             rear_margin: 0.0,
-            max_depth: 9,
+            max_depth: 21,
         }
     }
 }
 
 /// Verifies one cell (module docs).
 pub fn verify_cell(table: &RearTable, cell: &StateBox, level: f64, s: &Settings) -> Verdict {
+    verify_cell_with(table, cell, level, s, None)
+}
+
+/// [`verify_cell`], with the standstill lemma where its exit check passed.
+fn verify_cell_with(
+    table: &RearTable,
+    cell: &StateBox,
+    level: f64,
+    s: &Settings,
+    lemma: Option<Standstill>,
+) -> Verdict {
+    debug_assert!(!s.periods.is_empty());
+    let mut by_lemma = false;
     let extremes = table.extremes(cell);
     if extremes.hi <= level - TOLERANCE {
         return Verdict::NotCertified;
@@ -596,18 +643,57 @@ pub fn verify_cell(table: &RearTable, cell: &StateBox, level: f64, s: &Settings)
         if w.hi <= level - TOLERANCE {
             continue;
         }
-        let reach = table.model.reach(&b, s.period);
-        let end = table.extremes(&reach.end);
-        let safe = reach.least_gap > table.model.min_gap;
-        if safe && end.lo > level + TOLERANCE {
+        // The period that does best for this box: proven by it, or else the least deficit.
+        let mut best: Option<(bool, f64)> = None;
+        let mut proven = false;
+        for &period in &s.periods {
+            let reach = table.model.reach(&b, period);
+            let safe = reach.least_gap > table.model.min_gap;
+            let end = table.extremes(&reach.end).lo;
+            if safe && end > level + TOLERANCE {
+                proven = true;
+                break;
+            }
+            let better = match best {
+                None => true,
+                Some((was_safe, was_end)) => {
+                    (safe && !was_safe) || (safe == was_safe && end > was_end)
+                }
+            };
+            if better {
+                best = Some((safe, end));
+            }
+        }
+        if proven {
             continue;
         }
+        let (safe, end) = best.unwrap_or((false, f64::NEG_INFINITY));
         if depth < s.max_depth {
             let axis = (depth % 3) as usize;
             let (a, c) = b.axis(axis).halves();
             stack.push((b.with_axis(axis, a), depth + 1));
             stack.push((b.with_axis(axis, c), depth + 1));
             continue;
+        }
+        if let Some(z) = lemma {
+            // The gap's least value while it is at most G: the ego braking at beta from its
+            // lowest speed, the follower at its clip from its highest, until both stop.
+            let m = &table.model;
+            let (ve, vf) = (b.ego_speed.lo, b.follower_speed.hi);
+            // After both have stopped (or the follower, if the ego cannot brake) the gap no
+            // longer shrinks.
+            let ego_stops = if m.ego_min < 0.0 {
+                ve / -m.ego_min
+            } else {
+                0.0
+            };
+            let until = ego_stops.max(vf / m.clip_min.abs()) + 1.0;
+            let least =
+                b.gap.lo + least_difference(ve, m.ego_min, vf, m.clip_min, until, m.max_speed);
+            if b.gap.hi <= 0.5 * z.gap && vf <= z.exit_speed && widen_down(least) > m.min_gap {
+                by_lemma = true;
+                continue;
+            }
         }
         let reason = if !safe {
             Reason::Collision
@@ -616,15 +702,54 @@ pub fn verify_cell(table: &RearTable, cell: &StateBox, level: f64, s: &Settings)
         } else {
             Reason::Resolution
         };
-        let deficit = (level + TOLERANCE - end.lo).max(0.0);
+        let deficit = (level + TOLERANCE - end).max(0.0);
         if worst.is_none_or(|(_, d)| deficit > d || reason == Reason::Collision) {
             worst = Some((reason, deficit));
         }
     }
     match worst {
+        None if by_lemma => Verdict::ProvenAtStandstill,
         None => Verdict::Proven,
         Some((reason, deficit)) => Verdict::Unproven { reason, deficit },
     }
+}
+
+/// The standstill lemma's gap `G` (module docs): `s0 / sqrt(1 - a_min / a)`, where the IDM
+/// asks for the follower's clip `a_min` or harder whatever the speeds; `None` if the model has
+/// no such gap.
+pub fn standstill_gap(m: &RearModel) -> Option<f64> {
+    let ratio = 1.0 - m.clip_min / m.idm_a;
+    (m.clip_min < 0.0 && ratio > 1.0).then(|| m.idm_s0 / ratio.sqrt())
+}
+
+/// The standstill lemma's exit check (module docs): the largest follower speed `V` (a multiple
+/// of 0.05 m/s, at most 5 m/s) such that every state `(G, v_f, v_e >= v_f)` with `v_f <= V` is
+/// certified, over slices of 0.05 m/s of `v_f`, each with `v_e` over `[slice's lowest, v_max]`
+/// (a superset); `None` if not even the slowest slice is.
+pub fn standstill_exit_speed(table: &RearTable, g: f64, level: f64) -> Option<f64> {
+    let m = &table.model;
+    let slices = (5.0f64.min(m.max_speed) / 0.05) as u32;
+    let passed = (0..slices)
+        .take_while(|&i| {
+            let v = 0.05 * f64::from(i);
+            let face = StateBox {
+                gap: Interval::new(g, g),
+                follower_speed: Interval::new(v, v + 0.05),
+                ego_speed: Interval::new(v, m.max_speed),
+            };
+            table.extremes(&face).lo > level + TOLERANCE
+        })
+        .count();
+    (passed > 0).then(|| 0.05 * passed as f64)
+}
+
+/// The standstill lemma's region: gap `G` and the exit check's follower speed `V`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Standstill {
+    /// `G`, m.
+    pub gap: f64,
+    /// `V`, m/s.
+    pub exit_speed: f64,
 }
 
 /// One unproven cell of the report.
@@ -657,6 +782,10 @@ pub struct Report {
     pub certified: usize,
     /// Certified cells proven.
     pub proven: usize,
+    /// Of those, cells with sub-boxes proven by the standstill lemma (module docs).
+    pub proven_at_standstill: usize,
+    /// The standstill lemma's region, when its exit check passed.
+    pub standstill: Option<Standstill>,
     /// `proven / certified`.
     pub proven_share: f64,
     /// Unproven cells per reason.
@@ -689,16 +818,19 @@ pub fn verify(table: &RearTable, crc: u32, s: &Settings) -> Report {
     let t0 = Instant::now();
     let level = table.error_bound + s.rear_margin;
     let [ni, nj, nk] = table.cells();
+    let lemma = standstill_gap(&table.model).and_then(|gap| {
+        standstill_exit_speed(table, gap, level).map(|exit_speed| Standstill { gap, exit_speed })
+    });
     let verdicts: Vec<Verdict> = (0..ni * nj * nk)
         .into_par_iter()
         .map(|n| {
             let (i, j, k) = (n / (nj * nk), (n / nk) % nj, n % nk);
-            verify_cell(table, &table.cell(i, j, k), level, s)
+            verify_cell_with(table, &table.cell(i, j, k), level, s, lemma)
         })
         .collect();
     let mut counts = UnprovenCounts::default();
     let mut unproven = Vec::new();
-    let (mut certified, mut proven) = (0, 0);
+    let (mut certified, mut proven, mut proven_at_standstill) = (0, 0, 0);
     let mut dip = 0f64;
     for (n, v) in verdicts.iter().enumerate() {
         match *v {
@@ -706,6 +838,11 @@ pub fn verify(table: &RearTable, crc: u32, s: &Settings) -> Report {
             Verdict::Proven => {
                 certified += 1;
                 proven += 1;
+            }
+            Verdict::ProvenAtStandstill => {
+                certified += 1;
+                proven += 1;
+                proven_at_standstill += 1;
             }
             Verdict::Unproven { reason, deficit } => {
                 certified += 1;
@@ -726,13 +863,15 @@ pub fn verify(table: &RearTable, crc: u32, s: &Settings) -> Report {
         }
     }
     Report {
-        settings: *s,
+        settings: s.clone(),
         level,
         error_bound: table.error_bound,
         table_crc32: format!("{crc:08x}"),
         cells: verdicts.len(),
         certified,
         proven,
+        proven_at_standstill,
+        standstill: lemma,
         proven_share: if certified == 0 {
             1.0
         } else {
@@ -775,7 +914,7 @@ pub fn plot(
     ];
     let severity = |v: &Verdict| match v {
         Verdict::NotCertified => 0,
-        Verdict::Proven => 1,
+        Verdict::Proven | Verdict::ProvenAtStandstill => 1,
         Verdict::Unproven { reason, .. } => match reason {
             Reason::Tangency => 2,
             Reason::Resolution => 3,
@@ -796,8 +935,7 @@ pub fn plot(
         let a = table.axis(2);
         let k = a.partition_point(|&b| b <= ve).clamp(1, nk) - 1;
         let title = format!(
-            "verify, {} ms: rear cells, ego speed {:.2}-{:.2} m/s",
-            report.settings.period * 1e3,
+            "verify: rear cells at ego speeds {:.2}-{:.2} m/s",
             a[k],
             a[k + 1]
         );
@@ -817,10 +955,7 @@ pub fn plot(
         )?;
         written.push(path);
     }
-    let title = format!(
-        "verify, {} ms: the worst verdict over every ego speed",
-        report.settings.period * 1e3
-    );
+    let title = "verify: the worst verdict over every ego speed".to_string();
     let path = dir.join("verdicts-worst.png");
     let cell = |i: usize, j: usize| (0..nk).map(|k| at(i, j, k)).max();
     draw_cell_map(

@@ -31,7 +31,13 @@ const PERIOD: f64 = 0.1;
 /// `W = gap - K` on gaps 0, 0.25, ..., 10 m and speeds 0, 1, ..., 4 m/s: multilinear, so the
 /// table is exact. Certified: `gap > K` (no error bound, no margin).
 fn linear_table() -> RearTable {
-    let gaps: Vec<f64> = (0..=40).map(|i| 0.25 * f64::from(i)).collect();
+    linear_table_with_gap_step(0.25)
+}
+
+/// [`linear_table`] with gaps `0, step, 2 step, ..., 10` m.
+fn linear_table_with_gap_step(step: f64) -> RearTable {
+    let n = (10.0 / step).round() as i32;
+    let gaps: Vec<f64> = (0..=n).map(|i| step * f64::from(i)).collect();
     let speeds: Vec<f64> = (0..=4).map(f64::from).collect();
     let mut values = Vec::new();
     for &g in &gaps {
@@ -52,7 +58,7 @@ fn linear_table() -> RearTable {
 
 fn settings(depth: u32) -> Settings {
     Settings {
-        period: PERIOD,
+        periods: vec![PERIOD],
         rear_margin: 0.0,
         max_depth: depth,
     }
@@ -85,7 +91,7 @@ fn expected(i: usize, j: usize, k: usize) -> &'static str {
 fn name(v: &Verdict) -> &'static str {
     match v {
         Verdict::NotCertified => "not certified",
-        Verdict::Proven => "proven",
+        Verdict::Proven | Verdict::ProvenAtStandstill => "proven",
         Verdict::Unproven { .. } => "unproven",
     }
 }
@@ -322,7 +328,7 @@ fn the_least_value_over_a_box_is_at_a_candidate_point() {
 }
 
 #[test]
-fn the_firmware_table_is_proven_everywhere_but_at_its_level_set() {
+fn the_firmware_table_is_proven_in_every_certified_cell() {
     let bytes = std::fs::read(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../firmware/tables/default.bin"
@@ -330,24 +336,40 @@ fn the_firmware_table_is_proven_everywhere_but_at_its_level_set() {
     .expect("the committed table");
     let table = table_format::Table::parse(&bytes).expect("it parses");
     let rear = RearTable::from_table(&table).expect("a split table");
+    // With the default periods and depth, and the standstill lemma: every certified cell.
     let report = verify(
         &rear,
         table_format::CRC32.checksum(&bytes),
-        &Settings {
-            period: 0.02,
-            rear_margin: 0.0,
-            max_depth: 9,
-        },
+        &Settings::default(),
     );
     assert!(report.certified > 500_000, "{}", report.certified);
-    assert!(report.proven_share > 0.97, "{}", report.proven_share);
-    // Every unproven cell straddles the level: the interior is proven.
-    for c in &report.unproven {
-        let w = rear.extremes(&c.cell);
-        assert!(
-            w.lo <= report.level && w.hi > report.level,
-            "an interior cell is unproven: {c:?}"
-        );
+    assert_eq!(report.proven, report.certified, "{:?}", report.unproven);
+    assert!(report.proven_at_standstill > 0);
+}
+
+#[test]
+fn the_standstill_lemma_proves_a_braking_follower_and_not_one_too_fast_to_stop() {
+    // The hand-made table on gaps 0.125 m apart: the plane gap = 0.3 cuts the cell
+    // [0.25, 0.375] x [0, 1] x [0, 1] with the follower closing, tangent for the period. Below
+    // G = 2 / sqrt(7) = 0.756 m the IDM asks for more than 6 m/s^2, so the follower brakes at 6:
+    // from a gap of 0.29 m at 1 m/s it covers at most 1/12 m, and the lemma proves the cell
+    // (whose gaps are at most G / 2). At 2 m/s it may cover 1/3 m, more than the gap: the cell
+    // [0.25, 0.375] x [1, 2] x [0, 1] stays unproven.
+    let table = linear_table_with_gap_step(0.125);
+    let report = verify(&table, 0, &settings(12));
+    let s = report.standstill.expect("the exit face is certified");
+    assert!((s.gap - 2.0 / 7f64.sqrt()).abs() < 1e-12, "{s:?}");
+    let at = |i: usize, j: usize, k: usize| report.verdicts[(i * 4 + j) * 4 + k];
+    assert_eq!(at(2, 0, 0), Verdict::ProvenAtStandstill);
+    assert!(
+        matches!(at(2, 1, 0), Verdict::Unproven { .. }),
+        "{:?}",
+        at(2, 1, 0)
+    );
+    // Without the lemma both are tangent.
+    for j in [0, 1] {
+        let v = verify_cell(&table, &table.cell(2, j, 0), 0.0, &settings(12));
+        assert!(matches!(v, Verdict::Unproven { .. }), "{v:?}");
     }
 }
 
