@@ -740,7 +740,7 @@ pub fn standstill_exit_speed(table: &RearTable, g: f64, level: f64) -> Option<f6
             table.extremes(&face).lo > level + TOLERANCE
         })
         .count();
-    (passed > 0).then(|| 0.05 * passed as f64)
+    (passed > 0).then_some(0.05 * passed as f64)
 }
 
 /// The standstill lemma's region: gap `G` and the exit check's follower speed `V`.
