@@ -71,8 +71,9 @@
 //! value's plateau is -0.99 m, README).
 //!
 //! # Faults and the minimum-risk manoeuvre
-//! A table that does not parse, is not a split table or whose band does not fit the vehicle's
-//! [`Envelope`], a configuration outside its limits, a measurement the sensor flags invalid, a
+//! A table that does not parse, is not a split table, whose band does not fit the vehicle's
+//! [`Envelope`] or that carries no complete `solver verify` record for the configured
+//! `rear_margin`, a configuration outside its limits, a measurement the sensor flags invalid, a
 //! non-finite or physically impossible value, a measurement older than `stale_periods`
 //! periods, or a clock that jumps (backwards, or forwards by more than
 //! [`MAX_STEP_GAP_PERIODS`] periods): each is a [`Fault`], reported in the command and logged,
@@ -338,6 +339,10 @@ pub enum Fault {
     /// The clock jumped forward by more than [`MAX_STEP_GAP_PERIODS`] periods since the last
     /// step. Recovers after [`CLOCK_RECOVERY_PERIODS`] good periods.
     ClockJumped,
+    /// The table carries no record of `solver verify`, a record of a proof that left cells
+    /// unproven, or one for another `rear_margin` than the configuration's (a proof at one
+    /// level says nothing about another).
+    TableNotVerified,
 }
 
 /// One control step's output.
@@ -530,7 +535,8 @@ impl IssuedCommands {
     }
 }
 
-fn model_of(table: &Table<'_>, envelope: &Envelope) -> Result<Model, Fault> {
+fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
+    let envelope = &config.envelope;
     let header = table.header();
     let Game::ThreeCarSplit {
         ego,
@@ -550,6 +556,10 @@ fn model_of(table: &Table<'_>, envelope: &Envelope) -> Result<Model, Fault> {
     };
     if ego.min < envelope.min_acceleration || ego.max > envelope.max_acceleration {
         return Err(Fault::TableOutsideEnvelope);
+    }
+    match header.verification {
+        Some(v) if v.is_complete() && v.rear_margin == config.rear_margin => {}
+        _ => return Err(Fault::TableNotVerified),
     }
     // The rear table must cover every speed the game allows: the domain check below relies on
     // it.
@@ -587,7 +597,7 @@ impl<'t> Controller<'t> {
         let table = if config.is_valid() {
             Table::parse(table_bytes)
                 .map_err(Fault::Table)
-                .and_then(|t| model_of(&t, &config.envelope).map(|m| (t, m)))
+                .and_then(|t| model_of(&t, &config).map(|m| (t, m)))
         } else {
             Err(Fault::InvalidConfig)
         };

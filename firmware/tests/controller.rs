@@ -588,8 +588,14 @@ fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
     assert!(!bad.is_valid());
 }
 
-/// A valid, correctly checksummed split table with the given band (all values 1 m).
+/// A valid, correctly checksummed split table with the given band (all values 1 m), with a
+/// stand-in for solver verify's record (these tests are about the other load checks).
 fn split_table(ego: (f32, f32)) -> Vec<u8> {
+    table_format::with_verification(&split_table_unverified(ego), complete_record(0.0)).unwrap()
+}
+
+/// [`split_table`] as the solver writes it before `verify`: no record.
+fn split_table_unverified(ego: (f32, f32)) -> Vec<u8> {
     use table_format::{Axis, Bounds, Horizon, HorizonStatus, Spacing, TableContents, ValueBits};
     let axis = |name, unit, min, max| Axis {
         name,
@@ -642,6 +648,58 @@ fn split_table(ego: (f32, f32)) -> Vec<u8> {
         accelerate: &[],
     })
     .unwrap()
+}
+
+/// A record of a proof that covered every certified cell, for `rear_margin`.
+fn complete_record(rear_margin: f32) -> table_format::Verification {
+    table_format::Verification {
+        verifier: 1,
+        rear_margin,
+        certified_cells: 10,
+        proven_cells: 10,
+        shortest_period: 0.02,
+        longest_period: 0.3,
+    }
+}
+
+#[test]
+fn a_table_without_a_complete_proof_for_the_configured_margin_is_refused() {
+    // The committed table carries solver verify's record: every certified cell proven.
+    let record = Table::parse(DEFAULT_TABLE)
+        .unwrap()
+        .header()
+        .verification
+        .expect("the default table is verified");
+    assert!(
+        record.is_complete() && record.certified_cells > 500_000,
+        "{record:?}"
+    );
+    let split = split_table((-3.5, 2.0));
+    assert!(Controller::new(&split, ideal()).table().is_some());
+    let incomplete = table_format::Verification {
+        proven_cells: 9,
+        ..complete_record(0.0)
+    };
+    let cases = [
+        // The same table re-encoded without the record (what the solver wrote before verify).
+        split_table_unverified((-3.5, 2.0)),
+        table_format::with_verification(&split, incomplete).unwrap(),
+        // A proof for another level.
+        table_format::with_verification(&split, complete_record(0.2)).unwrap(),
+    ];
+    for bytes in &cases {
+        let mut c = Controller::new(bytes, ideal());
+        assert!(c.table().is_none());
+        let cmd = c.step(&inputs((8.0, -4.0), (30.0, 0.0), 25.0));
+        assert_eq!(fault_of(cmd), Fault::TableNotVerified);
+    }
+    // With the margin the proof was for, it loads.
+    let at_margin = table_format::with_verification(&split, complete_record(0.2)).unwrap();
+    let config = Config {
+        rear_margin: 0.2,
+        ..ideal()
+    };
+    assert!(Controller::new(&at_margin, config).table().is_some());
 }
 
 #[test]

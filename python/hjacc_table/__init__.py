@@ -1,4 +1,4 @@
-"""Reads hjacc safety tables (``table.bin``, format version 2) in Python.
+"""Reads hjacc safety tables (``table.bin``, format version 3) in Python.
 
 The format is specified byte by byte in ``table-format/README.md``; this reader follows it
 and answers exactly as the Rust reader (``table_format::Table``) does, to the last bit:
@@ -22,7 +22,7 @@ import zlib
 __all__ = ["Table", "TableError", "MAGIC", "FORMAT_VERSION"]
 
 MAGIC = b"HJTB"
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 _PREAMBLE = 8
 _CRC = 4
 
@@ -179,6 +179,21 @@ class Table:
         if policy not in (0, 1):
             raise TableError("unknown policy encoding %d" % policy)
         self.policy_encoding = "None" if policy == 1 else "SignBitWeightedVote"
+        # What solver verify proved of the table (an Option: 0 None, 1 and the record).
+        present = c.u8()
+        if present == 0:
+            self.verification = None
+        elif present == 1:
+            self.verification = {
+                "verifier": c.varint(),
+                "rear_margin": c.f32(),
+                "certified_cells": c.varint(),
+                "proven_cells": c.varint(),
+                "shortest_period": c.f32(),
+                "longest_period": c.f32(),
+            }
+        else:
+            raise TableError("invalid verification flag %d" % present)
         if c.at != header_len:
             raise TableError("the header's length does not match its encoding")
         if self.bits not in (8, 16) or not 1 <= len(self.axes) <= 6:

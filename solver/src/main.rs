@@ -56,6 +56,10 @@ struct VerifyArgs {
     /// How many times a cell may be halved (axes in turn).
     #[arg(long, default_value_t = 21)]
     depth: u32,
+    /// Also write the table with the proof's record in its header to FILE (the firmware
+    /// refuses a split table without a complete one).
+    #[arg(long, value_name = "FILE")]
+    write: Option<PathBuf>,
 }
 
 /// Fails at once, naming the folder, if `out` cannot be written: a solve takes minutes, and
@@ -136,6 +140,17 @@ fn real_main() -> Result<()> {
             s.top_face_min,
             s.table_bytes,
             s.quantization_error
+        );
+        println!(
+            "  verify: {} of {} certified cells proven ({:.1} s){}",
+            s.verification.proven_cells,
+            s.verification.certified_cells,
+            s.verify_seconds,
+            if s.verification.is_complete() {
+                ""
+            } else {
+                "; the firmware will refuse this table (see verify.json)"
+            }
         );
         println!("  wrote {}", args.out.join(&config.name).display());
     }
@@ -232,7 +247,7 @@ fn run_configs(args: &Args) -> Result<()> {
 /// `verify`: reads the table, checks every cell, writes the report, and fails (non-zero exit)
 /// when a certified cell is unproven.
 fn run_verify(v: &VerifyArgs, out: &std::path::Path) -> Result<()> {
-    use solver::verify::{verify, RearTable, Settings};
+    use solver::verify::{RearTable, Settings};
     let bytes =
         std::fs::read(&v.table).with_context(|| format!("reading {}", v.table.display()))?;
     let table = table_format::Table::parse(&bytes)
@@ -246,8 +261,7 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path) -> Result<()> {
         rear_margin: v.rear_margin,
         max_depth: v.depth,
     };
-    let crc = table_format::CRC32.checksum(&bytes);
-    let report = verify(&rear, crc, &settings);
+    let (report, recorded) = solver::verify::verify_bytes(&bytes, &settings)?;
     let stem = v
         .table
         .file_stem()
@@ -273,6 +287,10 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path) -> Result<()> {
         report.seconds
     );
     println!("  wrote {}", dir.display());
+    if let Some(path) = &v.write {
+        std::fs::write(path, &recorded).with_context(|| format!("writing {}", path.display()))?;
+        println!("  wrote {} (with the record)", path.display());
+    }
     if report.proven < report.certified {
         anyhow::bail!(
             "{} certified cells are not proven (see {})",

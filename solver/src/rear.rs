@@ -1,5 +1,6 @@
 //! The rear game's pipeline: a `[rear]` TOML config -> the sampled-data value on breakpoint
-//! axes -> a version-2 `ThreeCarSplit` table with its summary.
+//! axes -> a `ThreeCarSplit` table -> `verify` -> the table with the proof's record, its
+//! summary and the verify report.
 //!
 //! One responsibility: turn a rear config into files. The game is [`crate::games::RearIdm`],
 //! the scheme [`crate::semi_lagrangian`]; why the split and why that scheme is written there.
@@ -24,6 +25,7 @@ use crate::error::{ConfigError, SolverError};
 use crate::games::{Accel, Idm, RearIdm};
 use crate::output;
 use crate::semi_lagrangian::{iterate, Breakpoints};
+use crate::verify::{verify_bytes, Settings as VerifySettings};
 
 /// A breakpoint axis: from `start`, uniform pieces `[end, spacing]` in turn.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -321,6 +323,10 @@ pub struct RearSummary {
     pub table_bytes: usize,
     /// The table's quantization error bound, m.
     pub quantization_error: f32,
+    /// What `verify` proved of the table (default settings), recorded in its header.
+    pub verification: table_format::Verification,
+    /// Wall time of `verify`, s.
+    pub verify_seconds: f64,
 }
 
 /// Solves a rear config and writes `out/<name>/`: `table.bin`, `value.npy`, `summary.json`.
@@ -386,6 +392,10 @@ pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverEr
         accelerate: &[],
     })?;
     let table = table_format::Table::parse(&bytes)?;
+    let quantization_error = table.header().error_bound.quantization;
+    // The table the firmware may run carries what verify proved of it (the firmware refuses a
+    // split table without a complete record).
+    let (report, bytes) = verify_bytes(&bytes, &VerifySettings::default())?;
 
     let dir = out.join(&config.name);
     std::fs::create_dir_all(&dir).map_err(|e| SolverError::Io {
@@ -393,6 +403,7 @@ pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverEr
         source: e,
     })?;
     output::write_bytes(&dir.join("table.bin"), &bytes)?;
+    output::write_json(&dir.join("verify.json"), &report)?;
     let points = [lists[0].len(), lists[1].len(), lists[2].len()];
     output::write_npy(&dir.join("value.npy"), &result.values, &points)?;
     let axes: Vec<output::AxisCoordinates> = (0..3)
@@ -438,7 +449,9 @@ pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverEr
         safe_share: result.values.iter().filter(|&&w| w > 0.0).count() as f64
             / result.values.len() as f64,
         table_bytes: bytes.len(),
-        quantization_error: table.header().error_bound.quantization,
+        quantization_error,
+        verification: report.record(),
+        verify_seconds: report.seconds,
     };
     output::write_json(&dir.join("summary.json"), &summary)?;
     Ok(summary)

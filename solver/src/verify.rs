@@ -95,6 +95,10 @@ use table_format::{Game, Table};
 
 use crate::error::SolverError;
 
+/// The version of what `verify` proves, recorded in the tables it checks
+/// ([`table_format::Verification::verifier`]).
+pub const VERSION: u16 = 1;
+
 /// Slack on both sides of the level, m: the firmware's `f32` interpolation is within about
 /// `1e-6` m of the exact one.
 pub const TOLERANCE: f64 = 1e-5;
@@ -800,6 +804,31 @@ pub struct Report {
     /// Every cell's verdict, in C order (not written to the JSON report).
     #[serde(skip)]
     pub verdicts: Vec<Verdict>,
+}
+
+impl Report {
+    /// The record a table carries of this report.
+    pub fn record(&self) -> table_format::Verification {
+        let periods = &self.settings.periods;
+        table_format::Verification {
+            verifier: VERSION,
+            rear_margin: self.settings.rear_margin as f32,
+            certified_cells: u32::try_from(self.certified).unwrap_or(u32::MAX),
+            proven_cells: u32::try_from(self.proven).unwrap_or(u32::MAX),
+            shortest_period: periods.iter().copied().fold(f64::INFINITY, f64::min) as f32,
+            longest_period: periods.iter().copied().fold(0.0, f64::max) as f32,
+        }
+    }
+}
+
+/// Verifies a split table's bytes with `settings` and returns the report and the table with
+/// the report's record in its header.
+pub fn verify_bytes(bytes: &[u8], settings: &Settings) -> Result<(Report, Vec<u8>), SolverError> {
+    let table = Table::parse(bytes)?;
+    let rear = RearTable::from_table(&table)?;
+    let report = verify(&rear, table_format::CRC32.checksum(bytes), settings);
+    let recorded = table_format::with_verification(bytes, report.record())?;
+    Ok((report, recorded))
 }
 
 /// Unproven cells per reason.

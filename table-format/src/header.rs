@@ -497,6 +497,35 @@ pub struct Header<'a> {
     pub error_bound: ErrorBound,
     /// How the policy bits are read.
     pub policy: PolicyEncoding,
+    /// What `solver verify` proved of this table's payload, if it was run (version 3).
+    pub verification: Option<Verification>,
+}
+
+/// The record `solver verify` writes into a rear table it has checked: the firmware refuses a
+/// split table without one, or whose proof does not cover its configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Verification {
+    /// The version of the check (`solver::verify::VERSION`); a change to what it proves bumps it.
+    pub verifier: u16,
+    /// The `rear_margin` the proof is for, m: the rear level is `error_bound + rear_margin`, and
+    /// a proof at one level says nothing about another.
+    pub rear_margin: f32,
+    /// Cells holding a certified state.
+    pub certified_cells: u32,
+    /// Of those, cells proven.
+    pub proven_cells: u32,
+    /// The shortest period the proof uses, s.
+    pub shortest_period: f32,
+    /// The longest period the proof uses, s.
+    pub longest_period: f32,
+}
+
+impl Verification {
+    /// Whether the proof covers every certified cell.
+    pub fn is_complete(&self) -> bool {
+        self.proven_cells == self.certified_cells
+    }
 }
 
 impl Header<'_> {
@@ -578,6 +607,18 @@ impl Header<'_> {
         }
         if !(self.min_gap.is_finite() && self.horizon.seconds.is_finite()) {
             return Err(Error::InvalidHeader("min gap or horizon"));
+        }
+        if let Some(v) = &self.verification {
+            let ok = v.rear_margin.is_finite()
+                && v.rear_margin >= 0.0
+                && v.proven_cells <= v.certified_cells
+                && v.shortest_period.is_finite()
+                && v.shortest_period > 0.0
+                && v.longest_period >= v.shortest_period
+                && v.longest_period.is_finite();
+            if !ok {
+                return Err(Error::InvalidHeader("verification"));
+            }
         }
         Ok(())
     }

@@ -56,18 +56,18 @@ mod writer;
 pub use error::Error;
 pub use header::{
     Axis, Bounds, ErrorBound, FollowerSpeed, Game, GameKind, Header, Horizon, HorizonStatus,
-    IdmParameters, PolicyEncoding, Quantization, Spacing, MAX_DIMS,
+    IdmParameters, PolicyEncoding, Quantization, Spacing, Verification, MAX_DIMS,
 };
 pub use table::{EgoAction, Lookup, Table};
 #[cfg(feature = "std")]
-pub use writer::{encode, TableContents, ValueBits};
+pub use writer::{encode, with_verification, TableContents, ValueBits};
 
 /// The four bytes every table starts with: `HJTB` (Hamilton-Jacobi TaBle).
 pub const MAGIC: [u8; 4] = *b"HJTB";
 
 /// The layout version this crate reads and writes. Bumped on any change a reader of the previous
 /// version would misread.
-pub const FORMAT_VERSION: u16 = 2;
+pub const FORMAT_VERSION: u16 = 3;
 
 /// Bytes before the header: magic (4), format version (2), header length (2).
 pub const PREAMBLE_LEN: usize = 8;

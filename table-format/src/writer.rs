@@ -7,7 +7,7 @@
 
 use crate::header::{
     Axis, Bounds, ErrorBound, Game, Header, Horizon, PolicyEncoding, Quantization, Spacing,
-    MAX_DIMS,
+    Verification, MAX_DIMS,
 };
 use crate::{Error, CRC32, FORMAT_VERSION, MAGIC};
 
@@ -97,6 +97,7 @@ pub fn encode(contents: &TableContents<'_>) -> Result<Vec<u8>, Error> {
         } else {
             PolicyEncoding::SignBitWeightedVote
         },
+        verification: None,
     };
     header.validate()?;
     let n = header.node_count()?;
@@ -122,16 +123,7 @@ pub fn encode(contents: &TableContents<'_>) -> Result<Vec<u8>, Error> {
     header.error_bound.quantization = quantization_error;
     header.validate()?;
 
-    let header_bytes =
-        postcard::to_stdvec(&header).map_err(|_| Error::InvalidHeader("header encoding"))?;
-    let header_len = u16::try_from(header_bytes.len())
-        .map_err(|_| Error::InvalidHeader("header longer than 65535 bytes"))?;
-
-    let mut out = Vec::with_capacity(crate::PREAMBLE_LEN + header_bytes.len() + n * 2 + n / 8 + 8);
-    out.extend_from_slice(&MAGIC);
-    out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-    out.extend_from_slice(&header_len.to_le_bytes());
-    out.extend_from_slice(&header_bytes);
+    let mut out = preamble_and_header(&header, n * 2 + n / 8 + 8)?;
     let listed: Vec<&Axis<'_>> = header
         .axes
         .iter()
@@ -168,6 +160,43 @@ pub fn encode(contents: &TableContents<'_>) -> Result<Vec<u8>, Error> {
             .enumerate()
             .fold(0u8, |byte, (bit, &a)| byte | (u8::from(a) << bit))
     }));
+    let crc = CRC32.checksum(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    Ok(out)
+}
+
+/// The preamble and the encoded header, in a buffer with room for `payload` more bytes.
+fn preamble_and_header(header: &Header<'_>, payload: usize) -> Result<Vec<u8>, Error> {
+    let header_bytes =
+        postcard::to_stdvec(header).map_err(|_| Error::InvalidHeader("header encoding"))?;
+    let header_len = u16::try_from(header_bytes.len())
+        .map_err(|_| Error::InvalidHeader("header longer than 65535 bytes"))?;
+    let mut out = Vec::with_capacity(crate::PREAMBLE_LEN + header_bytes.len() + payload);
+    out.extend_from_slice(&MAGIC);
+    out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+    out.extend_from_slice(&header_len.to_le_bytes());
+    out.extend_from_slice(&header_bytes);
+    Ok(out)
+}
+
+/// The table `bytes` with `verification` in its header: the payload is copied byte for byte
+/// (nothing is quantized again), the header length and the CRC are written anew.
+pub fn with_verification(bytes: &[u8], verification: Verification) -> Result<Vec<u8>, Error> {
+    let table = crate::Table::parse(bytes)?;
+    let mut header = table.header().clone();
+    header.verification = Some(verification);
+    header.validate()?;
+    // `parse` has checked the preamble, the header length and the trailer.
+    let malformed = Error::InvalidHeader("header length");
+    let old_header_len = match bytes.get(6..8) {
+        Some(&[lo, hi]) => usize::from(u16::from_le_bytes([lo, hi])),
+        _ => return Err(malformed),
+    };
+    let payload = bytes
+        .get(crate::PREAMBLE_LEN + old_header_len..bytes.len().saturating_sub(crate::CRC_LEN))
+        .ok_or(malformed)?;
+    let mut out = preamble_and_header(&header, payload.len() + crate::CRC_LEN)?;
+    out.extend_from_slice(payload);
     let crc = CRC32.checksum(&out);
     out.extend_from_slice(&crc.to_le_bytes());
     Ok(out)

@@ -317,11 +317,18 @@ fn specific_corruptions_name_their_cause() {
         Table::parse(&version_one).unwrap_err(),
         Error::UnsupportedVersion { found: 1 }
     );
+    // A version-2 table (the header without its verification record) likewise.
+    let mut version_two = bytes.clone();
+    version_two[4] = 2;
+    assert_eq!(
+        Table::parse(&version_two).unwrap_err(),
+        Error::UnsupportedVersion { found: 2 }
+    );
     let mut future = bytes.clone();
-    future[4] = 3;
+    future[4] = 4;
     assert_eq!(
         Table::parse(&future).unwrap_err(),
-        Error::UnsupportedVersion { found: 3 }
+        Error::UnsupportedVersion { found: 4 }
     );
     let mut payload_flip = bytes.clone();
     let last = payload_flip.len() - 5;
@@ -586,4 +593,37 @@ fn node_indices_past_the_end_are_none_not_an_overflow() {
         assert_eq!(t.value_at_node(node), None, "{node}");
         assert_eq!(t.action_at_node(node), None, "{node}");
     }
+}
+
+#[test]
+fn a_verification_record_changes_the_header_only() {
+    let plain = small();
+    let record = table_format::Verification {
+        verifier: 1,
+        rear_margin: 0.25,
+        certified_cells: 1000,
+        proven_cells: 998,
+        shortest_period: 0.02,
+        longest_period: 0.3,
+    };
+    let recorded = table_format::with_verification(&plain, record).expect("re-encodes");
+    let (a, b) = (
+        Table::parse(&plain).expect("parses"),
+        Table::parse(&recorded).expect("parses"),
+    );
+    assert_eq!(a.header().verification, None);
+    assert_eq!(b.header().verification, Some(record));
+    assert!(!record.is_complete());
+    // Every node, and so every lookup, is the same; the file grew by the record's bytes.
+    for n in 0..a.node_count() {
+        assert_eq!(a.value_at_node(n), b.value_at_node(n));
+        assert_eq!(a.action_at_node(n), b.action_at_node(n));
+    }
+    assert_eq!(recorded.len(), plain.len() + 17);
+    // A record the header cannot hold is refused.
+    let bad = table_format::Verification {
+        proven_cells: 1001,
+        ..record
+    };
+    assert!(table_format::with_verification(&plain, bad).is_err());
 }
