@@ -197,3 +197,44 @@ fn a_grid_too_large_for_memory_is_refused_before_anything_is_allocated() {
     assert_eq!(err.field, "grid", "{err}");
     println!("{err}");
 }
+
+/// Every key a parsed config serializes to (leaf and section names alike).
+fn keys(value: &serde_json::Value, out: &mut Vec<String>) {
+    match value {
+        serde_json::Value::Object(map) => {
+            for (k, v) in map {
+                out.push(k.clone());
+                keys(v, out);
+            }
+        }
+        serde_json::Value::Array(items) => items.iter().for_each(|v| keys(v, out)),
+        _ => {}
+    }
+}
+
+#[test]
+fn the_reference_configs_parse_and_name_every_field() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/reference");
+    let level_set = std::fs::read_to_string(format!("{dir}/level-set.toml")).unwrap();
+    let rear = std::fs::read_to_string(format!("{dir}/rear.toml")).unwrap();
+    let a = Config::from_toml(&level_set).unwrap_or_else(|e| panic!("level-set.toml: {e}"));
+    let b = solver::rear::RearConfig::from_toml(&rear).unwrap_or_else(|e| panic!("rear.toml: {e}"));
+    // The level-set file also documents the 5-D game's fields, commented out.
+    let five_d = ["max_speed", "leader_speed", "follower_speed", "ego_speed"];
+    for (text, value, extra) in [
+        (&level_set, serde_json::to_value(&a).unwrap(), &five_d[..]),
+        (&rear, serde_json::to_value(&b).unwrap(), &[][..]),
+    ] {
+        let mut names: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
+        keys(&value, &mut names);
+        for name in names {
+            assert!(
+                text.contains(&format!("{name} ="))
+                    || text.contains(&format!("[{name}]"))
+                    || text.contains(&format!("[[{name}]]"))
+                    || text.contains(&format!("[game.{name}]")),
+                "the reference config does not document `{name}`"
+            );
+        }
+    }
+}
