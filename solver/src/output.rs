@@ -128,7 +128,7 @@ pub fn draw_cell_map(path: &Path, map: &CellMap<'_>) -> Result<(), SolverError> 
     let (x0, x1) = (map.x.coords[0], *map.x.coords.last().unwrap_or(&1.0));
     let (y0, y1) = (map.y.coords[0], *map.y.coords.last().unwrap_or(&1.0));
     let mut chart = ChartBuilder::on(&root)
-        .caption(map.title, ("sans-serif", 22))
+        .caption(map.title, ("sans-serif", 18))
         .margin(12)
         .x_label_area_size(48)
         .y_label_area_size(64)

@@ -328,6 +328,47 @@ const BLUE: RGBColor = RGBColor(60, 110, 220);
 const RED: RGBColor = RGBColor(230, 120, 100);
 const ORANGE: RGBColor = RGBColor(245, 170, 60);
 const PURPLE: RGBColor = RGBColor(130, 90, 190);
+const GREY: RGBColor = RGBColor(215, 215, 215);
+const PALE_GREEN: RGBColor = RGBColor(205, 235, 205);
+const PALE_BLUE: RGBColor = RGBColor(175, 195, 240);
+
+/// The categories of a safe-set map: inside the trusted box, then outside it (paler).
+const SET_LEGEND: [(&str, RGBColor); 4] = [
+    ("constraint set l >= 0", GREEN),
+    ("safe set V > 0", BLUE),
+    ("constraint set, untrusted", PALE_GREEN),
+    ("safe set, untrusted", PALE_BLUE),
+];
+
+/// The categories of a policy map: the policy where the state is safe, grey where it is not.
+const POLICY_LEGEND: [(&str, RGBColor); 3] = [
+    ("safe, u2* = a_max", ORANGE),
+    ("safe, u2* = a_min", PURPLE),
+    ("constraint set, not safe", GREY),
+];
+
+/// A safe-set map's category: `None` outside the constraint set; 2 and 3 where untrusted.
+fn set_category(safe: bool, in_constraint: bool, trusted: bool) -> Option<usize> {
+    let base = if safe {
+        1
+    } else if in_constraint {
+        0
+    } else {
+        return None;
+    };
+    Some(if trusted { base } else { base + 2 })
+}
+
+/// A policy map's category: the policy where safe, grey in the rest of the constraint set.
+fn policy_category(safe: bool, in_constraint: bool, accelerate: bool) -> Option<usize> {
+    if safe {
+        Some(if accelerate { 0 } else { 1 })
+    } else if in_constraint {
+        Some(2)
+    } else {
+        None
+    }
+}
 
 fn plots(
     config: &Config,
@@ -360,21 +401,22 @@ fn plots(
             .filter(|(x, _)| *x >= coords[0][0] && *x <= *coords[0].last().unwrap_or(&0.0))
             .collect();
         let frame = bounds.as_ref().map(|b| (b[0].0, b[0].1, b[1].0, b[1].1));
+        let inside = |x: f64, y: f64| {
+            frame.is_none_or(|(a, b, c, d)| (a..=b).contains(&x) && (c..=d).contains(&y))
+        };
         let sets = |i: usize, j: usize| {
-            let node = i * n1 + j;
-            if values[node] > 0.0 {
-                Some(1)
-            } else if coords[0][i] - g.min_gap >= 0.0 {
-                Some(0)
-            } else {
-                None
-            }
+            set_category(
+                values[i * n1 + j] > 0.0,
+                coords[0][i] - g.min_gap >= 0.0,
+                inside(coords[0][i], coords[1][j]),
+            )
         };
         output::draw_cell_map(
             &dir.join("safe_set.png"),
             &CellMap {
                 title: &format!(
-                    "Two-car game: constraint set and safe set, horizon {horizon_text}"
+                    "{}: constraint and safe sets, horizon {horizon_text}",
+                    config.name
                 ),
                 x: PlotAxis {
                     label: "gap_leader [m]",
@@ -385,16 +427,23 @@ fn plots(
                     coords: &coords[1],
                 },
                 cell: &sets,
-                legend: &[("constraint set l >= 0", GREEN), ("safe set V > 0", BLUE)],
-                curves: &[("exact safe-set boundary", RED, boundary)],
+                legend: &SET_LEGEND,
+                curves: &[("exact safe-set boundary", RED, boundary.clone())],
                 frame,
             },
         )?;
-        let policy = |i: usize, j: usize| Some(if accelerate[i * n1 + j] { 0 } else { 1 });
+        let policy = |i: usize, j: usize| {
+            let node = i * n1 + j;
+            policy_category(
+                values[node] > 0.0,
+                coords[0][i] - g.min_gap >= 0.0,
+                accelerate[node],
+            )
+        };
         output::draw_cell_map(
             &dir.join("policy.png"),
             &CellMap {
-                title: "Two-car game: ego input u2*",
+                title: &format!("{}: ego input u2* over the safe set", config.name),
                 x: PlotAxis {
                     label: "gap_leader [m]",
                     coords: &coords[0],
@@ -404,8 +453,8 @@ fn plots(
                     coords: &coords[1],
                 },
                 cell: &policy,
-                legend: &[("u2* = a_max", ORANGE), ("u2* = a_min", PURPLE)],
-                curves: &[],
+                legend: &POLICY_LEGEND,
+                curves: &[("exact safe-set boundary", RED, boundary)],
                 frame,
             },
         )?;
@@ -437,14 +486,39 @@ fn plots(
                 }
                 accelerate[node]
             };
+            // The trusted box on the slice: its gap extents, when the slice's held speeds lie
+            // inside it; otherwise the whole slice is untrusted.
+            let held_inside = bounds.as_ref().is_none_or(|b| {
+                [1, 3, 4].iter().all(|&k| {
+                    speeds
+                        .get(k)
+                        .is_none_or(|&x| k >= b.len() || (b[k].0..=b[k].1).contains(&x))
+                })
+            });
+            let frame = bounds
+                .as_ref()
+                .filter(|_| held_inside)
+                .map(|b| (b[0].0, b[0].1, b[2].0, b[2].1));
+            let trusted_at = |i: usize, j: usize| {
+                held_inside
+                    && frame.is_none_or(|(a, b, c, d)| {
+                        (a..=b).contains(&coords[0][i]) && (c..=d).contains(&coords[2][j])
+                    })
+            };
+            let in_constraint =
+                |i: usize, j: usize| coords[0][i].min(coords[2][j]) - min_gap >= 0.0;
             let sets = |i: usize, j: usize| {
-                if at(i, j) > 0.0 {
-                    Some(1)
-                } else if coords[0][i].min(coords[2][j]) - min_gap >= 0.0 {
-                    Some(0)
-                } else {
-                    None
-                }
+                set_category(at(i, j) > 0.0, in_constraint(i, j), trusted_at(i, j))
+            };
+            let safe_nodes = (0..coords[0].len())
+                .flat_map(|i| (0..coords[2].len()).map(move |j| (i, j)))
+                .filter(|&(i, j)| at(i, j) > 0.0)
+                .count();
+            let notes = match (held_inside, safe_nodes) {
+                (true, 0) => " (empty)".to_string(),
+                (true, _) => String::new(),
+                (false, 0) => " (untrusted, empty)".to_string(),
+                (false, _) => " (untrusted slice)".to_string(),
             };
             let tag = s.tag(five);
             let speeds_text = if five {
@@ -455,16 +529,16 @@ fn plots(
             } else {
                 format!("v_g1 = {:.1}, v_g2 = {:.1} m/s", speeds[1], speeds[3])
             };
-            let frame = bounds.as_ref().map(|b| (b[0].0, b[0].1, b[2].0, b[2].1));
             let kind = match config.game.kind {
-                GameKindConfig::ThreeCarBaseline => "baseline follower",
-                _ => "IDM follower",
+                GameKindConfig::ThreeCarBaseline => "baseline",
+                _ => "IDM",
             };
             output::draw_cell_map(
                 &dir.join(format!("safe_set_{tag}.png")),
                 &CellMap {
                     title: &format!(
-                        "Three cars, {kind}: slice {speeds_text}, horizon {horizon_text}"
+                        "{} ({kind}): {speeds_text}, {horizon_text}{notes}",
+                        config.name
                     ),
                     x: PlotAxis {
                         label: "gap_leader x_g1 [m]",
@@ -475,16 +549,18 @@ fn plots(
                         coords: &coords[2],
                     },
                     cell: &sets,
-                    legend: &[("constraint set l >= 0", GREEN), ("safe set V > 0", BLUE)],
+                    legend: &SET_LEGEND,
                     curves: &[],
                     frame,
                 },
             )?;
-            let policy = |i: usize, j: usize| Some(if policy_at(i, j) { 0 } else { 1 });
+            let policy = |i: usize, j: usize| {
+                policy_category(at(i, j) > 0.0, in_constraint(i, j), policy_at(i, j))
+            };
             output::draw_cell_map(
                 &dir.join(format!("policy_{tag}.png")),
                 &CellMap {
-                    title: &format!("Three cars, {kind}: ego input u2*, {speeds_text}"),
+                    title: &format!("{}: u2* where safe, {speeds_text}{notes}", config.name),
                     x: PlotAxis {
                         label: "gap_leader x_g1 [m]",
                         coords: &coords[0],
@@ -494,7 +570,7 @@ fn plots(
                         coords: &coords[2],
                     },
                     cell: &policy,
-                    legend: &[("u2* = a_max", ORANGE), ("u2* = a_min", PURPLE)],
+                    legend: &POLICY_LEGEND,
                     curves: &[],
                     frame,
                 },
@@ -516,4 +592,24 @@ fn plots(
 /// The output folder of a config.
 pub fn folder(out: &Path, config: &Config) -> PathBuf {
     out.join(&config.name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn untrusted_cells_take_the_pale_categories_and_policy_shows_only_where_safe() {
+        assert_eq!(set_category(true, true, true), Some(1));
+        assert_eq!(set_category(false, true, true), Some(0));
+        assert_eq!(set_category(true, true, false), Some(3));
+        assert_eq!(set_category(false, true, false), Some(2));
+        assert_eq!(set_category(false, false, true), None);
+        assert_eq!(SET_LEGEND[3].0, "safe set, untrusted");
+        // The policy bit is shown only where the state is safe.
+        assert_eq!(policy_category(true, true, true), Some(0));
+        assert_eq!(policy_category(true, true, false), Some(1));
+        assert_eq!(policy_category(false, true, true), Some(2));
+        assert_eq!(policy_category(false, false, false), None);
+    }
 }
