@@ -425,18 +425,8 @@ impl RearTable {
             .map(|n| table.value_at_node(n).map(f64::from))
             .collect::<Option<Vec<f64>>>()
             .ok_or_else(|| SolverError::Verify("missing node values".into()))?;
-        let face = axes[1].len() * axes[2].len();
-        let beyond_grid = values[values.len() - face..]
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, f64::min);
-        Ok(RearTable {
-            axes,
-            values,
-            beyond_grid,
-            error_bound: f64::from(header.error_bound.total()),
-            model,
-        })
+        RearTable::new(model, axes, values, f64::from(header.error_bound.total()))
+            .ok_or_else(|| SolverError::Verify("the grid and the values disagree".into()))
     }
 
     /// A table from breakpoints and node values in C order (last axis fastest): hand-made
@@ -794,8 +784,9 @@ pub struct Report {
     pub proven_share: f64,
     /// Unproven cells per reason.
     pub unproven_by_reason: UnprovenCounts,
-    /// The largest deficit: every certified state's value stays above `level - dip` through
-    /// one period (proven for every cell), m.
+    /// The largest deficit among the unproven cells: how far below the level the images of
+    /// their certified states may fall, under the best of the periods (0 when every cell is
+    /// proven), m.
     pub dip: f64,
     /// Wall time, s.
     pub seconds: f64,
