@@ -247,12 +247,7 @@ fn run_configs(args: &Args) -> Result<()> {
 /// `verify`: reads the table, checks every cell, writes the report, and fails (non-zero exit)
 /// when a certified cell is unproven.
 fn run_verify(v: &VerifyArgs, out: &std::path::Path) -> Result<()> {
-    use solver::verify::{RearTable, Settings};
-    let bytes =
-        std::fs::read(&v.table).with_context(|| format!("reading {}", v.table.display()))?;
-    let table = table_format::Table::parse(&bytes)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", v.table.display()))?;
-    let rear = RearTable::from_table(&table)?;
+    use solver::verify::Settings;
     if v.period_ms.is_empty() || v.period_ms.iter().any(|p| !(p.is_finite() && *p > 0.0)) {
         anyhow::bail!("--period-ms: every period must be a positive number of milliseconds");
     }
@@ -261,7 +256,10 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path) -> Result<()> {
         rear_margin: v.rear_margin,
         max_depth: v.depth,
     };
-    let (report, recorded) = solver::verify::verify_bytes(&bytes, &settings)?;
+    let bytes =
+        std::fs::read(&v.table).with_context(|| format!("reading {}", v.table.display()))?;
+    let (rear, report, recorded) = solver::verify::verify_bytes(&bytes, &settings)
+        .with_context(|| v.table.display().to_string())?;
     let stem = v
         .table
         .file_stem()

@@ -395,7 +395,7 @@ pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverEr
     let quantization_error = table.header().error_bound.quantization;
     // The table the firmware may run carries what verify proved of it (the firmware refuses a
     // split table without a complete record).
-    let (report, bytes) = verify_bytes(&bytes, &VerifySettings::default())?;
+    let (_, report, bytes) = verify_bytes(&bytes, &VerifySettings::default())?;
 
     let dir = out.join(&config.name);
     std::fs::create_dir_all(&dir).map_err(|e| SolverError::Io {

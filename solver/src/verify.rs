@@ -626,10 +626,7 @@ fn verify_cell_with(
 ) -> Verdict {
     debug_assert!(!s.periods.is_empty());
     let mut by_lemma = false;
-    let extremes = table.extremes(cell);
-    if extremes.hi <= level - TOLERANCE {
-        return Verdict::NotCertified;
-    }
+    let mut certified = false;
     let mut worst: Option<(Reason, f64)> = None;
     let mut stack = vec![(*cell, 0u32)];
     while let Some((b, depth)) = stack.pop() {
@@ -637,6 +634,7 @@ fn verify_cell_with(
         if w.hi <= level - TOLERANCE {
             continue;
         }
+        certified = true;
         // The period that does best for this box: proven by it, or else the least deficit.
         let mut best: Option<(bool, f64)> = None;
         let mut proven = false;
@@ -702,6 +700,7 @@ fn verify_cell_with(
         }
     }
     match worst {
+        None if !certified => Verdict::NotCertified,
         None if by_lemma => Verdict::ProvenAtStandstill,
         None => Verdict::Proven,
         Some((reason, deficit)) => Verdict::Unproven { reason, deficit },
@@ -812,14 +811,17 @@ impl Report {
     }
 }
 
-/// Verifies a split table's bytes with `settings` and returns the report and the table with
-/// the report's record in its header.
-pub fn verify_bytes(bytes: &[u8], settings: &Settings) -> Result<(Report, Vec<u8>), SolverError> {
+/// Verifies a split table's bytes with `settings`; returns the table as `verify` reads it, the
+/// report, and the bytes with the report's record in the header.
+pub fn verify_bytes(
+    bytes: &[u8],
+    settings: &Settings,
+) -> Result<(RearTable, Report, Vec<u8>), SolverError> {
     let table = Table::parse(bytes)?;
     let rear = RearTable::from_table(&table)?;
     let report = verify(&rear, table_format::CRC32.checksum(bytes), settings);
     let recorded = table_format::with_verification(bytes, report.record())?;
-    Ok((report, recorded))
+    Ok((rear, report, recorded))
 }
 
 /// Unproven cells per reason.
