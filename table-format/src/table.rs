@@ -186,6 +186,61 @@ impl<'a> Table<'a> {
         })
     }
 
+    /// Checks the table at the start of `region`, a buffer that may be longer than the table
+    /// (a flash slot of fixed size, erased beyond the table), and returns a reader over the
+    /// table's bytes alone.
+    ///
+    /// The table's length is found from its preamble and header alone: `8 + H` plus the
+    /// payload the header's grid calls for, plus the CRC (see the crate's README, "File
+    /// layout"). Nothing before the CRC check is trusted beyond that arithmetic, which is
+    /// overflow-checked; then [`Table::parse`] checks the prefix of that length, CRC first. An
+    /// erased or foreign region is refused as [`Error::BadMagic`], a region shorter than the
+    /// declared table as [`Error::Truncated`].
+    pub fn parse_prefix(region: &'a [u8]) -> Result<Self, Error> {
+        let len = Self::declared_len(region)?;
+        let bytes = region.get(..len).ok_or(Error::Truncated {
+            needed: len,
+            found: region.len(),
+        })?;
+        Self::parse(bytes)
+    }
+
+    /// The length in bytes of the table that starts `region`, as its preamble and header
+    /// declare it (not yet checked against the CRC).
+    pub fn declared_len(region: &[u8]) -> Result<usize, Error> {
+        if region.get(..4) != Some(&MAGIC[..]) {
+            return Err(Error::BadMagic);
+        }
+        let version = le_u16(region, 4).ok_or(Error::Truncated {
+            needed: PREAMBLE_LEN,
+            found: region.len(),
+        })?;
+        if version != FORMAT_VERSION {
+            return Err(Error::UnsupportedVersion { found: version });
+        }
+        let header_len = usize::from(le_u16(region, 6).ok_or(Error::Truncated {
+            needed: PREAMBLE_LEN,
+            found: region.len(),
+        })?);
+        let header_end = PREAMBLE_LEN + header_len;
+        let header_bytes = region.get(PREAMBLE_LEN..header_end).ok_or(Error::Truncated {
+            needed: header_end,
+            found: region.len(),
+        })?;
+        let (header, rest): (Header<'_>, &[u8]) =
+            postcard::take_from_bytes(header_bytes).map_err(|_| Error::HeaderDecode)?;
+        if !rest.is_empty() {
+            return Err(Error::InvalidHeader(
+                "header length does not match its encoding",
+            ));
+        }
+        header.validate()?;
+        header
+            .payload_len()?
+            .checked_add(header_end + CRC_LEN)
+            .ok_or(Error::InvalidHeader("grid has too many nodes"))
+    }
+
     /// The header.
     pub fn header(&self) -> &Header<'a> {
         &self.header

@@ -304,6 +304,56 @@ fn truncated_or_extended_buffers_are_rejected() {
     assert!(Table::parse(&longer).is_err());
 }
 
+/// A table flashed into a slot of fixed size: the bytes after it are erased flash (`0xFF`), or
+/// whatever an earlier, longer table left there.
+#[test]
+fn a_table_at_the_start_of_a_longer_region_is_found_by_its_declared_length() {
+    let bytes = small();
+    for fill in [0xFF_u8, 0x00, 0xA5] {
+        let mut slot = bytes.clone();
+        slot.resize(bytes.len() + 1000, fill);
+        assert_eq!(Table::declared_len(&slot), Ok(bytes.len()));
+        let table = Table::parse_prefix(&slot).expect("table in a slot");
+        let whole = Table::parse(&bytes).expect("table");
+        assert_eq!(table.header(), whole.header());
+        assert_eq!(
+            table.lookup(&[10.0, 1.0, 20.0, 2.0]),
+            whole.lookup(&[10.0, 1.0, 20.0, 2.0])
+        );
+    }
+    // Exactly the table's length is a slot too.
+    assert!(Table::parse_prefix(&bytes).is_ok());
+    // Erased flash, in either polarity, is not a table.
+    assert_eq!(
+        Table::parse_prefix(&[0xFF; 4096]).unwrap_err(),
+        Error::BadMagic
+    );
+    assert_eq!(Table::parse_prefix(&[0; 4096]).unwrap_err(), Error::BadMagic);
+    // A slot cut short of the declared table (a table too big for its slot).
+    for len in 0..bytes.len() {
+        assert!(
+            Table::parse_prefix(&bytes[..len]).is_err(),
+            "prefix of {len} accepted"
+        );
+    }
+    assert_eq!(
+        Table::parse_prefix(&bytes[..bytes.len() - 1]).unwrap_err(),
+        Error::Truncated {
+            needed: bytes.len(),
+            found: bytes.len() - 1
+        }
+    );
+    // A corrupt table in a slot is still refused by its CRC, and nothing beyond it is read.
+    let mut slot = bytes.clone();
+    slot.resize(bytes.len() + 64, 0xFF);
+    let mid = bytes.len() / 2;
+    slot[mid] ^= 0x10;
+    assert!(matches!(
+        Table::parse_prefix(&slot).unwrap_err(),
+        Error::Checksum { .. }
+    ));
+}
+
 #[test]
 fn specific_corruptions_name_their_cause() {
     let bytes = small();

@@ -9,6 +9,13 @@ fuzz_target!(|data: &[u8]| {
     // The first 24 bytes, when present, are a state to look up (up to six axes); the rest is
     // the table.
     let (state_bytes, table_bytes) = data.split_at(data.len().min(24));
+    // A flash slot: the table found by its declared length, never past the region's end.
+    if let Ok(len) = Table::declared_len(table_bytes) {
+        assert!(len <= table_bytes.len() || Table::parse_prefix(table_bytes).is_err());
+    }
+    if let Ok(table) = Table::parse_prefix(table_bytes) {
+        let _ = table.value_at(&[0.0; table_format::MAX_DIMS][..table.dims()]);
+    }
     if let Ok(table) = Table::parse(table_bytes) {
         let mut state = [0f32; table_format::MAX_DIMS];
         for (x, b) in state.iter_mut().zip(state_bytes.chunks_exact(4)) {
