@@ -311,6 +311,18 @@ impl<C: embedded_can::nb::Can> CanBus<C> {
         self.can
     }
 
+    /// The bus, for what the traits do not cover (a board finishing the peripheral's start-up,
+    /// say). Frames taken from it here bypass the end-to-end checks.
+    pub fn bus_mut(&mut self) -> &mut C {
+        &mut self.can
+    }
+
+    /// The rolling counter the next acceleration request will carry: a fault handler that
+    /// must send a last frame on its own uses it, so the receiver sees no gap in the sequence.
+    pub fn next_counter(&self) -> u8 {
+        self.counter
+    }
+
     /// Drains up to [`MAX_FRAMES_PER_READ`] received frames into the inputs.
     pub fn poll(&mut self, now_us: u64) -> Result<(), Error<C::Error>> {
         for _ in 0..MAX_FRAMES_PER_READ {

@@ -343,6 +343,10 @@ pub enum Fault {
     /// unproven, or one for another `rear_margin` than the configuration's (a proof at one
     /// level says nothing about another).
     TableNotVerified,
+    /// The board restarted after a fault of its own: the watchdog expired, or a HardFault
+    /// (a stack overflow among them) or a panic ended the last run. The minimum-risk manoeuvre
+    /// until the next power-on reset (see [`Controller::latch_minimum_risk`]).
+    RestartedAfterFault,
 }
 
 /// One control step's output.
@@ -631,6 +635,17 @@ impl<'t> Controller<'t> {
         u64::from(c.period_us) * u64::from(c.stale_periods)
             + u64::from(c.actuator_dead_time_us)
             + 5 * u64::from(c.actuator_lag_us)
+    }
+
+    /// Ends certified control for good: every later step is the minimum-risk manoeuvre, with
+    /// `fault` as its reason. For a board that restarted after a fault of its own (watchdog,
+    /// HardFault, panic): software that failed once in a drive is not trusted again in that
+    /// drive, so a restart brings the car to a stop instead of resuming control. The
+    /// manoeuvre is the usual one (softened for a close, closing follower); nothing but a new
+    /// controller ends it.
+    pub fn latch_minimum_risk(&mut self, fault: Fault) {
+        log_warn!("minimum-risk manoeuvre latched: {}", fault);
+        self.table = Err(fault);
     }
 
     /// The table, if it was accepted.

@@ -311,6 +311,33 @@ fn a_corrupt_or_foreign_table_means_minimum_risk_for_good() {
     );
 }
 
+/// A board restarted by its watchdog or a fault latches the minimum-risk manoeuvre, whatever
+/// the inputs, and still minds the follower.
+#[test]
+fn a_latched_controller_stays_in_minimum_risk_on_good_inputs() {
+    let mut c = controller();
+    let good = inputs((60.0, 0.0), (40.0, 0.0), 25.0);
+    assert_eq!(c.step(&good).mode, Mode::Nominal);
+    c.latch_minimum_risk(Fault::RestartedAfterFault);
+    for k in 1..=500u64 {
+        let mut later = good;
+        later.now_us = NOW + k * 20_000;
+        later.leader.timestamp_us = later.now_us;
+        later.follower.timestamp_us = later.now_us;
+        later.ego_speed.timestamp_us = later.now_us;
+        let command = c.step(&later);
+        assert_eq!(fault_of(command), Fault::RestartedAfterFault, "step {k}");
+        assert_eq!(command.acceleration, -2.0);
+    }
+    let mut close = inputs((60.0, 0.0), (8.0, -2.0), 25.0);
+    close.now_us = NOW + 501 * 20_000;
+    close.leader.timestamp_us = close.now_us;
+    close.follower.timestamp_us = close.now_us;
+    close.ego_speed.timestamp_us = close.now_us;
+    assert_eq!(c.step(&close).acceleration, -1.0);
+    assert!(c.table().is_none());
+}
+
 #[test]
 fn minimum_risk_minds_the_follower_and_its_limits() {
     let mut bad = inputs((f32::NAN, 0.0), (40.0, 0.0), 25.0);

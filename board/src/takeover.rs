@@ -1,0 +1,140 @@
+//! The driver's takeover request: a lamp (or chime) on an `embedded-hal` 1.0 output pin, lit
+//! whenever the controller is not certifying its command.
+//!
+//! An ACC that brakes to a stop on its own (the minimum-risk manoeuvre) or drives without its
+//! certificate (outside the table's domain) must tell the driver to take over. The request is on
+//! in [`Mode::MinimumRisk`] and [`Mode::Uncertified`], off in [`Mode::Nominal`] and
+//! [`Mode::Override`] (the certified law braking harder than the nominal one is the controller
+//! doing its job). The pin is written on every change of the request, and re-written every
+//! [`REFRESH_PERIODS`] periods, so a pin disturbed by anything else is put right within that.
+
+use embedded_hal::digital::OutputPin;
+use firmware::{Command, Mode};
+
+/// The request is written to the pin at least this often (periods), changed or not.
+pub const REFRESH_PERIODS: u32 = 50;
+
+/// Errors of the takeover output.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Error<E> {
+    /// The pin could not be driven.
+    Pin(E),
+}
+
+/// The takeover request on an output pin, active high.
+#[derive(Debug)]
+pub struct TakeoverRequest<P> {
+    pin: P,
+    /// What the pin was last set to, if it was set.
+    shown: Option<bool>,
+    since_write: u32,
+}
+
+/// Whether a command calls for the driver to take over.
+pub fn requested(command: &Command) -> bool {
+    matches!(command.mode, Mode::MinimumRisk | Mode::Uncertified)
+}
+
+impl<P: OutputPin> TakeoverRequest<P> {
+    /// The request on `pin`; the first [`TakeoverRequest::show`] writes it.
+    pub fn new(pin: P) -> Self {
+        TakeoverRequest {
+            pin,
+            shown: None,
+            since_write: 0,
+        }
+    }
+
+    /// Shows the request `command` calls for. A failed write is retried at the next call.
+    pub fn show(&mut self, command: &Command) -> Result<(), Error<P::Error>> {
+        let on = requested(command);
+        self.since_write = self.since_write.saturating_add(1);
+        if self.shown == Some(on) && self.since_write < REFRESH_PERIODS {
+            return Ok(());
+        }
+        self.shown = None;
+        if on {
+            self.pin.set_high().map_err(Error::Pin)?;
+        } else {
+            self.pin.set_low().map_err(Error::Pin)?;
+        }
+        self.shown = Some(on);
+        self.since_write = 0;
+        Ok(())
+    }
+
+    /// The pin, given back.
+    pub fn release(self) -> P {
+        self.pin
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use embedded_hal_mock::eh1::digital::{Mock, State, Transaction};
+    use embedded_hal_mock::eh1::MockError;
+    use std::io::ErrorKind;
+    use firmware::Fault;
+
+    fn command(mode: Mode) -> Command {
+        Command {
+            acceleration: 0.0,
+            mode,
+            fault: (mode == Mode::MinimumRisk).then_some(Fault::LeaderStale),
+            margin: None,
+        }
+    }
+
+    #[test]
+    fn lit_exactly_when_the_controller_is_not_certifying() {
+        let expected = [
+            Transaction::set(State::Low),  // Nominal, first write
+            Transaction::set(State::High), // MinimumRisk
+            Transaction::set(State::Low),  // Override
+            Transaction::set(State::High), // Uncertified
+        ];
+        let mut lamp = TakeoverRequest::new(Mock::new(&expected));
+        for mode in [
+            Mode::Nominal,
+            Mode::Nominal,
+            Mode::MinimumRisk,
+            Mode::MinimumRisk,
+            Mode::Override,
+            Mode::Nominal,
+            Mode::Uncertified,
+        ] {
+            lamp.show(&command(mode)).unwrap();
+        }
+        lamp.release().done();
+    }
+
+    #[test]
+    fn rewritten_every_refresh_period_unchanged() {
+        let refreshes = 3;
+        let expected: Vec<_> = (0..=refreshes)
+            .map(|_| Transaction::set(State::High))
+            .collect();
+        let mut lamp = TakeoverRequest::new(Mock::new(&expected));
+        for _ in 0..=(refreshes * REFRESH_PERIODS) {
+            lamp.show(&command(Mode::MinimumRisk)).unwrap();
+        }
+        lamp.release().done();
+    }
+
+    #[test]
+    fn a_failed_write_is_reported_and_retried() {
+        let expected = [
+            Transaction::set(State::High).with_error(MockError::Io(ErrorKind::BrokenPipe)),
+            Transaction::set(State::High),
+        ];
+        let mut lamp = TakeoverRequest::new(Mock::new(&expected));
+        assert_eq!(
+            lamp.show(&command(Mode::MinimumRisk)),
+            Err(Error::Pin(MockError::Io(ErrorKind::BrokenPipe)))
+        );
+        lamp.show(&command(Mode::MinimumRisk)).unwrap();
+        lamp.release().done();
+    }
+}
