@@ -58,7 +58,10 @@ mod tests {
 
     impl MicrosCounter for Script<'_> {
         fn ticks(&mut self) -> u32 {
-            *self.0.next().expect("the script has a value for every reading")
+            *self
+                .0
+                .next()
+                .expect("the script has a value for every reading")
         }
     }
 
@@ -97,7 +100,10 @@ mod tests {
         // 20 ms a reading for 20 wraps of the counter (about a day).
         let step = 20_000u32;
         let n = 20 * (u64::from(u32::MAX) + 1) / u64::from(step);
-        let mut clock = WideClock::new(Stepping { ticks: 12_345, step });
+        let mut clock = WideClock::new(Stepping {
+            ticks: 12_345,
+            step,
+        });
         let mut last = 0;
         for _ in 0..n {
             let now = clock.now_us();

@@ -68,7 +68,11 @@ mod tests {
     fn the_last_frame_is_a_valid_minimum_risk_request() {
         let w = minimum_risk_frame(2.0, 41);
         assert_eq!(w.tir >> 21, u32::from(ACCEL_REQUEST_ID));
-        assert_eq!(w.tir & 0b111, 1, "standard id, data frame, transmit requested");
+        assert_eq!(
+            w.tir & 0b111,
+            1,
+            "standard id, data frame, transmit requested"
+        );
         assert_eq!(w.tdtr, 5);
         let bytes = [w.tdlr.to_le_bytes(), w.tdhr.to_le_bytes()].concat();
         // -2 m/s^2 in 0.001 m/s^2, mode 2 (minimum risk), the counter, then the CRC.

@@ -33,6 +33,31 @@
     )
 )]
 
+/// Defines the core's HardFault handler: it first moves the stack pointer back to the top of the
+/// stack region (`_stack_start`, `memory.x`), then branches to `$handler`, an
+/// `extern "C" fn(u32) -> !` that gets the stack pointer the fault left. A stack overflow faults with the stack pointer below RAM, where a
+/// handler with a prologue would fault again and lock the core up; on a fresh stack it runs.
+/// The faulting context is discarded: the handler never returns.
+#[macro_export]
+macro_rules! hard_fault_on_fresh_stack {
+    ($handler:path) => {
+        core::arch::global_asm!(
+            ".section .HardFault.hjacc, \"ax\"",
+            ".global HardFault",
+            ".type HardFault,%function",
+            ".thumb_func",
+            "HardFault:",
+            "mrs r0, msp",
+            "movw r1, :lower16:_stack_start",
+            "movt r1, :upper16:_stack_start",
+            "msr msp, r1",
+            "b {handler}",
+            ".size HardFault, . - HardFault",
+            handler = sym $handler,
+        );
+    };
+}
+
 pub mod boot;
 pub mod can_timing;
 pub mod clock;

@@ -75,8 +75,8 @@ mod tests {
     use super::*;
     use embedded_hal_mock::eh1::digital::{Mock, State, Transaction};
     use embedded_hal_mock::eh1::MockError;
-    use std::io::ErrorKind;
     use firmware::Fault;
+    use std::io::ErrorKind;
 
     fn command(mode: Mode) -> Command {
         Command {

@@ -60,32 +60,70 @@ pub fn run_period<S: Sensors, A: Actuator, C: Clock, W: Watchdog>(
     clock: &mut C,
     watchdog: &mut W,
 ) -> Result<Command, A::Error> {
+    period(
+        controller,
+        &mut (sensors, actuator),
+        |io, now| io.0.read(now).ok(),
+        |io, command| io.1.request(command),
+        clock,
+        watchdog,
+    )
+}
+
+/// [`run_period`] over one transport that both delivers the inputs and takes the command, such
+/// as a CAN bus ([`can::CanBus`]): the same period, in the same order.
+pub fn run_period_on_bus<B: Sensors + Actuator, C: Clock, W: Watchdog>(
+    controller: &mut Controller<'_>,
+    bus: &mut B,
+    clock: &mut C,
+    watchdog: &mut W,
+) -> Result<Command, <B as Actuator>::Error> {
+    period(
+        controller,
+        bus,
+        |bus, now| bus.read(now).ok(),
+        |bus, command| bus.request(command),
+        clock,
+        watchdog,
+    )
+}
+
+/// The period, once: the time, the inputs (all invalid if they could not be read), the step,
+/// the command sent, and the watchdog fed whatever the send did.
+fn period<T, E, C: Clock, W: Watchdog>(
+    controller: &mut Controller<'_>,
+    io: &mut T,
+    read: fn(&mut T, u64) -> Option<Inputs>,
+    request: fn(&mut T, &Command) -> Result<(), E>,
+    clock: &mut C,
+    watchdog: &mut W,
+) -> Result<Command, E> {
     let now = clock.now_us();
-    let inputs = match sensors.read(now) {
-        Ok(inputs) => inputs,
-        Err(_) => {
-            let invalid = Measurement {
-                value: Track {
-                    gap: f32::NAN,
-                    rel_speed: f32::NAN,
-                },
-                timestamp_us: now,
-                valid: false,
-            };
-            Inputs {
-                leader: invalid,
-                follower: invalid,
-                ego_speed: Measurement {
-                    value: f32::NAN,
-                    timestamp_us: now,
-                    valid: false,
-                },
-                now_us: now,
-            }
-        }
-    };
+    let inputs = read(io, now).unwrap_or_else(|| unreadable(now));
     let command = controller.step(&inputs);
-    let sent = actuator.request(&command);
+    let sent = request(io, &command);
     watchdog.feed();
     sent.map(|()| command)
+}
+
+/// The inputs of a period whose sensors could not be read: every measurement invalid.
+fn unreadable(now: u64) -> Inputs {
+    let invalid = Measurement {
+        value: Track {
+            gap: f32::NAN,
+            rel_speed: f32::NAN,
+        },
+        timestamp_us: now,
+        valid: false,
+    };
+    Inputs {
+        leader: invalid,
+        follower: invalid,
+        ego_speed: Measurement {
+            value: f32::NAN,
+            timestamp_us: now,
+            valid: false,
+        },
+        now_us: now,
+    }
 }

@@ -309,6 +309,38 @@ fn a_period_over_can_and_then_silence() {
     assert_eq!(dog.0, 1);
 }
 
+/// One bus delivers the inputs and takes the command, as on the board.
+#[test]
+fn one_bus_runs_the_whole_period() {
+    let mut controller = Controller::new(DEFAULT_TABLE, Config::default());
+    let mut bus = CanBus::new(MockBus::default());
+    bus = push_all(&mut bus, healthy_frames());
+    let mut dog = Dog::default();
+    let cmd =
+        firmware::run_period_on_bus(&mut controller, &mut bus, &mut TestClock(20_000), &mut dog)
+            .unwrap();
+    assert_eq!(cmd.mode, Mode::Nominal, "{cmd:?}");
+    assert_eq!(dog.0, 1);
+    assert_eq!(bus.next_counter(), 1);
+    let raw = bus.release();
+    assert_eq!(raw.tx.len(), 1);
+    assert_eq!(raw.tx[0].data, can::encode_command(&cmd, 0).to_vec());
+    // A failing bus: the manoeuvre, and the watchdog still fed.
+    let mut failing = CanBus::new(MockBus {
+        fail: true,
+        ..MockBus::default()
+    });
+    let sent = firmware::run_period_on_bus(
+        &mut controller,
+        &mut failing,
+        &mut TestClock(40_000),
+        &mut dog,
+    );
+    // (The mock's receive fails; its transmit still works.)
+    assert_eq!(sent.unwrap().mode, Mode::MinimumRisk);
+    assert_eq!(dog.0, 2);
+}
+
 #[test]
 fn malformed_frames_are_counted_and_a_bus_error_means_minimum_risk() {
     let mut bus = CanBus::new(MockBus::default());

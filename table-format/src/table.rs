@@ -223,10 +223,12 @@ impl<'a> Table<'a> {
             found: region.len(),
         })?);
         let header_end = PREAMBLE_LEN + header_len;
-        let header_bytes = region.get(PREAMBLE_LEN..header_end).ok_or(Error::Truncated {
-            needed: header_end,
-            found: region.len(),
-        })?;
+        let header_bytes = region
+            .get(PREAMBLE_LEN..header_end)
+            .ok_or(Error::Truncated {
+                needed: header_end,
+                found: region.len(),
+            })?;
         let (header, rest): (Header<'_>, &[u8]) =
             postcard::take_from_bytes(header_bytes).map_err(|_| Error::HeaderDecode)?;
         if !rest.is_empty() {

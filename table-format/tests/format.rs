@@ -328,7 +328,10 @@ fn a_table_at_the_start_of_a_longer_region_is_found_by_its_declared_length() {
         Table::parse_prefix(&[0xFF; 4096]).unwrap_err(),
         Error::BadMagic
     );
-    assert_eq!(Table::parse_prefix(&[0; 4096]).unwrap_err(), Error::BadMagic);
+    assert_eq!(
+        Table::parse_prefix(&[0; 4096]).unwrap_err(),
+        Error::BadMagic
+    );
     // A slot cut short of the declared table (a table too big for its slot).
     for len in 0..bytes.len() {
         assert!(

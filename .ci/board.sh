@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# The board: cross-builds the STM32F407 binary (stm32f4xx-hal, bxCAN, defmt over RTT) with
+# Debian's Rust toolchain and prints its sections and the table slot's address; then runs the
+# board-independent part on QEMU's netduinoplus2 (an STM32F405) three times, decoding its defmt
+# log with defmt-print:
+#   1. the deployed table flashed on its own into the slot: boot check, 30 s closed loop over the
+#      CAN driver, a HardFault and a stack overflow, each ending in the minimum-risk manoeuvre;
+#   2. an erased slot: the table refused (BadMagic), every command the minimum-risk manoeuvre;
+#   3. a corrupt table (one bit flipped): refused by its CRC, likewise.
+# Fails if a binary does not build or link, or if a run's log lacks what it must show.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+export RUSTC=/usr/bin/rustc RUSTDOC=/usr/bin/rustdoc RUSTC_BOOTSTRAP=1 CARGO_TARGET_DIR=target/thumbv7em
+export DEFMT_LOG=info
+build() {
+  /usr/bin/cargo build --release --locked --target thumbv7em-none-eabihf \
+    -Zbuild-std=core,compiler_builtins -Zbuild-std-features=compiler-builtins-mem \
+    --config 'target.thumbv7em-none-eabihf.linker="ld.lld-22"' -p board-stm32f4 "$@"
+}
+
+build --features stm32f407 --bin stm32f407
+build --features qemu --bin netduino-check
+dir=target/thumbv7em/thumbv7em-none-eabihf/release
+
+echo "--- the STM32F407 binary: sections (bytes, address)"
+size -A "$dir/stm32f407" | awk '$1 ~ /^\.(vector_table|text|rodata|data|bss|uninit)$/ {printf "%-14s %8d  %#010x\n", $1, $2, $3}'
+nm "$dir/stm32f407" | awk '$3 ~ /^(__table_slot_start|__table_slot_end|_stack_start)$/ {print "symbol " $3 " = 0x" $1}'
+echo "table slot: 0x08040000, 786432 bytes (sectors 6-11), holds firmware/tables/default.bin ($(stat -c %s firmware/tables/default.bin) bytes)"
+
+elf=$dir/netduino-check
+python3 - "$PWD/target/corrupt-table.bin" <<'PY'
+import sys
+table = bytearray(open("firmware/tables/default.bin", "rb").read())
+table[len(table) // 2] ^= 0x20
+open(sys.argv[1], "wb").write(table)
+PY
+
+run() {
+  local name=$1 expect=$2
+  shift 2
+  echo "--- netduinoplus2: $name"
+  local raw=target/netduino-$name.defmt
+  timeout 120 qemu-system-arm -machine netduinoplus2 -nographic \
+    -semihosting-config enable=on,target=native -kernel "$elf" "$@" > "$raw"
+  defmt-print -e "$elf" < "$raw" | grep -v '^INFO  mode ' | tee "target/netduino-$name.log"
+  grep -q 'netduino-check: PASS' "target/netduino-$name.log"
+  grep -qF "$expect" "target/netduino-$name.log"
+}
+
+run table "below RAM, a stack overflow" \
+  -device loader,file=firmware/tables/default.bin,addr=0x08040000
+run erased "minimum-risk with Table(BadMagic)"
+run corrupt "minimum-risk with Table(Checksum" \
+  -device loader,file=target/corrupt-table.bin,addr=0x08040000

@@ -1,0 +1,283 @@
+//! hjacc on an STM32F407 (an STM32F4DISCOVERY, or any F407/F405 board with an 8 MHz crystal and
+//! a CAN transceiver on PB8/PB9).
+//!
+//! Boot, in order:
+//! 1. The reset cause and the fault marker are read, then cleared ([`boot::restart_fault`]).
+//! 2. Clocks: 168 MHz from the 8 MHz crystal (HSE), APB1 42 MHz (the CAN's clock), APB2
+//!    84 MHz.
+//! 3. The independent watchdog starts (100 ms, five periods): from here on a hang resets the
+//!    board.
+//! 4. TIM2 runs free at 1 MHz over its 32 bits (the controller's clock); TIM3 paces the loop
+//!    at 50 Hz.
+//! 5. CAN1 on PB8 (RX) / PB9 (TX) at 500 kbit/s; filters pass the tracks (0x120, 0x121) and the
+//!    ego speed (0x130). The peripheral joins the bus without blocking: until it has, no frame
+//!    arrives and the controller is in the minimum-risk manoeuvre, as with a silent bus.
+//! 6. The table is read in place from its own flash slot and checked whole
+//!    (`firmware::Controller::new`); after a fault restart the controller is latched in the
+//!    minimum-risk manoeuvre.
+//!
+//! Then, every 20 ms: read the CAN frames, step the controller, send the acceleration request,
+//! feed the watchdog (`firmware::run_period_on_bus`), show the takeover request on PD14 (the
+//! Discovery's red LED). A step that overran its period is counted and logged.
+//!
+//! The HardFault and panic handlers send one minimum-risk request straight from a CAN mailbox,
+//! leave the fault marker and reset; a stack overflow (the stack sits at the bottom of RAM,
+//! `memory.x`) faults into the HardFault handler, or locks the core up, which the watchdog
+//! resets. Either way the next boot latches the minimum-risk manoeuvre.
+#![no_std]
+#![no_main]
+// The entry point, the exception handlers, the linker's table symbols, the fault marker in RAM
+// that survives a reset, and the mailbox writes of the last frame are the board's unsafe code;
+// the controller has none.
+#![allow(unsafe_code)]
+
+use core::mem::MaybeUninit;
+use core::panic::PanicInfo;
+use core::ptr::{addr_of, addr_of_mut};
+use core::sync::atomic::{AtomicU8, Ordering};
+
+use board_stm32f4::boot::{self, FaultMarker, ResetFlags};
+use board_stm32f4::can_timing::BOARD_500K;
+use board_stm32f4::clock::{MicrosCounter, WideClock};
+use board_stm32f4::last_resort;
+use board_stm32f4::takeover::TakeoverRequest;
+use board_stm32f4::{PERIOD_US, WATCHDOG_TIMEOUT_MS};
+use bxcan::filter::Mask32;
+use bxcan::{Fifo, StandardId};
+use cortex_m_rt::entry;
+use defmt_rtt as _;
+use firmware::can::{CanBus, EGO_SPEED_ID, FRONT_TRACK_ID};
+use firmware::{Config, Controller};
+use stm32f4xx_hal::pac;
+use stm32f4xx_hal::prelude::*;
+use stm32f4xx_hal::rcc::{Config as ClockConfig, Enable, Reset};
+use stm32f4xx_hal::watchdog::IndependentWatchdog;
+
+/// The fault marker: survives a reset, not a power cycle (`.uninit` is never initialised).
+#[link_section = ".uninit.HJACC_FAULT_MARKER"]
+static mut FAULT_MARKER: MaybeUninit<[u32; 2]> = MaybeUninit::uninit();
+
+/// The rolling counter of the next acceleration request, for the fault handlers' last frame.
+static NEXT_COUNTER: AtomicU8 = AtomicU8::new(0);
+
+extern "C" {
+    static __table_slot_start: u8;
+    static __table_slot_end: u8;
+}
+
+/// The table's flash slot (`memory.x`), read in place.
+fn table_slot() -> &'static [u8] {
+    // SAFETY: the linker places both symbols at the ends of the TABLE region, which is flash:
+    // readable, never written by this program, and 'static.
+    unsafe {
+        let start = addr_of!(__table_slot_start);
+        let end = addr_of!(__table_slot_end);
+        let len = (end as usize).saturating_sub(start as usize);
+        core::slice::from_raw_parts(start, len)
+    }
+}
+
+fn read_marker() -> FaultMarker {
+    // SAFETY: a plain volatile read of two words of RAM; any bit pattern is a valid [u32; 2].
+    // Single core, before interrupts are enabled: no other access.
+    FaultMarker(unsafe { core::ptr::read_volatile(addr_of!(FAULT_MARKER).cast::<[u32; 2]>()) })
+}
+
+fn write_marker(marker: FaultMarker) {
+    // SAFETY: as in `read_marker`; a fault handler never returns to the code it interrupted.
+    unsafe { core::ptr::write_volatile(addr_of_mut!(FAULT_MARKER).cast::<[u32; 2]>(), marker.0) }
+}
+
+/// TIM2 at 1 MHz, free-running over all 32 bits.
+struct Tim2(pac::TIM2);
+
+impl MicrosCounter for Tim2 {
+    fn ticks(&mut self) -> u32 {
+        self.0.cnt().read().bits()
+    }
+}
+
+/// The independent watchdog behind the firmware's trait.
+struct Iwdg(IndependentWatchdog);
+
+impl firmware::Watchdog for Iwdg {
+    fn feed(&mut self) {
+        self.0.feed();
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let Some(dp) = pac::Peripherals::take() else {
+        // Taken once, here: unreachable, but never a panic.
+        fault_exit();
+    };
+
+    // 1. Why we started, and whether the last run ended in a fault.
+    let csr = dp.RCC.csr().read();
+    let flags = ResetFlags {
+        // PADRSTF and WDGRSTF are the reference manual's PINRSTF and IWDGRSTF.
+        power_on: csr.porrstf().bit_is_set(),
+        brown_out: csr.borrstf().bit_is_set(),
+        pin: csr.padrstf().bit_is_set(),
+        software: csr.sftrstf().bit_is_set(),
+        independent_watchdog: csr.wdgrstf().bit_is_set(),
+        window_watchdog: csr.wwdgrstf().bit_is_set(),
+        low_power: csr.lpwrrstf().bit_is_set(),
+    };
+    dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
+    let restart = boot::restart_fault(flags, read_marker());
+    write_marker(FaultMarker::CLEAR);
+
+    // 2. Clocks.
+    let mut rcc = dp.RCC.freeze(
+        ClockConfig::hse(8.MHz())
+            .sysclk(168.MHz())
+            .pclk1(42.MHz())
+            .pclk2(84.MHz()),
+    );
+
+    // 3. The watchdog, before anything that could hang.
+    let mut watchdog = IndependentWatchdog::new(dp.IWDG);
+    watchdog.stop_on_debug(&dp.DBGMCU, true);
+    watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
+
+    // 4. The clock (TIM2: 84 MHz timer clock / 84) and the pacing timer.
+    pac::TIM2::enable(&mut rcc);
+    pac::TIM2::reset(&mut rcc);
+    let tim2 = dp.TIM2;
+    tim2.psc().write(|w| w.psc().set(83));
+    tim2.arr().write(|w| w.arr().set(u32::MAX));
+    tim2.egr().write(|w| w.ug().set_bit());
+    tim2.cr1().modify(|_, w| w.cen().set_bit());
+    let mut clock = WideClock::new(Tim2(tim2));
+    let mut pace = dp.TIM3.counter_hz(&mut rcc);
+    if pace.start((1_000_000 / PERIOD_US).Hz()).is_err() {
+        defmt::error!("the pacing timer did not start");
+        fault_exit();
+    }
+
+    // 5. CAN1.
+    let gpiob = dp.GPIOB.split(&mut rcc);
+    let can = dp.CAN1.can((gpiob.pb9, gpiob.pb8), &mut rcc);
+    let Some(btr) = BOARD_500K.btr() else {
+        fault_exit();
+    };
+    let mut can = bxcan::Can::builder(can)
+        .set_bit_timing(btr)
+        .leave_disabled();
+    {
+        let mut filters = can.modify_filters();
+        if let (Some(tracks), Some(pair), Some(ego), Some(exact)) = (
+            StandardId::new(FRONT_TRACK_ID),
+            StandardId::new(0x7FE),
+            StandardId::new(EGO_SPEED_ID),
+            StandardId::new(0x7FF),
+        ) {
+            // 0x120 and 0x121 differ in the last bit only.
+            filters.enable_bank(0, Fifo::Fifo0, Mask32::frames_with_std_id(tracks, pair));
+            filters.enable_bank(1, Fifo::Fifo0, Mask32::frames_with_std_id(ego, exact));
+        }
+    }
+    let mut bus = CanBus::new(can);
+
+    // 6. The table, and the controller.
+    let gpiod = dp.GPIOD.split(&mut rcc);
+    let mut takeover = TakeoverRequest::new(gpiod.pd14.into_push_pull_output());
+    let slot = table_slot();
+    let table = boot::table_in_slot(slot);
+    let mut controller = Controller::new(table, Config::default());
+    defmt::info!(
+        "hjacc: table slot {=usize:#x}, {=usize} of {=usize} bytes, accepted {=bool}",
+        slot.as_ptr() as usize,
+        table.len(),
+        slot.len(),
+        controller.table().is_some()
+    );
+    if let Some(fault) = restart {
+        defmt::warn!(
+            "restarted after a fault (watchdog {=bool}): minimum-risk manoeuvre until power-on",
+            flags.independent_watchdog || flags.window_watchdog
+        );
+        controller.latch_minimum_risk(fault);
+    }
+
+    let mut dog = Iwdg(watchdog);
+    let mut overruns: u32 = 0;
+    loop {
+        // The period's start: TIM3's update. Already there means the last step overran.
+        if pace.wait().is_ok() {
+            overruns = overruns.saturating_add(1);
+            defmt::warn!("control step overran its period ({=u32} so far)", overruns);
+        } else {
+            while pace.wait().is_err() {
+                cortex_m::asm::nop();
+            }
+        }
+        // Joins the bus once it has seen it idle; a no-op afterwards.
+        let _ = bus.bus_mut().enable_non_blocking();
+        let sent = firmware::run_period_on_bus(&mut controller, &mut bus, &mut clock, &mut dog);
+        NEXT_COUNTER.store(bus.next_counter(), Ordering::Relaxed);
+        let command = match sent {
+            Ok(command) => command,
+            Err(e) => {
+                let why = match e {
+                    firmware::can::Error::Bus(_) => "receive overrun",
+                    firmware::can::Error::TransmitBusy => "transmit mailboxes full",
+                    _ => "frame construction",
+                };
+                defmt::warn!("acceleration request not sent: {=str}", why);
+                continue;
+            }
+        };
+        if takeover.show(&command).is_err() {
+            defmt::warn!("takeover request not shown");
+        }
+    }
+}
+
+/// The end of every fault path: one minimum-risk request from a CAN mailbox, the marker, and a
+/// reset. Touches no driver and little stack.
+fn fault_exit() -> ! {
+    send_last_frame();
+    write_marker(FaultMarker::SET);
+    cortex_m::peripheral::SCB::sys_reset()
+}
+
+/// Writes the minimum-risk request into a free transmit mailbox of CAN1, if the peripheral is
+/// running; waits a bounded time for a mailbox to free up.
+fn send_last_frame() {
+    let words = last_resort::minimum_risk_frame(
+        Config::default().mrm_deceleration,
+        NEXT_COUNTER.load(Ordering::Relaxed),
+    );
+    // SAFETY: the handler is the only code running from here to the reset; the registers are
+    // CAN1's, written as the reference manual's "transmit" procedure describes.
+    let can = unsafe { &*pac::CAN1::ptr() };
+    // Abort whatever is pending (an older, possibly gentler command), then take mailbox 0.
+    can.tsr()
+        .write(|w| w.abrq0().set_bit().abrq1().set_bit().abrq2().set_bit());
+    for _ in 0..100_000 {
+        if can.tsr().read().tme0().bit_is_set() {
+            let mailbox = can.tx(0);
+            mailbox.tdtr().write(|w| unsafe { w.bits(words.tdtr) });
+            mailbox.tdlr().write(|w| unsafe { w.bits(words.tdlr) });
+            mailbox.tdhr().write(|w| unsafe { w.bits(words.tdhr) });
+            mailbox.tir().write(|w| unsafe { w.bits(words.tir) });
+            break;
+        }
+    }
+    // Let it leave before the reset: a 500 kbit/s frame of 5 bytes takes under 0.25 ms.
+    cortex_m::asm::delay(168_000);
+}
+
+board_stm32f4::hard_fault_on_fresh_stack!(hard_fault);
+
+extern "C" fn hard_fault(_stack_pointer: u32) -> ! {
+    fault_exit()
+}
+
+#[panic_handler]
+fn panic(_: &PanicInfo) -> ! {
+    fault_exit()
+}
