@@ -11,7 +11,8 @@
 //!   [`Fault`] with a documented reaction (see [`controller`]).
 //! - One math module ([`math`]) so that host tests run the target's arithmetic.
 //! - Hardware behind traits ([`Sensors`], [`Actuator`], [`Clock`], [`Watchdog`]), with a CAN
-//!   driver over `embedded-can` ([`can`]).
+//!   driver over `embedded-can` ([`can`]). The crate knows no board: `board-stm32f4` (in
+//!   `board/`) puts it on an STM32F407.
 //!
 //! The default table (`tables/default.bin`, 693 KiB) is the split three-car certificate's rear
 //! value (see [`controller`]); it comes from
