@@ -3,7 +3,9 @@
 Reads QEMU's `-d exec,nochain` log in single-step mode (one instruction per translation block,
 so one log line per executed instruction) from a file or FIFO, and counts the lines between
 each entry into `hjacc_step_begin` and the next entry into `hjacc_step_end` (the markers the
-qemu-scenario binary calls around `Controller::step`). Prints the worst, median and mean.
+qemu-scenario binary calls around `Controller::step`). The scenario then calls one marker per
+mode (`hjacc_mode_nominal`, ...), which files the step's count under its path. Prints the
+worst, median and mean over every step and per path.
 Usage: count_instructions.py ELF LOG"""
 import re
 import statistics
@@ -14,9 +16,14 @@ elf, log = sys.argv[1], sys.argv[2]
 symbols = {}
 for line in subprocess.run(["nm", elf], capture_output=True, text=True, check=True).stdout.splitlines():
     parts = line.split()
-    if len(parts) == 3 and parts[2] in ("hjacc_step_begin", "hjacc_step_end"):
+    if len(parts) == 3 and parts[2].startswith(("hjacc_step_", "hjacc_mode_")):
         symbols[parts[2]] = int(parts[0], 16) & ~1
 begin, end = symbols["hjacc_step_begin"], symbols["hjacc_step_end"]
+modes = {symbols[name]: name.removeprefix("hjacc_mode_").replace("_", "-")
+         for name in ("hjacc_mode_nominal", "hjacc_mode_override", "hjacc_mode_minimum_risk",
+                      "hjacc_mode_uncertified")}
+per_mode = {name: [] for name in modes.values()}
+pending = None
 pc_re = re.compile(r"\[[0-9a-f]+/([0-9a-f]+)/")
 counts, counting, n = [], False, 0
 with open(log, errors="replace") as f:
@@ -29,7 +36,10 @@ with open(log, errors="replace") as f:
             counting, n = True, 0
         elif pc == end and counting:
             counts.append(n)
-            counting = False
+            counting, pending = False, n
+        elif pc in modes and pending is not None:
+            per_mode[modes[pc]].append(pending)
+            pending = None
         if counting:
             n += 1
 if not counts:
@@ -37,3 +47,11 @@ if not counts:
 print(f"instructions per control step over {len(counts)} steps: worst {max(counts)}, "
       f"median {int(statistics.median(counts))}, mean {statistics.mean(counts):.0f} "
       f"(from the begin marker's entry to the end marker's entry)")
+for mode, values in per_mode.items():
+    if values:
+        print(f"  {mode}: {len(values)} steps, worst {max(values)}, "
+              f"median {int(statistics.median(values))}")
+    else:
+        print(f"  {mode}: no step")
+if sum(len(v) for v in per_mode.values()) != len(counts):
+    sys.exit("a counted step has no mode marker")

@@ -122,12 +122,30 @@ fn plot_err(path: &Path, e: impl std::fmt::Display) -> SolverError {
 
 /// Draws a [`CellMap`] into a PNG.
 pub fn draw_cell_map(path: &Path, map: &CellMap<'_>) -> Result<(), SolverError> {
+    draw_cell_maps(path, std::slice::from_ref(map))
+}
+
+/// Draws [`CellMap`]s side by side into one PNG, each 900 x 760 pixels.
+pub fn draw_cell_maps(path: &Path, maps: &[CellMap<'_>]) -> Result<(), SolverError> {
     register_plot_font()?;
-    let root = BitMapBackend::new(path, (900, 760)).into_drawing_area();
+    let width = 900 * u32::try_from(maps.len().max(1)).unwrap_or(1);
+    let root = BitMapBackend::new(path, (width, 760)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    for (area, map) in root.split_evenly((1, maps.len().max(1))).iter().zip(maps) {
+        draw_cell_map_on(area, path, map)?;
+    }
+    root.present().map_err(|e| plot_err(path, e))?;
+    Ok(())
+}
+
+fn draw_cell_map_on(
+    root: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
+    path: &Path,
+    map: &CellMap<'_>,
+) -> Result<(), SolverError> {
     let (x0, x1) = (map.x.coords[0], *map.x.coords.last().unwrap_or(&1.0));
     let (y0, y1) = (map.y.coords[0], *map.y.coords.last().unwrap_or(&1.0));
-    let mut chart = ChartBuilder::on(&root)
+    let mut chart = ChartBuilder::on(root)
         .caption(map.title, ("sans-serif", 18))
         .margin(12)
         .x_label_area_size(48)
@@ -204,7 +222,6 @@ pub fn draw_cell_map(path: &Path, map: &CellMap<'_>) -> Result<(), SolverError> 
         .position(SeriesLabelPosition::UpperLeft)
         .draw()
         .map_err(|e| plot_err(path, e))?;
-    root.present().map_err(|e| plot_err(path, e))?;
     Ok(())
 }
 

@@ -12,7 +12,7 @@ use crate::compile::{compile, CompileInput, CompileReport};
 use crate::config::{Config, GameKindConfig};
 use crate::error::SolverError;
 use crate::exact::{self, ExactComparison};
-use crate::games::{AnyGame, Vector};
+use crate::games::{AnyGame, Vector, TIE_TOLERANCE};
 use crate::grid::{Grid, GridAxis, MAX_DIMS};
 use crate::hji::{self, Boundary, Numerics, Outcome, Solution, Stop};
 use crate::output::{self, CellMap, PlotAxis};
@@ -174,15 +174,18 @@ pub fn run(
     let grads = gradient_any(&game, &grid, numerics, &solution.values);
     let dynamics = game.dynamics();
     let d = grid.dims();
-    let accelerate: Vec<bool> = (0..grid.len())
+    let (accelerate, tie): (Vec<bool>, Vec<bool>) = (0..grid.len())
         .map(|node| {
             let mut p: Vector = [0.0; MAX_DIMS];
             for k in 0..d {
                 p[k] = grads[k][node];
             }
-            dynamics.ego_accelerates(&p)
+            (
+                dynamics.ego_accelerates(&p),
+                dynamics.ego_switching(&p).abs() < TIE_TOLERANCE,
+            )
         })
-        .collect();
+        .unzip();
 
     let horizon = Horizon {
         seconds: solution.time as f32,
@@ -260,7 +263,11 @@ pub fn run(
         config,
         &grid,
         &solution,
-        &accelerate,
+        &Policy {
+            accelerate: &accelerate,
+            tie: &tie,
+            table: table.as_ref().map(|(bytes, _)| bytes.as_slice()),
+        },
         trusted.as_ref(),
         &dir,
         &safe_fraction_history,
@@ -331,6 +338,7 @@ const PURPLE: RGBColor = RGBColor(130, 90, 190);
 const GREY: RGBColor = RGBColor(215, 215, 215);
 const PALE_GREEN: RGBColor = RGBColor(205, 235, 205);
 const PALE_BLUE: RGBColor = RGBColor(175, 195, 240);
+const PALE_YELLOW: RGBColor = RGBColor(250, 230, 130);
 
 /// The categories of a safe-set map: inside the trusted box, then outside it (paler).
 const SET_LEGEND: [(&str, RGBColor); 4] = [
@@ -341,11 +349,48 @@ const SET_LEGEND: [(&str, RGBColor); 4] = [
 ];
 
 /// The categories of a policy map: the policy where the state is safe, grey where it is not.
-const POLICY_LEGEND: [(&str, RGBColor); 3] = [
+const POLICY_LEGEND: [(&str, RGBColor); 4] = [
     ("safe, u2* = a_max", ORANGE),
     ("safe, u2* = a_min", PURPLE),
     ("constraint set, not safe", GREY),
+    ("safe, either input (tie)", PALE_YELLOW),
 ];
+
+/// The categories of the compiled table's map: what the firmware reads at a state.
+const TABLE_LEGEND: [(&str, RGBColor); 3] = [
+    ("certified, policy bit a_max", ORANGE),
+    ("certified, policy bit a_min", PURPLE),
+    ("constraint set, not certified", GREY),
+];
+
+/// The firmware's reading of `table` at `state`: certified (the interpolated value above the
+/// table's error bound) with its policy bit, not certified, or `None` outside the table's grid
+/// or the constraint set.
+fn table_category(
+    table: &table_format::Table<'_>,
+    state: &[f32],
+    in_constraint: bool,
+) -> Option<usize> {
+    let lookup = table.lookup(state).ok()?;
+    if lookup.value > table.header().error_bound.total() {
+        Some(match lookup.action {
+            table_format::EgoAction::Accelerate => 0,
+            table_format::EgoAction::Brake => 1,
+        })
+    } else if in_constraint {
+        Some(2)
+    } else {
+        None
+    }
+}
+
+/// The ego's policy per node (the table's bit, and whether it is a tie: either input), and the
+/// table compiled from it, if any.
+struct Policy<'a> {
+    accelerate: &'a [bool],
+    tie: &'a [bool],
+    table: Option<&'a [u8]>,
+}
 
 /// A safe-set map's category: `None` outside the constraint set; 2 and 3 where untrusted.
 fn set_category(safe: bool, in_constraint: bool, trusted: bool) -> Option<usize> {
@@ -359,9 +404,12 @@ fn set_category(safe: bool, in_constraint: bool, trusted: bool) -> Option<usize>
     Some(if trusted { base } else { base + 2 })
 }
 
-/// A policy map's category: the policy where safe, grey in the rest of the constraint set.
-fn policy_category(safe: bool, in_constraint: bool, accelerate: bool) -> Option<usize> {
-    if safe {
+/// A policy map's category: the policy where safe (a tie apart), grey in the rest of the
+/// constraint set.
+fn policy_category(safe: bool, in_constraint: bool, accelerate: bool, tie: bool) -> Option<usize> {
+    if safe && tie {
+        Some(3)
+    } else if safe {
         Some(if accelerate { 0 } else { 1 })
     } else if in_constraint {
         Some(2)
@@ -374,7 +422,7 @@ fn plots(
     config: &Config,
     grid: &Grid,
     solution: &Solution,
-    accelerate: &[bool],
+    policy_bits: &Policy<'_>,
     trusted: Option<&IndexBox>,
     dir: &Path,
     history: &[(f64, f64)],
@@ -386,6 +434,19 @@ fn plots(
         .collect();
     let bounds = trusted.map(|b| b.bounds(grid));
     let values = &solution.values;
+    let table = match policy_bits.table.map(table_format::Table::parse) {
+        Some(Ok(t)) => Some(t),
+        Some(Err(e)) => return Err(SolverError::Table(e)),
+        None => None,
+    };
+    let table_title = |what: &str| {
+        table.as_ref().map_or_else(String::new, |t| {
+            format!(
+                "{what}: the compiled table, as the firmware reads it (V > {:.4} m)",
+                t.header().error_bound.total()
+            )
+        })
+    };
     let horizon_text = format!("{:.1} s", solution.time);
     if grid.dims() == 2 {
         let n1 = grid.axes()[1].points;
@@ -437,7 +498,8 @@ fn plots(
             policy_category(
                 values[node] > 0.0,
                 coords[0][i] - g.min_gap >= 0.0,
-                accelerate[node],
+                policy_bits.accelerate[node],
+                policy_bits.tie[node],
             )
         };
         output::draw_cell_map(
@@ -454,24 +516,80 @@ fn plots(
                 },
                 cell: &policy,
                 legend: &POLICY_LEGEND,
-                curves: &[("exact safe-set boundary", RED, boundary)],
+                curves: &[("exact safe-set boundary", RED, boundary.clone())],
                 frame,
             },
         )?;
+        if let Some(t) = &table {
+            let firmware = |i: usize, j: usize| {
+                table_category(
+                    t,
+                    &[coords[0][i] as f32, coords[1][j] as f32],
+                    coords[0][i] - g.min_gap >= 0.0,
+                )
+            };
+            let solver_title = format!("{}: the solver's value and policy", config.name);
+            let table_title = table_title(&config.name);
+            let curves = [("exact safe-set boundary", RED, boundary)];
+            output::draw_cell_maps(
+                &dir.join("table_vs_solver.png"),
+                &[
+                    CellMap {
+                        title: &solver_title,
+                        x: PlotAxis {
+                            label: "gap_leader [m]",
+                            coords: &coords[0],
+                        },
+                        y: PlotAxis {
+                            label: "rel_speed_leader [m/s]",
+                            coords: &coords[1],
+                        },
+                        cell: &policy,
+                        legend: &POLICY_LEGEND,
+                        curves: &curves,
+                        frame,
+                    },
+                    CellMap {
+                        title: &table_title,
+                        x: PlotAxis {
+                            label: "gap_leader [m]",
+                            coords: &coords[0],
+                        },
+                        y: PlotAxis {
+                            label: "rel_speed_leader [m/s]",
+                            coords: &coords[1],
+                        },
+                        cell: &firmware,
+                        legend: &TABLE_LEGEND,
+                        curves: &curves,
+                        frame,
+                    },
+                ],
+            )?;
+        }
     } else {
-        let slices = if config.slices.is_empty() {
+        let configured = if config.slices.is_empty() {
             vec![crate::config::SliceConfig::default()]
         } else {
             config.slices.clone()
         };
         let min_gap = config.game.min_gap;
         let five = grid.dims() == 5;
-        for s in &slices {
+        // Besides the configured slices, the trusted slice with the most safe states, so that
+        // a reader sees the set where it is not empty (when it is anywhere).
+        let mut slices: Vec<(crate::config::SliceConfig, bool)> =
+            configured.into_iter().map(|s| (s, false)).collect();
+        if let Some(widest) = widest_slice(grid, values, bounds.as_deref(), min_gap) {
+            if !slices.iter().any(|(s, _)| s.tag(five) == widest.tag(five)) {
+                slices.push((widest, true));
+            }
+        }
+        for (s, widest) in &slices {
             let at = |i: usize, j: usize| -> f64 {
                 grid.interpolate(values, &s.point(five, coords[0][i], coords[2][j]))
             };
             let speeds = s.point(five, 0.0, 0.0);
-            let policy_at = |i: usize, j: usize| -> bool {
+            let policy_at = |i: usize, j: usize| -> (bool, bool) {
                 // The policy of the nearest node in speed.
                 let nearest = |k: usize, x: f64| -> usize {
                     let a = &grid.axes()[k];
@@ -484,7 +602,7 @@ fn plots(
                         node += nearest(k, x) * st[k];
                     }
                 }
-                accelerate[node]
+                (policy_bits.accelerate[node], policy_bits.tie[node])
             };
             // The trusted box on the slice: its gap extents, when the slice's held speeds lie
             // inside it; otherwise the whole slice is untrusted.
@@ -514,11 +632,12 @@ fn plots(
                 .flat_map(|i| (0..coords[2].len()).map(move |j| (i, j)))
                 .filter(|&(i, j)| at(i, j) > 0.0)
                 .count();
-            let notes = match (held_inside, safe_nodes) {
-                (true, 0) => " (empty)".to_string(),
-                (true, _) => String::new(),
-                (false, 0) => " (untrusted, empty)".to_string(),
-                (false, _) => " (untrusted slice)".to_string(),
+            let notes = match (held_inside, safe_nodes, widest) {
+                (true, 0, _) => " (empty)".to_string(),
+                (true, _, true) => " (the slice with the most safe states)".to_string(),
+                (true, _, false) => String::new(),
+                (false, 0, _) => " (untrusted, empty)".to_string(),
+                (false, _, _) => " (untrusted slice)".to_string(),
             };
             let tag = s.tag(five);
             let speeds_text = if five {
@@ -555,12 +674,38 @@ fn plots(
                 },
             )?;
             let policy = |i: usize, j: usize| {
-                policy_category(at(i, j) > 0.0, in_constraint(i, j), policy_at(i, j))
+                let (accelerate, tie) = policy_at(i, j);
+                policy_category(at(i, j) > 0.0, in_constraint(i, j), accelerate, tie)
             };
-            output::draw_cell_map(
-                &dir.join(format!("policy_{tag}.png")),
-                &CellMap {
-                    title: &format!("{}: u2* where safe, {speeds_text}{notes}", config.name),
+            let policy_title = format!("{}: u2* where safe, {speeds_text}{notes}", config.name);
+            let policy_map = CellMap {
+                title: &policy_title,
+                x: PlotAxis {
+                    label: "gap_leader x_g1 [m]",
+                    coords: &coords[0],
+                },
+                y: PlotAxis {
+                    label: "gap_follower x_g2 [m]",
+                    coords: &coords[2],
+                },
+                cell: &policy,
+                legend: &POLICY_LEGEND,
+                curves: &[],
+                frame,
+            };
+            output::draw_cell_map(&dir.join(format!("policy_{tag}.png")), &policy_map)?;
+            if let Some(t) = &table {
+                let firmware = |i: usize, j: usize| {
+                    let state: Vec<f32> = s
+                        .point(five, coords[0][i], coords[2][j])
+                        .iter()
+                        .map(|&x| x as f32)
+                        .collect();
+                    table_category(t, &state, in_constraint(i, j))
+                };
+                let title = table_title(&speeds_text);
+                let table_map = CellMap {
+                    title: &title,
                     x: PlotAxis {
                         label: "gap_leader x_g1 [m]",
                         coords: &coords[0],
@@ -569,12 +714,16 @@ fn plots(
                         label: "gap_follower x_g2 [m]",
                         coords: &coords[2],
                     },
-                    cell: &policy,
-                    legend: &POLICY_LEGEND,
+                    cell: &firmware,
+                    legend: &TABLE_LEGEND,
                     curves: &[],
                     frame,
-                },
-            )?;
+                };
+                output::draw_cell_maps(
+                    &dir.join(format!("table_vs_solver_{tag}.png")),
+                    &[policy_map, table_map],
+                )?;
+            }
         }
     }
     if history.len() > 1 {
@@ -587,6 +736,83 @@ fn plots(
         )?;
     }
     Ok(())
+}
+
+/// The slice of a 4-D or 5-D grid, at node speeds inside the trusted box, with the most nodes
+/// that are safe, in the constraint set and trusted in gap; `None` when no such node exists.
+/// Speeds are the nodes' own (axes 1 and 3, and 4 on a 5-D grid), so the count is exact.
+fn widest_slice(
+    grid: &Grid,
+    values: &[f32],
+    trusted: Option<&[(f64, f64)]>,
+    min_gap: f64,
+) -> Option<crate::config::SliceConfig> {
+    let axes = grid.axes();
+    let strides = grid.strides();
+    let five = grid.dims() == 5;
+    let in_box = |k: usize, i: usize| {
+        trusted.is_none_or(|b| {
+            b.get(k)
+                .is_none_or(|r| (r.0..=r.1).contains(&axes[k].coordinate(i)))
+        })
+    };
+    let speed_axes: &[usize] = if five { &[1, 3, 4] } else { &[1, 3] };
+    let gap_nodes: Vec<(usize, usize)> = (0..axes[0].points)
+        .filter(|&i| in_box(0, i))
+        .flat_map(|i| {
+            (0..axes[2].points)
+                .filter(|&j| in_box(2, j))
+                .map(move |j| (i, j))
+        })
+        .filter(|&(i, j)| axes[0].coordinate(i).min(axes[2].coordinate(j)) >= min_gap)
+        .collect();
+    let mut best: Option<(usize, Vec<usize>)> = None;
+    let mut index = vec![0usize; speed_axes.len()];
+    loop {
+        if speed_axes.iter().zip(&index).all(|(&k, &i)| in_box(k, i)) {
+            let base: usize = speed_axes
+                .iter()
+                .zip(&index)
+                .map(|(&k, &i)| i * strides[k])
+                .sum();
+            let safe = gap_nodes
+                .iter()
+                .filter(|&&(i, j)| values[base + i * strides[0] + j * strides[2]] > 0.0)
+                .count();
+            if safe > 0 && best.as_ref().is_none_or(|(n, _)| safe > *n) {
+                best = Some((safe, index.clone()));
+            }
+        }
+        // The next combination of speed nodes, odometer style.
+        let mut k = 0;
+        loop {
+            if k == index.len() {
+                return best.map(|(_, idx)| {
+                    let at = |n: usize| axes[speed_axes[n]].coordinate(idx[n]);
+                    if five {
+                        crate::config::SliceConfig {
+                            leader_speed: Some(at(0)),
+                            follower_speed: Some(at(1)),
+                            ego_speed: Some(at(2)),
+                            ..Default::default()
+                        }
+                    } else {
+                        crate::config::SliceConfig {
+                            rel_speed_leader: at(0),
+                            rel_speed_follower: at(1),
+                            ..Default::default()
+                        }
+                    }
+                });
+            }
+            index[k] += 1;
+            if index[k] < axes[speed_axes[k]].points {
+                break;
+            }
+            index[k] = 0;
+            k += 1;
+        }
+    }
 }
 
 /// The output folder of a config.
@@ -607,9 +833,84 @@ mod tests {
         assert_eq!(set_category(false, false, true), None);
         assert_eq!(SET_LEGEND[3].0, "safe set, untrusted");
         // The policy bit is shown only where the state is safe.
-        assert_eq!(policy_category(true, true, true), Some(0));
-        assert_eq!(policy_category(true, true, false), Some(1));
-        assert_eq!(policy_category(false, true, true), Some(2));
-        assert_eq!(policy_category(false, false, false), None);
+        assert_eq!(policy_category(true, true, true, false), Some(0));
+        assert_eq!(policy_category(true, true, false, false), Some(1));
+        assert_eq!(policy_category(false, true, true, false), Some(2));
+        assert_eq!(policy_category(false, false, false, false), None);
+        // A tie is shown as such where safe, whatever the bit says.
+        assert_eq!(policy_category(true, true, false, true), Some(3));
+        assert_eq!(policy_category(false, true, false, true), Some(2));
+        assert_eq!(POLICY_LEGEND[3].1, PALE_YELLOW);
+    }
+
+    /// The compiled table's map reads the table as the firmware does: certified states with
+    /// their bit, uncertified ones in the constraint set, nothing outside the grid; and the run
+    /// draws it beside the solver's.
+    #[test]
+    fn the_table_map_is_the_firmwares_reading() {
+        let text =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/two-car.toml"))
+                .unwrap()
+                .replace("points = 201", "points = 41")
+                .replace("name = \"two-car\"", "name = \"two-car-table-map\"");
+        let config = Config::from_toml(&text).unwrap();
+        let out = std::env::temp_dir().join(format!("hjacc-table-map-{}", std::process::id()));
+        run(&config, &out, &mut |_| {}).unwrap();
+        let dir = out.join("two-car-table-map");
+        let bytes = std::fs::read(dir.join("table.bin")).unwrap();
+        let table = table_format::Table::parse(&bytes).unwrap();
+        // Closing at 14 m/s from 20 m: no braking saves it.
+        assert_eq!(table_category(&table, &[20.0, -14.0], true), Some(2));
+        // Closing at 2 m/s from 20 m: certified, and the bit brakes.
+        assert_eq!(table_category(&table, &[20.0, -2.0], true), Some(1));
+        // Outside the constraint set, and outside the grid.
+        assert_eq!(table_category(&table, &[-3.0, 0.0], false), None);
+        assert_eq!(table_category(&table, &[100.0, 0.0], true), None);
+        let png = std::fs::read(dir.join("table_vs_solver.png")).unwrap();
+        // Two maps side by side: the PNG's IHDR width is 1800.
+        assert_eq!(
+            u32::from_be_bytes([png[16], png[17], png[18], png[19]]),
+            1800
+        );
+        std::fs::remove_dir_all(&out).ok();
+    }
+
+    /// A 4-D grid whose safe states sit at known speed nodes: the widest slice is found there,
+    /// inside the trusted box, and nowhere when nothing is safe.
+    #[test]
+    fn the_widest_slice_is_the_one_with_the_most_safe_states() {
+        use crate::grid::GridAxis;
+        let grid = Grid::new(vec![
+            GridAxis::new("gap_leader", 0.0, 40.0, 5),
+            GridAxis::new("rel_speed_leader", -10.0, 10.0, 5),
+            GridAxis::new("gap_follower", 0.0, 40.0, 5),
+            GridAxis::new("rel_speed_follower", -10.0, 10.0, 5),
+        ])
+        .unwrap();
+        let st = grid.strides();
+        let mut values = vec![-1.0f32; grid.len()];
+        // Speeds (5, -5): 6 safe nodes; speeds (-10, 0): 9, but outside the trusted box below.
+        let mut mark = |v1: usize, v3: usize, n: usize| {
+            let cells = (1..5).flat_map(|i| (1..5).map(move |j| (i, j)));
+            for (i, j) in cells.take(n) {
+                values[i * st[0] + v1 * st[1] + j * st[2] + v3 * st[3]] = 1.0;
+            }
+        };
+        mark(3, 1, 6);
+        mark(0, 2, 9);
+        let widest = widest_slice(&grid, &values, None, 2.0).unwrap();
+        assert_eq!(
+            (widest.rel_speed_leader, widest.rel_speed_follower),
+            (-10.0, 0.0)
+        );
+        let trusted = [(0.0, 40.0), (-5.0, 10.0), (0.0, 40.0), (-10.0, 10.0)];
+        let widest = widest_slice(&grid, &values, Some(&trusted), 2.0).unwrap();
+        assert_eq!(
+            (widest.rel_speed_leader, widest.rel_speed_follower),
+            (5.0, -5.0)
+        );
+        // Safe nodes below the minimum gap do not count.
+        assert!(widest_slice(&grid, &values, None, 100.0).is_none());
+        assert!(widest_slice(&grid, &vec![-1.0; grid.len()], None, 2.0).is_none());
     }
 }

@@ -42,6 +42,34 @@ pub extern "C" fn hjacc_step_end() {
     black_box(0x5eed_0002u32);
 }
 
+/// Tells the instruction counter that the step just counted ran the nominal law.
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn hjacc_mode_nominal() {
+    black_box(0x5eed_0010u32);
+}
+
+/// Tells the instruction counter that the step just counted overrode the nominal law.
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn hjacc_mode_override() {
+    black_box(0x5eed_0011u32);
+}
+
+/// Tells the instruction counter that the step just counted was the minimum-risk manoeuvre.
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn hjacc_mode_minimum_risk() {
+    black_box(0x5eed_0012u32);
+}
+
+/// Tells the instruction counter that the step just counted ran uncertified.
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn hjacc_mode_uncertified() {
+    black_box(0x5eed_0013u32);
+}
+
 #[panic_handler]
 fn panic(_: &PanicInfo) -> ! {
     debug::exit(debug::EXIT_FAILURE);
@@ -194,6 +222,12 @@ fn main() -> ! {
         hjacc_step_begin();
         let command = controller.step(black_box(&inputs));
         hjacc_step_end();
+        match command.mode {
+            Mode::Nominal => hjacc_mode_nominal(),
+            Mode::Override => hjacc_mode_override(),
+            Mode::MinimumRisk => hjacc_mode_minimum_risk(),
+            Mode::Uncertified => hjacc_mode_uncertified(),
+        }
         if (command.mode == Mode::MinimumRisk) != in_fault_window {
             misplaced_minimum_risk += 1;
         }

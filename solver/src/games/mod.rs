@@ -59,6 +59,11 @@ pub struct OptimalInputs {
     pub follower_speed: Option<f32>,
 }
 
+/// Below this magnitude (s: metres of value per m/s of speed) the ego's switching function
+/// is a tie: both inputs change `V` by less than 1 mm per m/s, under the table's quantization
+/// on every grid here. The plots show ties apart; the policy bit brakes there.
+pub const TIE_TOLERANCE: f32 = 1e-3;
+
 /// A differential game the level-set engine can solve.
 pub trait Dynamics: Sync {
     /// The number of state axes.
@@ -72,8 +77,16 @@ pub trait Dynamics: Sync {
     fn dissipation(&self, z: &Vector, alpha: &mut Vector);
     /// All players' optimal inputs at `z` for co-state `p`.
     fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs;
-    /// Whether the ego's optimal input is its maximum acceleration (the table's policy bit).
-    fn ego_accelerates(&self, p: &Vector) -> bool;
+    /// The ego's switching function: the coefficient of its acceleration in `p . f` (the
+    /// derivative of `V` along the ego's input, s). The ego accelerates where it is positive
+    /// and brakes where it is negative; where it is zero (within [`TIE_TOLERANCE`]) both inputs
+    /// are equally good to first order, a tie.
+    fn ego_switching(&self, p: &Vector) -> f32;
+    /// Whether the ego's optimal input is its maximum acceleration (the table's policy bit). A
+    /// tie brakes.
+    fn ego_accelerates(&self, p: &Vector) -> bool {
+        self.ego_switching(p) > 0.0
+    }
     /// Whether `V` is non-decreasing along `axis`, so that the pessimistic and optimistic ghost
     /// values of [`crate::hji::Boundary`] bound the true ones there. Axes where it is not (or
     /// where nothing leaves the grid) take extrapolated ghosts. Default: every axis.
@@ -198,8 +211,8 @@ impl Dynamics for TwoCar {
         }
     }
 
-    fn ego_accelerates(&self, p: &Vector) -> bool {
-        -p[1] > 0.0
+    fn ego_switching(&self, p: &Vector) -> f32 {
+        -p[1]
     }
 
     #[inline(always)]
@@ -282,8 +295,8 @@ impl Dynamics for ThreeCarBaseline {
         }
     }
 
-    fn ego_accelerates(&self, p: &Vector) -> bool {
-        p[3] - p[1] > 0.0
+    fn ego_switching(&self, p: &Vector) -> f32 {
+        p[3] - p[1]
     }
     #[inline(always)]
     fn lax_friedrichs_row(
@@ -536,8 +549,8 @@ impl Dynamics for ThreeCarIdm {
         }
     }
 
-    fn ego_accelerates(&self, p: &Vector) -> bool {
-        p[3] - p[1] > 0.0
+    fn ego_switching(&self, p: &Vector) -> f32 {
+        p[3] - p[1]
     }
 
     #[inline(always)]
@@ -736,8 +749,8 @@ impl Dynamics for ThreeCarIdmSpeeds {
         }
     }
 
-    fn ego_accelerates(&self, p: &Vector) -> bool {
-        p[4] > 0.0
+    fn ego_switching(&self, p: &Vector) -> f32 {
+        p[4]
     }
 
     #[inline(always)]

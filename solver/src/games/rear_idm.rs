@@ -121,7 +121,12 @@ impl Dynamics for RearIdm {
         }
     }
 
-    /// The ego is adversarial here: the bit says whether its worst case is to accelerate.
+    /// The ego is adversarial here: the switching function is the one of its worst case.
+    fn ego_switching(&self, p: &Vector) -> f32 {
+        -p[2]
+    }
+
+    /// The bit says whether the ego's worst case is to accelerate (a tie accelerates).
     fn ego_accelerates(&self, p: &Vector) -> bool {
         p[2] <= 0.0
     }
