@@ -173,7 +173,9 @@ fn plot_trace(path: &std::path::Path, title: &str, trace: &Trace) -> Result<()> 
     chart
         .draw_series(LineSeries::new(
             trace.iter().map(|p| (p.t, p.command)),
-            BLACK.stroke_width(2),
+            // One pixel: plotters joins wider lines with mitres, which at the command's sharp
+            // turns draw spikes beyond the values (a spike to -3.9 under braking at -3.5).
+            BLACK.stroke_width(1),
         ))?
         .label("ego command [m/s^2]")
         .legend(line(BLACK));

@@ -442,7 +442,7 @@ fn plots(
     let table_title = |what: &str| {
         table.as_ref().map_or_else(String::new, |t| {
             format!(
-                "{what}: the compiled table, as the firmware reads it (V > {:.4} m)",
+                "{what}: the table as the firmware reads it (V > {:.4} m)",
                 t.header().error_bound.total()
             )
         })
@@ -703,7 +703,7 @@ fn plots(
                         .collect();
                     table_category(t, &state, in_constraint(i, j))
                 };
-                let title = table_title(&speeds_text);
+                let title = table_title(&format!("{}, {speeds_text}", config.name));
                 let table_map = CellMap {
                     title: &title,
                     x: PlotAxis {
