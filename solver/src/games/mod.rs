@@ -61,7 +61,8 @@ pub struct OptimalInputs {
 
 /// Below this magnitude (s: metres of value per m/s of speed) the ego's switching function
 /// is a tie: both inputs change `V` by less than 1 mm per m/s, under the table's quantization
-/// on every grid here. The plots show ties apart; the policy bit brakes there.
+/// on every grid here. The plots show ties apart; the policy bit still follows the sign (and
+/// brakes at exactly zero).
 pub const TIE_TOLERANCE: f32 = 1e-3;
 
 /// A differential game the level-set engine can solve.
