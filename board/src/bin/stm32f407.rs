@@ -5,16 +5,17 @@
 //! 1. The reset cause and the fault marker are read, then cleared ([`boot::restart_fault`]).
 //! 2. Clocks: 168 MHz from the 8 MHz crystal (HSE), APB1 42 MHz (the CAN's clock), APB2
 //!    84 MHz.
-//! 3. The independent watchdog starts (100 ms, five periods): from here on a hang resets the
-//!    board.
-//! 4. TIM2 runs free at 1 MHz over its 32 bits (the controller's clock); TIM3 paces the loop
+//! 3. The table is read in place from its own flash slot and checked whole
+//!    (`firmware::Controller::new`: one CRC over the table and the header's checks, bounded);
+//!    after a fault restart the controller is latched in the minimum-risk manoeuvre.
+//! 4. The independent watchdog starts (100 ms, five periods): from here on a hang resets the
+//!    board. It starts after the table check, so that the check's length cannot trip it.
+//! 5. TIM2 runs free at 1 MHz over its 32 bits (the controller's clock); TIM3 paces the loop
 //!    at 50 Hz.
-//! 5. CAN1 on PB8 (RX) / PB9 (TX) at 500 kbit/s; filters pass the tracks (0x120, 0x121) and the
+//! 6. CAN1 on PB8 (RX) / PB9 (TX) at 500 kbit/s; filters pass the tracks (0x120, 0x121) and the
 //!    ego speed (0x130). The peripheral joins the bus without blocking: until it has, no frame
-//!    arrives and the controller is in the minimum-risk manoeuvre, as with a silent bus.
-//! 6. The table is read in place from its own flash slot and checked whole
-//!    (`firmware::Controller::new`); after a fault restart the controller is latched in the
-//!    minimum-risk manoeuvre.
+//!    arrives and the controller is in the minimum-risk manoeuvre, as with a silent bus. The
+//!    takeover request goes on PD14.
 //!
 //! Then, every 20 ms: read the CAN frames, step the controller, send the acceleration request,
 //! feed the watchdog (`firmware::run_period_on_bus`), show the takeover request on PD14 (the
@@ -137,12 +138,32 @@ fn main() -> ! {
             .pclk2(84.MHz()),
     );
 
-    // 3. The watchdog, before anything that could hang.
+    // 3. The table, and the controller: one CRC over the table and its checks, bounded, done
+    //    before the watchdog starts so that its length cannot trip it.
+    let slot = table_slot();
+    let table = boot::table_in_slot(slot);
+    let mut controller = Controller::new(table, Config::default());
+    defmt::info!(
+        "hjacc: table slot {=usize:#x}, {=usize} of {=usize} bytes, accepted {=bool}",
+        slot.as_ptr() as usize,
+        table.len(),
+        slot.len(),
+        controller.table().is_some()
+    );
+    if let Some(fault) = restart {
+        defmt::warn!(
+            "restarted after a fault (watchdog {=bool}): minimum-risk manoeuvre until power-on",
+            flags.independent_watchdog || flags.window_watchdog
+        );
+        controller.latch_minimum_risk(fault);
+    }
+
+    // 4. The watchdog, before anything that could hang.
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
     watchdog.stop_on_debug(&dp.DBGMCU, true);
     watchdog.start(WATCHDOG_TIMEOUT_MS.millis());
 
-    // 4. The clock (TIM2: 84 MHz timer clock / 84) and the pacing timer.
+    // 5. The clock (TIM2: 84 MHz timer clock / 84) and the pacing timer.
     pac::TIM2::enable(&mut rcc);
     pac::TIM2::reset(&mut rcc);
     let tim2 = dp.TIM2;
@@ -157,7 +178,7 @@ fn main() -> ! {
         fault_exit();
     }
 
-    // 5. CAN1.
+    // 6. CAN1, and the takeover request.
     let gpiob = dp.GPIOB.split(&mut rcc);
     let can = dp.CAN1.can((gpiob.pb9, gpiob.pb8), &mut rcc);
     let Some(btr) = BOARD_500K.btr() else {
@@ -180,27 +201,8 @@ fn main() -> ! {
         }
     }
     let mut bus = CanBus::new(can);
-
-    // 6. The table, and the controller.
     let gpiod = dp.GPIOD.split(&mut rcc);
     let mut takeover = TakeoverRequest::new(gpiod.pd14.into_push_pull_output());
-    let slot = table_slot();
-    let table = boot::table_in_slot(slot);
-    let mut controller = Controller::new(table, Config::default());
-    defmt::info!(
-        "hjacc: table slot {=usize:#x}, {=usize} of {=usize} bytes, accepted {=bool}",
-        slot.as_ptr() as usize,
-        table.len(),
-        slot.len(),
-        controller.table().is_some()
-    );
-    if let Some(fault) = restart {
-        defmt::warn!(
-            "restarted after a fault (watchdog {=bool}): minimum-risk manoeuvre until power-on",
-            flags.independent_watchdog || flags.window_watchdog
-        );
-        controller.latch_minimum_risk(fault);
-    }
 
     let mut dog = Iwdg(watchdog);
     let mut overruns: u32 = 0;
