@@ -63,6 +63,8 @@ pub mod can_timing;
 pub mod clock;
 pub mod last_resort;
 pub mod takeover;
+#[cfg(target_os = "none")]
+pub mod target;
 
 /// The control period: 50 Hz, the firmware's default.
 pub const PERIOD_US: u32 = 20_000;

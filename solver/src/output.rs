@@ -88,6 +88,7 @@ pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<(), Solv
 pub type Curve<'a> = (&'a str, RGBColor, Vec<(f64, f64)>);
 
 /// A named axis of a plot: label and node coordinates.
+#[derive(Debug, Clone, Copy)]
 pub struct PlotAxis<'a> {
     /// Label with unit.
     pub label: &'a str,

@@ -363,6 +363,26 @@ const TABLE_LEGEND: [(&str, RGBColor); 3] = [
     ("constraint set, not certified", GREY),
 ];
 
+/// A [`CellMap`] on `axes` (horizontal, vertical).
+fn cell_map<'a>(
+    axes: (PlotAxis<'a>, PlotAxis<'a>),
+    title: &'a str,
+    cell: &'a dyn Fn(usize, usize) -> Option<usize>,
+    legend: &'a [(&'a str, RGBColor)],
+    curves: &'a [output::Curve<'a>],
+    frame: Option<(f64, f64, f64, f64)>,
+) -> CellMap<'a> {
+    CellMap {
+        title,
+        x: axes.0,
+        y: axes.1,
+        cell,
+        legend,
+        curves,
+        frame,
+    }
+}
+
 /// The firmware's reading of `table` at `state`: certified (the interpolated value above the
 /// table's error bound) with its policy bit, not certified, or `None` outside the table's grid
 /// or the constraint set.
@@ -462,6 +482,16 @@ fn plots(
             .filter(|(x, _)| *x >= coords[0][0] && *x <= *coords[0].last().unwrap_or(&0.0))
             .collect();
         let frame = bounds.as_ref().map(|b| (b[0].0, b[0].1, b[1].0, b[1].1));
+        let axes = (
+            PlotAxis {
+                label: "gap_leader [m]",
+                coords: &coords[0],
+            },
+            PlotAxis {
+                label: "rel_speed_leader = v_leader - v_ego [m/s]",
+                coords: &coords[1],
+            },
+        );
         let inside = |x: f64, y: f64| {
             frame.is_none_or(|(a, b, c, d)| (a..=b).contains(&x) && (c..=d).contains(&y))
         };
@@ -474,24 +504,17 @@ fn plots(
         };
         output::draw_cell_map(
             &dir.join("safe_set.png"),
-            &CellMap {
-                title: &format!(
+            &cell_map(
+                axes,
+                &format!(
                     "{}: constraint and safe sets, horizon {horizon_text}",
                     config.name
                 ),
-                x: PlotAxis {
-                    label: "gap_leader [m]",
-                    coords: &coords[0],
-                },
-                y: PlotAxis {
-                    label: "rel_speed_leader = v_leader - v_ego [m/s]",
-                    coords: &coords[1],
-                },
-                cell: &sets,
-                legend: &SET_LEGEND,
-                curves: &[("exact safe-set boundary", RED, boundary.clone())],
+                &sets,
+                &SET_LEGEND,
+                &[("exact safe-set boundary", RED, boundary.clone())],
                 frame,
-            },
+            ),
         )?;
         let policy = |i: usize, j: usize| {
             let node = i * n1 + j;
@@ -504,21 +527,14 @@ fn plots(
         };
         output::draw_cell_map(
             &dir.join("policy.png"),
-            &CellMap {
-                title: &format!("{}: ego input u2* over the safe set", config.name),
-                x: PlotAxis {
-                    label: "gap_leader [m]",
-                    coords: &coords[0],
-                },
-                y: PlotAxis {
-                    label: "rel_speed_leader [m/s]",
-                    coords: &coords[1],
-                },
-                cell: &policy,
-                legend: &POLICY_LEGEND,
-                curves: &[("exact safe-set boundary", RED, boundary.clone())],
+            &cell_map(
+                axes,
+                &format!("{}: ego input u2* over the safe set", config.name),
+                &policy,
+                &POLICY_LEGEND,
+                &[("exact safe-set boundary", RED, boundary.clone())],
                 frame,
-            },
+            ),
         )?;
         if let Some(t) = &table {
             let firmware = |i: usize, j: usize| {
@@ -534,36 +550,8 @@ fn plots(
             output::draw_cell_maps(
                 &dir.join("table_vs_solver.png"),
                 &[
-                    CellMap {
-                        title: &solver_title,
-                        x: PlotAxis {
-                            label: "gap_leader [m]",
-                            coords: &coords[0],
-                        },
-                        y: PlotAxis {
-                            label: "rel_speed_leader [m/s]",
-                            coords: &coords[1],
-                        },
-                        cell: &policy,
-                        legend: &POLICY_LEGEND,
-                        curves: &curves,
-                        frame,
-                    },
-                    CellMap {
-                        title: &table_title,
-                        x: PlotAxis {
-                            label: "gap_leader [m]",
-                            coords: &coords[0],
-                        },
-                        y: PlotAxis {
-                            label: "rel_speed_leader [m/s]",
-                            coords: &coords[1],
-                        },
-                        cell: &firmware,
-                        legend: &TABLE_LEGEND,
-                        curves: &curves,
-                        frame,
-                    },
+                    cell_map(axes, &solver_title, &policy, &POLICY_LEGEND, &curves, frame),
+                    cell_map(axes, &table_title, &firmware, &TABLE_LEGEND, &curves, frame),
                 ],
             )?;
         }
@@ -617,6 +605,16 @@ fn plots(
                 .as_ref()
                 .filter(|_| held_inside)
                 .map(|b| (b[0].0, b[0].1, b[2].0, b[2].1));
+            let axes = (
+                PlotAxis {
+                    label: "gap_leader x_g1 [m]",
+                    coords: &coords[0],
+                },
+                PlotAxis {
+                    label: "gap_follower x_g2 [m]",
+                    coords: &coords[2],
+                },
+            );
             let trusted_at = |i: usize, j: usize| {
                 held_inside
                     && frame.is_none_or(|(a, b, c, d)| {
@@ -654,45 +652,24 @@ fn plots(
             };
             output::draw_cell_map(
                 &dir.join(format!("safe_set_{tag}.png")),
-                &CellMap {
-                    title: &format!(
+                &cell_map(
+                    axes,
+                    &format!(
                         "{} ({kind}): {speeds_text}, {horizon_text}{notes}",
                         config.name
                     ),
-                    x: PlotAxis {
-                        label: "gap_leader x_g1 [m]",
-                        coords: &coords[0],
-                    },
-                    y: PlotAxis {
-                        label: "gap_follower x_g2 [m]",
-                        coords: &coords[2],
-                    },
-                    cell: &sets,
-                    legend: &SET_LEGEND,
-                    curves: &[],
+                    &sets,
+                    &SET_LEGEND,
+                    &[],
                     frame,
-                },
+                ),
             )?;
             let policy = |i: usize, j: usize| {
                 let (accelerate, tie) = policy_at(i, j);
                 policy_category(at(i, j) > 0.0, in_constraint(i, j), accelerate, tie)
             };
             let policy_title = format!("{}: u2* where safe, {speeds_text}{notes}", config.name);
-            let policy_map = CellMap {
-                title: &policy_title,
-                x: PlotAxis {
-                    label: "gap_leader x_g1 [m]",
-                    coords: &coords[0],
-                },
-                y: PlotAxis {
-                    label: "gap_follower x_g2 [m]",
-                    coords: &coords[2],
-                },
-                cell: &policy,
-                legend: &POLICY_LEGEND,
-                curves: &[],
-                frame,
-            };
+            let policy_map = cell_map(axes, &policy_title, &policy, &POLICY_LEGEND, &[], frame);
             output::draw_cell_map(&dir.join(format!("policy_{tag}.png")), &policy_map)?;
             if let Some(t) = &table {
                 let firmware = |i: usize, j: usize| {
@@ -704,21 +681,7 @@ fn plots(
                     table_category(t, &state, in_constraint(i, j))
                 };
                 let title = table_title(&format!("{}, {speeds_text}", config.name));
-                let table_map = CellMap {
-                    title: &title,
-                    x: PlotAxis {
-                        label: "gap_leader x_g1 [m]",
-                        coords: &coords[0],
-                    },
-                    y: PlotAxis {
-                        label: "gap_follower x_g2 [m]",
-                        coords: &coords[2],
-                    },
-                    cell: &firmware,
-                    legend: &TABLE_LEGEND,
-                    curves: &[],
-                    frame,
-                };
+                let table_map = cell_map(axes, &title, &firmware, &TABLE_LEGEND, &[], frame);
                 output::draw_cell_maps(
                     &dir.join(format!("table_vs_solver_{tag}.png")),
                     &[policy_map, table_map],

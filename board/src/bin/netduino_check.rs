@@ -24,13 +24,13 @@
 
 use core::cell::Cell;
 use core::hint::black_box;
-use core::mem::MaybeUninit;
 use core::panic::PanicInfo;
 use core::ptr::{addr_of, addr_of_mut};
 
-use board_stm32f4::boot::{self, FaultMarker, ResetFlags};
+use board_stm32f4::boot::{self, ResetFlags};
 use board_stm32f4::clock::{MicrosCounter, WideClock};
 use board_stm32f4::last_resort;
+use board_stm32f4::target::{self, KeptWords};
 use board_stm32f4::PERIOD_US;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::debug;
@@ -43,39 +43,22 @@ use firmware::can::{
 use firmware::{Config, Controller, Fault, Mode, Track};
 use heapless::Deque;
 
-#[link_section = ".uninit.HJACC_FAULT_MARKER"]
-static mut FAULT_MARKER: MaybeUninit<[u32; 2]> = MaybeUninit::uninit();
-
 /// Which fault this check has caused so far (survives the resets): a word and its complement.
 #[link_section = ".uninit.HJACC_CHECK_STAGE"]
-static mut STAGE: MaybeUninit<[u32; 2]> = MaybeUninit::uninit();
+static mut STAGE: KeptWords = KeptWords::new();
 
 /// The stack pointer at the last HardFault (survives the reset): a word and its complement.
 #[link_section = ".uninit.HJACC_FAULT_SP"]
-static mut FAULT_SP: MaybeUninit<[u32; 2]> = MaybeUninit::uninit();
+static mut FAULT_SP: KeptWords = KeptWords::new();
 
-extern "C" {
-    static __table_slot_start: u8;
-    static __table_slot_end: u8;
+fn read_words(words: *const KeptWords) -> [u32; 2] {
+    // SAFETY: single core, no interrupts in use; a fault handler never returns.
+    unsafe { target::read(words) }
 }
 
-fn table_slot() -> &'static [u8] {
-    // SAFETY: the linker's symbols bound the TABLE region, flash that nothing writes.
-    unsafe {
-        let start = addr_of!(__table_slot_start);
-        let end = addr_of!(__table_slot_end);
-        core::slice::from_raw_parts(start, (end as usize).saturating_sub(start as usize))
-    }
-}
-
-fn read_words(p: *const MaybeUninit<[u32; 2]>) -> [u32; 2] {
-    // SAFETY: two words of RAM, any bit pattern valid; single core, no interrupts in use.
-    unsafe { core::ptr::read_volatile(p.cast::<[u32; 2]>()) }
-}
-
-fn write_words(p: *mut MaybeUninit<[u32; 2]>, words: [u32; 2]) {
+fn write_words(words: *mut KeptWords, value: [u32; 2]) {
     // SAFETY: as in `read_words`.
-    unsafe { core::ptr::write_volatile(p.cast::<[u32; 2]>(), words) }
+    unsafe { target::write(words, value) }
 }
 
 fn stage() -> u32 {
@@ -323,11 +306,10 @@ fn overflow(depth: u32) -> u32 {
 
 #[entry]
 fn main() -> ! {
-    let marker = FaultMarker(read_words(addr_of!(FAULT_MARKER)));
-    write_words(addr_of_mut!(FAULT_MARKER), FaultMarker::CLEAR.0);
+    let marker = target::take_fault_marker();
     // QEMU models no reset flags: the marker alone tells a fault restart.
     let restart = boot::restart_fault(ResetFlags::default(), marker);
-    let slot = table_slot();
+    let slot = target::table_slot();
     let table = boot::table_in_slot(slot);
     let mut controller = Controller::new(table, Config::default());
     defmt::info!(
@@ -425,7 +407,7 @@ fn main() -> ! {
 fn fault_exit() -> ! {
     let words = last_resort::minimum_risk_frame(Config::default().mrm_deceleration, 0);
     black_box(words);
-    write_words(addr_of_mut!(FAULT_MARKER), FaultMarker::SET.0);
+    target::set_fault_marker();
     cortex_m::peripheral::SCB::sys_reset()
 }
 

@@ -27,21 +27,19 @@
 //! resets. Either way the next boot latches the minimum-risk manoeuvre.
 #![no_std]
 #![no_main]
-// The entry point, the exception handlers, the linker's table symbols, the fault marker in RAM
-// that survives a reset, and the mailbox writes of the last frame are the board's unsafe code;
-// the controller has none.
+// The exception handlers and the mailbox writes of the last frame are this binary's unsafe
+// code (the slot and the marker are in `board_stm32f4::target`); the controller has none.
 #![allow(unsafe_code)]
 
-use core::mem::MaybeUninit;
 use core::panic::PanicInfo;
-use core::ptr::{addr_of, addr_of_mut};
 use core::sync::atomic::{AtomicU8, Ordering};
 
-use board_stm32f4::boot::{self, FaultMarker, ResetFlags};
+use board_stm32f4::boot::{self, ResetFlags};
 use board_stm32f4::can_timing::BOARD_500K;
 use board_stm32f4::clock::{MicrosCounter, WideClock};
 use board_stm32f4::last_resort;
 use board_stm32f4::takeover::TakeoverRequest;
+use board_stm32f4::target;
 use board_stm32f4::{PERIOD_US, WATCHDOG_TIMEOUT_MS};
 use bxcan::filter::Mask32;
 use bxcan::{Fifo, StandardId};
@@ -54,40 +52,8 @@ use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::rcc::{Config as ClockConfig, Enable, Reset};
 use stm32f4xx_hal::watchdog::IndependentWatchdog;
 
-/// The fault marker: survives a reset, not a power cycle (`.uninit` is never initialised).
-#[link_section = ".uninit.HJACC_FAULT_MARKER"]
-static mut FAULT_MARKER: MaybeUninit<[u32; 2]> = MaybeUninit::uninit();
-
 /// The rolling counter of the next acceleration request, for the fault handlers' last frame.
 static NEXT_COUNTER: AtomicU8 = AtomicU8::new(0);
-
-extern "C" {
-    static __table_slot_start: u8;
-    static __table_slot_end: u8;
-}
-
-/// The table's flash slot (`memory.x`), read in place.
-fn table_slot() -> &'static [u8] {
-    // SAFETY: the linker places both symbols at the ends of the TABLE region, which is flash:
-    // readable, never written by this program, and 'static.
-    unsafe {
-        let start = addr_of!(__table_slot_start);
-        let end = addr_of!(__table_slot_end);
-        let len = (end as usize).saturating_sub(start as usize);
-        core::slice::from_raw_parts(start, len)
-    }
-}
-
-fn read_marker() -> FaultMarker {
-    // SAFETY: a plain volatile read of two words of RAM; any bit pattern is a valid [u32; 2].
-    // Single core, before interrupts are enabled: no other access.
-    FaultMarker(unsafe { core::ptr::read_volatile(addr_of!(FAULT_MARKER).cast::<[u32; 2]>()) })
-}
-
-fn write_marker(marker: FaultMarker) {
-    // SAFETY: as in `read_marker`; a fault handler never returns to the code it interrupted.
-    unsafe { core::ptr::write_volatile(addr_of_mut!(FAULT_MARKER).cast::<[u32; 2]>(), marker.0) }
-}
 
 /// TIM2 at 1 MHz, free-running over all 32 bits.
 struct Tim2(pac::TIM2);
@@ -127,8 +93,7 @@ fn main() -> ! {
         low_power: csr.lpwrrstf().bit_is_set(),
     };
     dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
-    let restart = boot::restart_fault(flags, read_marker());
-    write_marker(FaultMarker::CLEAR);
+    let restart = boot::restart_fault(flags, target::take_fault_marker());
 
     // 2. Clocks.
     let mut rcc = dp.RCC.freeze(
@@ -140,7 +105,7 @@ fn main() -> ! {
 
     // 3. The table, and the controller: one CRC over the table and its checks, bounded, done
     //    before the watchdog starts so that its length cannot trip it.
-    let slot = table_slot();
+    let slot = target::table_slot();
     let table = boot::table_in_slot(slot);
     let mut controller = Controller::new(table, Config::default());
     defmt::info!(
@@ -242,7 +207,7 @@ fn main() -> ! {
 /// reset. Touches no driver and little stack.
 fn fault_exit() -> ! {
     send_last_frame();
-    write_marker(FaultMarker::SET);
+    target::set_fault_marker();
     cortex_m::peripheral::SCB::sys_reset()
 }
 

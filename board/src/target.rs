@@ -1,0 +1,86 @@
+//! What only exists on the target: the table's flash slot, bounded by the linker's symbols
+//! (`memory.x`), and words of RAM that a reset keeps (cortex-m-rt's `.uninit`, never
+//! initialised), where the fault handlers leave their marker for the next boot. The binaries'
+//! only other unsafe code is their entry and fault handlers.
+#![allow(unsafe_code)]
+
+use core::mem::MaybeUninit;
+use core::ptr::{addr_of, addr_of_mut};
+
+use crate::boot::FaultMarker;
+
+extern "C" {
+    static __table_slot_start: u8;
+    static __table_slot_end: u8;
+}
+
+/// The table's flash slot (the linker's `TABLE` region), read in place.
+pub fn table_slot() -> &'static [u8] {
+    // SAFETY: the linker places both symbols at the ends of the TABLE region, which is flash:
+    // readable, never written by the program, and 'static.
+    unsafe {
+        let start = addr_of!(__table_slot_start);
+        let end = addr_of!(__table_slot_end);
+        core::slice::from_raw_parts(start, (end as usize).saturating_sub(start as usize))
+    }
+}
+
+/// Two words of RAM that a reset keeps, and power-on fills with garbage: hence a word and its
+/// complement wherever they hold a value.
+#[repr(transparent)]
+pub struct KeptWords(
+    // Read and written through raw pointers only (`read`, `write`).
+    #[allow(dead_code)] MaybeUninit<[u32; 2]>,
+);
+
+impl KeptWords {
+    /// Words to place in `.uninit` (`#[link_section = ".uninit.NAME"]`).
+    pub const fn new() -> Self {
+        KeptWords(MaybeUninit::uninit())
+    }
+}
+
+impl Default for KeptWords {
+    fn default() -> Self {
+        KeptWords::new()
+    }
+}
+
+/// Reads `words`: any bit pattern is a valid `[u32; 2]`.
+///
+/// # Safety
+/// No other access to `words` may run at the same time (single core: no interrupt handler
+/// that touches them preempting the caller).
+pub unsafe fn read(words: *const KeptWords) -> [u32; 2] {
+    // SAFETY: the caller's; the read is volatile so that it is never elided.
+    unsafe { core::ptr::read_volatile(words.cast::<[u32; 2]>()) }
+}
+
+/// Writes `value` into `words`.
+///
+/// # Safety
+/// As for [`read`].
+pub unsafe fn write(words: *mut KeptWords, value: [u32; 2]) {
+    // SAFETY: the caller's.
+    unsafe { core::ptr::write_volatile(words.cast::<[u32; 2]>(), value) }
+}
+
+/// The fault handlers' marker.
+#[link_section = ".uninit.HJACC_FAULT_MARKER"]
+static mut FAULT_MARKER: KeptWords = KeptWords::new();
+
+/// The marker the last run left, then cleared: call once at boot, before interrupts.
+pub fn take_fault_marker() -> FaultMarker {
+    // SAFETY: boot runs alone; the fault handlers that write the marker never return.
+    unsafe {
+        let marker = FaultMarker(read(addr_of!(FAULT_MARKER)));
+        write(addr_of_mut!(FAULT_MARKER), FaultMarker::CLEAR.0);
+        marker
+    }
+}
+
+/// Leaves the marker for the next boot: for the fault handlers, which then reset.
+pub fn set_fault_marker() {
+    // SAFETY: a fault handler runs alone and never returns to the code it interrupted.
+    unsafe { write(addr_of_mut!(FAULT_MARKER), FaultMarker::SET.0) }
+}
