@@ -68,27 +68,6 @@ pub struct CanBus<C> {
     last_counters: [Option<u8>; 3],
 }
 
-fn never(now_us: u64) -> Inputs {
-    let track = Measurement {
-        value: Track {
-            gap: f32::NAN,
-            rel_speed: f32::NAN,
-        },
-        timestamp_us: now_us,
-        valid: false,
-    };
-    Inputs {
-        leader: track,
-        follower: track,
-        ego_speed: Measurement {
-            value: f32::NAN,
-            timestamp_us: now_us,
-            valid: false,
-        },
-        now_us,
-    }
-}
-
 fn u16_at(data: &[u8], at: usize) -> Option<u16> {
     Some(u16::from_le_bytes([*data.get(at)?, *data.get(at + 1)?]))
 }
@@ -289,7 +268,7 @@ impl<C: embedded_can::nb::Can> CanBus<C> {
     pub fn new(can: C) -> Self {
         CanBus {
             can,
-            inputs: never(0),
+            inputs: Inputs::invalid(0),
             counter: 0,
             counts: E2eCounts::default(),
             last_counters: [None; 3],

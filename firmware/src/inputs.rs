@@ -54,6 +54,32 @@ pub struct Inputs {
     pub now_us: u64,
 }
 
+impl Inputs {
+    /// Inputs at `now_us` with every measurement invalid (NaN, flagged invalid): what a period
+    /// whose sensors could not be read, or a bus that has delivered nothing yet, gives the
+    /// controller.
+    pub fn invalid(now_us: u64) -> Self {
+        let track = Measurement {
+            value: Track {
+                gap: f32::NAN,
+                rel_speed: f32::NAN,
+            },
+            timestamp_us: now_us,
+            valid: false,
+        };
+        Inputs {
+            leader: track,
+            follower: track,
+            ego_speed: Measurement {
+                value: f32::NAN,
+                timestamp_us: now_us,
+                valid: false,
+            },
+            now_us,
+        }
+    }
+}
+
 /// The source of the front and rear radar tracks and the ego speed (a radar fusion ECU on CAN,
 /// or a simulation).
 pub trait Sensors {

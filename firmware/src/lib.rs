@@ -100,31 +100,9 @@ fn period<T, E, C: Clock, W: Watchdog>(
     watchdog: &mut W,
 ) -> Result<Command, E> {
     let now = clock.now_us();
-    let inputs = read(io, now).unwrap_or_else(|| unreadable(now));
+    let inputs = read(io, now).unwrap_or_else(|| Inputs::invalid(now));
     let command = controller.step(&inputs);
     let sent = request(io, &command);
     watchdog.feed();
     sent.map(|()| command)
-}
-
-/// The inputs of a period whose sensors could not be read: every measurement invalid.
-fn unreadable(now: u64) -> Inputs {
-    let invalid = Measurement {
-        value: Track {
-            gap: f32::NAN,
-            rel_speed: f32::NAN,
-        },
-        timestamp_us: now,
-        valid: false,
-    };
-    Inputs {
-        leader: invalid,
-        follower: invalid,
-        ego_speed: Measurement {
-            value: f32::NAN,
-            timestamp_us: now,
-            valid: false,
-        },
-        now_us: now,
-    }
 }
