@@ -149,9 +149,13 @@ fn main() -> ! {
     let Some(btr) = BOARD_500K.btr() else {
         fault_exit();
     };
-    let mut can = bxcan::Can::builder(can)
-        .set_bit_timing(btr)
-        .leave_disabled();
+    let builder = bxcan::Can::builder(can).set_bit_timing(btr);
+    // Automatic bus-off management (ABOM): after a bus-off the controller rejoins by itself
+    // once it has seen 128 x 11 recessive bits, instead of staying off until software asks.
+    // SAFETY: CAN1 is in initialisation mode (the builder's), where MCR is written; nothing
+    // else touches the peripheral here.
+    unsafe { (*pac::CAN1::ptr()).mcr().modify(|_, w| w.abom().set_bit()) };
+    let mut can = builder.leave_disabled();
     {
         let mut filters = can.modify_filters();
         if let (Some(tracks), Some(pair), Some(ego), Some(exact)) = (
