@@ -62,7 +62,7 @@ impl RearIdm {
     /// The follower's clipped IDM acceleration, within its speed limits.
     #[inline(always)]
     pub fn follower_acceleration(&self, vf: f32, ve: f32, gap: f32, t: f32) -> f32 {
-        super::clipped_idm(
+        super::idm::clipped_idm(
             &self.idm,
             self.follower_clip,
             self.max_speed,
@@ -76,7 +76,7 @@ impl RearIdm {
     /// The adversary's time gap for co-state component `p2` (on `v_f`).
     #[inline(always)]
     pub fn adversarial_time_gap(&self, p2: f32) -> f32 {
-        super::time_gap_against(self.time_gap, p2)
+        super::idm::time_gap_against(self.time_gap, p2)
     }
 }
 
