@@ -81,8 +81,10 @@
 //! `mrm_deceleration` (default 2 m/s^2, at most 4), softened to `mrm_gentle_deceleration` when
 //! the follower is known, close and closing, so as not to provoke a rear-end collision. A clock
 //! jump is never latched: the new time is adopted, the command history forgotten, and the
-//! manoeuvre ends after [`CLOCK_RECOVERY_PERIODS`] good periods. Every command, in every mode,
-//! is clamped into the envelope, and (with a table) into the band.
+//! manoeuvre ends after [`CLOCK_RECOVERY_PERIODS`] good periods. A board that restarted after
+//! a fault of its own (watchdog, HardFault, panic) latches the manoeuvre until power-on
+//! ([`Controller::latch_minimum_risk`], [`Fault::RestartedAfterFault`]). Every command, in
+//! every mode, is clamped into the envelope, and (with a table) into the band.
 //!
 //! # What `solver verify` proves of the rear table
 //! `cargo run -p solver --release -- verify firmware/tables/default.bin` proves, by interval
