@@ -206,7 +206,7 @@ pub enum Game {
     /// and a front closed form, for one braking level `beta = -ego.min`.
     ///
     /// The table holds the rear value `W_beta` on three axes in absolute speeds: `gap_follower`
-    /// [m], `follower_speed` [m/s], `ego_speed` [m/s], every speed in `[0, max_speed]`: an IDM
+    /// (m), `follower_speed` (m/s), `ego_speed` (m/s), every speed in `[0, max_speed]`: an IDM
     /// follower (time gap adversarial in `time_gap`, output clipped to `follower_clip`) behind an
     /// ego whose acceleration anywhere in the band `ego = [-beta, a_max]` is adversarial too, so
     /// the value bounds the rear gap for as long as the ego keeps its acceleration in the band,
