@@ -2,7 +2,8 @@
 # Builds the firmware's bare-metal binaries for thumbv7em-none-eabihf with Debian's Rust
 # toolchain, proves no panic is reachable from the control step (the no-panic binary only links
 # if none is), runs the closed-loop scenario on QEMU's emulated Cortex-M4F (failing on a
-# non-zero exit), and prints sizes, stack and instructions per control step.
+# non-zero exit), and prints sizes, stack and instructions per control step; then runs it once more
+# with the firmware's defmt log on (feature qemu-defmt) and decodes the log with defmt-print.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -42,3 +43,12 @@ timeout 600 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
 wait "$counter"
 cat "$fifo.out"
 rm -f "$fifo" "$fifo.out"
+
+echo "--- the same scenario with the firmware's defmt log (feature qemu-defmt), decoded by defmt-print"
+DEFMT_LOG=info build -p firmware --features qemu-defmt --bin qemu-scenario
+timeout 300 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
+  -semihosting-config enable=on,target=native -kernel "$elf" > target/qemu-scenario.defmt
+defmt-print -e "$elf" < target/qemu-scenario.defmt > target/qemu-scenario.log
+grep -c "^INFO  mode " target/qemu-scenario.log | sed 's/^/defmt log: mode changes logged: /'
+grep -m1 "MinimumRisk" target/qemu-scenario.log
+grep "^result: PASS" target/qemu-scenario.log

@@ -17,4 +17,8 @@ fn main() {
     fs::copy(PathBuf::from("memory").join(board), out.join("memory.x")).expect("memory file");
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
+    // defmt's symbols (its interned strings) have their own linker script.
+    if env::var_os("CARGO_FEATURE_DEFMT").is_some() {
+        println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    }
 }

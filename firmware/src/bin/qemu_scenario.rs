@@ -23,7 +23,27 @@ use core::hint::black_box;
 use core::panic::PanicInfo;
 
 use cortex_m_rt::entry;
-use cortex_m_semihosting::{debug, hprintln};
+use cortex_m_semihosting::debug;
+#[cfg(not(feature = "qemu-defmt"))]
+use cortex_m_semihosting::hprintln;
+#[cfg(feature = "qemu-defmt")]
+use defmt_semihosting as _;
+
+#[cfg(all(feature = "defmt", not(feature = "qemu-defmt")))]
+compile_error!(
+    "the QEMU binaries log defmt with the `qemu-defmt` feature (it adds the semihosting logger)"
+);
+
+/// A line of the summary: text over semihosting, or a defmt frame when the defmt log shares
+/// the channel (text would corrupt its frames).
+macro_rules! report {
+    ($($arg:tt)*) => {{
+        #[cfg(feature = "qemu-defmt")]
+        defmt::println!($($arg)*);
+        #[cfg(not(feature = "qemu-defmt"))]
+        hprintln!($($arg)*);
+    }};
+}
 use firmware::{
     Config, Controller, Inputs, Measurement, Mode, Track, CERTIFICATE_TOLERANCE, DEFAULT_TABLE,
 };
@@ -283,7 +303,7 @@ fn main() -> ! {
     }
     let stack_bytes = used_words * 4;
 
-    hprintln!(
+    report!(
         "hjacc qemu scenario: {} steps ({} s), nominal {}, override {}, minimum-risk {} (outside the fault window: {})",
         steps,
         steps as f32 * h,
@@ -292,11 +312,11 @@ fn main() -> ! {
         minimum_risk,
         misplaced_minimum_risk
     );
-    hprintln!(
+    report!(
         "smallest certificate margin outside the fault window: {} m",
         min_margin
     );
-    hprintln!(
+    report!(
         "min gap front {} m, rear {} m, max braking {} m/s^2, final speeds {} {} {} m/s",
         min_front,
         min_rear,
@@ -305,11 +325,11 @@ fn main() -> ! {
         ego.v,
         follower.v
     );
-    hprintln!(
+    report!(
         "stack used by the control loop (painted, 8 KiB window): {} bytes",
         stack_bytes
     );
-    hprintln!(
+    report!(
         "controller state (its command history, event log and table view): {} bytes",
         core::mem::size_of::<Controller<'static>>()
     );
@@ -320,7 +340,7 @@ fn main() -> ! {
         && minimum_risk > 0
         && misplaced_minimum_risk == 0
         && min_margin > -CERTIFICATE_TOLERANCE;
-    hprintln!("result: {}", if ok { "PASS" } else { "FAIL" });
+    report!("result: {}", if ok { "PASS" } else { "FAIL" });
     debug::exit(if ok {
         debug::EXIT_SUCCESS
     } else {
