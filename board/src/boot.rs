@@ -78,6 +78,24 @@ impl FaultMarker {
     }
 }
 
+/// The acceleration requests' rolling counter, as kept in two words of RAM across a reset: the
+/// counter and its complement.
+pub fn counter_words(counter: u8) -> [u32; 2] {
+    let c = u32::from(counter);
+    [c, !c]
+}
+
+/// The counter kept in `words`, or `None` when they hold none (after a power-on, RAM holds
+/// garbage; the sequence then starts at 0).
+pub fn counter_from_words(words: [u32; 2]) -> Option<u8> {
+    let [c, check] = words;
+    if check == !c {
+        u8::try_from(c).ok()
+    } else {
+        None
+    }
+}
+
 /// The fault to latch at boot, if the last run ended in one: a watchdog reset, or a reset
 /// after a fault handler left its marker. A power-on or brown-out reset discards the marker
 /// (RAM did not hold).
@@ -124,6 +142,16 @@ mod tests {
         let erased = vec![0xFF; 1024];
         let controller = firmware::Controller::new(table_in_slot(&erased), Default::default());
         assert!(controller.table().is_none());
+    }
+
+    #[test]
+    fn the_request_counter_survives_a_reset_and_garbage_is_no_counter() {
+        for c in [0u8, 1, 200, 255] {
+            assert_eq!(counter_from_words(counter_words(c)), Some(c));
+        }
+        assert_eq!(counter_from_words([7, 7]), None);
+        assert_eq!(counter_from_words([256, !256]), None);
+        assert_eq!(counter_from_words(FaultMarker::SET.0), None);
     }
 
     #[test]

@@ -1,13 +1,14 @@
 //! What only exists on the target: the table's flash slot, bounded by the linker's symbols
 //! (`memory.x`), and words of RAM that a reset keeps (cortex-m-rt's `.uninit`, never
-//! initialised), where the fault handlers leave their marker for the next boot. The binaries'
+//! initialised), where the fault handlers leave their marker for the next boot and the loop
+//! keeps the acceleration requests' rolling counter. The binaries'
 //! only other unsafe code is their entry and fault handlers.
 #![allow(unsafe_code)]
 
 use core::mem::MaybeUninit;
 use core::ptr::{addr_of, addr_of_mut};
 
-use crate::boot::FaultMarker;
+use crate::boot::{counter_from_words, counter_words, FaultMarker};
 
 extern "C" {
     static __table_slot_start: u8;
@@ -83,4 +84,23 @@ pub fn take_fault_marker() -> FaultMarker {
 pub fn set_fault_marker() {
     // SAFETY: a fault handler runs alone and never returns to the code it interrupted.
     unsafe { write(addr_of_mut!(FAULT_MARKER), FaultMarker::SET.0) }
+}
+
+/// The rolling counter of the next acceleration request.
+#[link_section = ".uninit.HJACC_REQUEST_COUNTER"]
+static mut REQUEST_COUNTER: KeptWords = KeptWords::new();
+
+/// The counter the next acceleration request carries, as the last run left it; 0 after a
+/// power-on.
+pub fn kept_request_counter() -> u8 {
+    // SAFETY: single core; the loop and the fault handlers, which never return, are the only
+    // users, one at a time.
+    counter_from_words(unsafe { read(addr_of!(REQUEST_COUNTER)) }).unwrap_or(0)
+}
+
+/// Keeps the counter the next acceleration request carries, for a fault handler's last frame
+/// and for the run after a reset.
+pub fn keep_request_counter(counter: u8) {
+    // SAFETY: as in `kept_request_counter`.
+    unsafe { write(addr_of_mut!(REQUEST_COUNTER), counter_words(counter)) }
 }

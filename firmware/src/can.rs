@@ -266,10 +266,17 @@ fn quantize_u16(x: f32) -> u16 {
 impl<C: embedded_can::nb::Can> CanBus<C> {
     /// A driver on `can`. Until the first frames arrive every measurement is invalid.
     pub fn new(can: C) -> Self {
+        Self::with_next_counter(can, 0)
+    }
+
+    /// A driver whose first acceleration request carries `counter`: a board that restarts
+    /// without a power cycle goes on with the sequence its receiver expects, instead of a jump
+    /// back to 0 that an end-to-end check refuses until it resynchronises.
+    pub fn with_next_counter(can: C, counter: u8) -> Self {
         CanBus {
             can,
             inputs: Inputs::invalid(0),
-            counter: 0,
+            counter,
             counts: E2eCounts::default(),
             last_counters: [None; 3],
         }

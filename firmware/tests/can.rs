@@ -7,7 +7,7 @@ use std::collections::VecDeque;
 use embedded_can::{Frame, Id, StandardId};
 use firmware::can::{self, CanBus};
 use firmware::{
-    run_period, Actuator, Clock, Config, Controller, Fault, Mode, Sensors, Track, Watchdog,
+    run_period, Actuator, Clock, Config, Controller, Fault, Inputs, Mode, Sensors, Track, Watchdog,
     DEFAULT_TABLE,
 };
 
@@ -307,6 +307,19 @@ fn a_period_over_can_and_then_silence() {
     assert_eq!(cmd.mode, Mode::MinimumRisk);
     assert_eq!(cmd.fault, Some(Fault::LeaderStale));
     assert_eq!(dog.0, 1);
+}
+
+/// A driver restarted with the next counter goes on with the sequence, across the wrap.
+#[test]
+fn a_restarted_driver_goes_on_with_the_request_sequence() {
+    let mut bus = CanBus::with_next_counter(MockBus::default(), 255);
+    let command = Controller::new(DEFAULT_TABLE, Config::default()).step(&Inputs::invalid(0));
+    bus.request(&command).unwrap();
+    bus.request(&command).unwrap();
+    assert_eq!(bus.next_counter(), 1);
+    let raw = bus.release();
+    assert_eq!(raw.tx[0].data, can::encode_command(&command, 255).to_vec());
+    assert_eq!(raw.tx[1].data, can::encode_command(&command, 0).to_vec());
 }
 
 /// One bus delivers the inputs and takes the command, as on the board.

@@ -47,6 +47,17 @@ use heapless::Deque;
 #[link_section = ".uninit.HJACC_CHECK_STAGE"]
 static mut STAGE: KeptWords = KeptWords::new();
 
+/// The request counter the run after the next fault must start at: a word and its complement.
+#[link_section = ".uninit.HJACC_EXPECTED_COUNTER"]
+static mut EXPECTED_COUNTER: KeptWords = KeptWords::new();
+
+/// Records that the run after the fault about to happen must go on one past the kept counter
+/// (the fault handler's last frame takes the kept one).
+fn expect_counter_after_fault() {
+    let next = u32::from(target::kept_request_counter().wrapping_add(1));
+    write_words(addr_of_mut!(EXPECTED_COUNTER), [next, !next]);
+}
+
 /// The stack pointer at the last HardFault (survives the reset): a word and its complement.
 #[link_section = ".uninit.HJACC_FAULT_SP"]
 static mut FAULT_SP: KeptWords = KeptWords::new();
@@ -205,6 +216,8 @@ struct Run {
     last_ego_speed: f32,
     /// Frames the CAN driver's end-to-end checks refused.
     e2e_faults: u32,
+    /// The rolling counter of the first acceleration request sent.
+    first_counter: Option<u8>,
 }
 
 /// Runs `steps` periods of the loop: the leader cruises at 25 m/s, then at 2 s brakes at
@@ -214,7 +227,8 @@ fn drive(controller: &mut Controller<'_>, steps: u32) -> Run {
     let mut leader = Car { x: 80.0, v: 25.0 };
     let mut ego = Car { x: 20.0, v: 25.0 };
     let mut ego_a = 0.0f32;
-    let mut bus = CanBus::new(Loopback::default());
+    // The request sequence goes on from the last run's, as on the board.
+    let mut bus = CanBus::with_next_counter(Loopback::default(), target::kept_request_counter());
     let ticks = Cell::new(0u32);
     let mut clock = WideClock::new(SimCounter(&ticks));
     let mut dog = Dog(0);
@@ -222,6 +236,7 @@ fn drive(controller: &mut Controller<'_>, steps: u32) -> Run {
         nominal: 0,
         minimum_risk: 0,
         first_fault: None,
+        first_counter: None,
         same_fault: 0,
         smallest_gap: f32::INFINITY,
         last_ego_speed: ego.v,
@@ -278,10 +293,12 @@ fn drive(controller: &mut Controller<'_>, steps: u32) -> Run {
             _ => {}
         }
         // The actuator reads the request off the bus.
+        target::keep_request_counter(bus.next_counter());
         if let Some(f) = bus.bus_mut().tx.pop_front() {
             if f.id.as_raw() == ACCEL_REQUEST_ID {
-                let [a0, a1, ..] = f.data;
+                let [a0, a1, _, counter, ..] = f.data;
                 ego_a = f32::from(i16::from_le_bytes([a0, a1])) * 1e-3;
+                run.first_counter = run.first_counter.or(Some(counter));
             }
         }
         let t = k as f32 * h;
@@ -356,6 +373,7 @@ fn main() -> ! {
                 finish(false);
             }
             defmt::info!("causing a HardFault (undefined instruction)");
+            expect_counter_after_fault();
             set_stage(1);
             cortex_m::asm::udf()
         }
@@ -376,7 +394,23 @@ fn main() -> ! {
                 finish(false);
             }
             controller.latch_minimum_risk(fault);
+            let resumed = target::kept_request_counter();
             let run = drive(&mut controller, 250);
+            // The sequence goes on: the last frame took the counter the loop had kept, and the
+            // first request after the reset carries the next one.
+            let [expected, check] = read_words(addr_of!(EXPECTED_COUNTER));
+            let goes_on = check == !expected
+                && u32::from(resumed) == expected
+                && run.first_counter == Some(resumed);
+            defmt::info!(
+                "the request sequence goes on after the reset at counter {=u8} (expected {=u32}): {=bool}",
+                resumed,
+                expected,
+                goes_on
+            );
+            if !goes_on {
+                finish(false);
+            }
             let latched = if run.first_fault == Some(fault) {
                 run.same_fault
             } else {
@@ -393,6 +427,7 @@ fn main() -> ! {
             }
             if s == 1 {
                 defmt::info!("causing a stack overflow");
+                expect_counter_after_fault();
                 set_stage(2);
                 black_box(overflow(black_box(0)));
                 finish(false);
@@ -405,7 +440,9 @@ fn main() -> ! {
 /// The board's fault path, less the CAN mailbox QEMU does not model: the marker, the last
 /// frame's words (computed as the board does), and a reset.
 fn fault_exit() -> ! {
-    let words = last_resort::minimum_risk_frame(Config::default().mrm_deceleration, 0);
+    let counter = target::kept_request_counter();
+    let words = last_resort::minimum_risk_frame(Config::default().mrm_deceleration, counter);
+    target::keep_request_counter(counter.wrapping_add(1));
     black_box(words);
     target::set_fault_marker();
     cortex_m::peripheral::SCB::sys_reset()

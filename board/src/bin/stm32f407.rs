@@ -32,7 +32,6 @@
 #![allow(unsafe_code)]
 
 use core::panic::PanicInfo;
-use core::sync::atomic::{AtomicU8, Ordering};
 
 use board_stm32f4::boot::{self, ResetFlags};
 use board_stm32f4::can_timing::BOARD_500K;
@@ -51,9 +50,6 @@ use stm32f4xx_hal::pac;
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::rcc::{Config as ClockConfig, Enable, Reset};
 use stm32f4xx_hal::watchdog::IndependentWatchdog;
-
-/// The rolling counter of the next acceleration request, for the fault handlers' last frame.
-static NEXT_COUNTER: AtomicU8 = AtomicU8::new(0);
 
 /// TIM2 at 1 MHz, free-running over all 32 bits.
 struct Tim2(pac::TIM2);
@@ -169,7 +165,8 @@ fn main() -> ! {
             filters.enable_bank(1, Fifo::Fifo0, Mask32::frames_with_std_id(ego, exact));
         }
     }
-    let mut bus = CanBus::new(can);
+    // The request sequence goes on from the last run's (0 after a power-on).
+    let mut bus = CanBus::with_next_counter(can, target::kept_request_counter());
     let gpiod = dp.GPIOD.split(&mut rcc);
     let mut takeover = TakeoverRequest::new(gpiod.pd14.into_push_pull_output());
 
@@ -188,7 +185,7 @@ fn main() -> ! {
         // Joins the bus once it has seen it idle; a no-op afterwards.
         let _ = bus.bus_mut().enable_non_blocking();
         let sent = firmware::run_period_on_bus(&mut controller, &mut bus, &mut clock, &mut dog);
-        NEXT_COUNTER.store(bus.next_counter(), Ordering::Relaxed);
+        target::keep_request_counter(bus.next_counter());
         let command = match sent {
             Ok(command) => command,
             Err(e) => {
@@ -218,10 +215,9 @@ fn fault_exit() -> ! {
 /// Writes the minimum-risk request into a free transmit mailbox of CAN1, if the peripheral is
 /// running; waits a bounded time for a mailbox to free up.
 fn send_last_frame() {
-    let words = last_resort::minimum_risk_frame(
-        Config::default().mrm_deceleration,
-        NEXT_COUNTER.load(Ordering::Relaxed),
-    );
+    let counter = target::kept_request_counter();
+    let words = last_resort::minimum_risk_frame(Config::default().mrm_deceleration, counter);
+    target::keep_request_counter(counter.wrapping_add(1));
     // SAFETY: the handler is the only code running from here to the reset; the registers are
     // CAN1's, written as the reference manual's "transmit" procedure describes.
     let can = unsafe { &*pac::CAN1::ptr() };
