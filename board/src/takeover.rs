@@ -9,7 +9,7 @@
 //! [`REFRESH_PERIODS`] periods, so a pin disturbed by anything else is put right within that.
 
 use embedded_hal::digital::OutputPin;
-use firmware::{Command, Mode};
+use firmware::Mode;
 
 /// The request is written to the pin at least this often (periods), changed or not.
 pub const REFRESH_PERIODS: u32 = 50;
@@ -31,9 +31,9 @@ pub struct TakeoverRequest<P> {
     since_write: u32,
 }
 
-/// Whether a command calls for the driver to take over.
-pub fn requested(command: &Command) -> bool {
-    matches!(command.mode, Mode::MinimumRisk | Mode::Uncertified)
+/// Whether the controller's mode calls for the driver to take over.
+pub fn requested(mode: Mode) -> bool {
+    matches!(mode, Mode::MinimumRisk | Mode::Uncertified)
 }
 
 impl<P: OutputPin> TakeoverRequest<P> {
@@ -46,9 +46,10 @@ impl<P: OutputPin> TakeoverRequest<P> {
         }
     }
 
-    /// Shows the request `command` calls for. A failed write is retried at the next call.
-    pub fn show(&mut self, command: &Command) -> Result<(), Error<P::Error>> {
-        let on = requested(command);
+    /// Shows the request the controller's `mode` calls for (`Controller::mode`, the mode of
+    /// its last command). A failed write is retried at the next call.
+    pub fn show(&mut self, mode: Mode) -> Result<(), Error<P::Error>> {
+        let on = requested(mode);
         self.since_write = self.since_write.saturating_add(1);
         if self.shown == Some(on) && self.since_write < REFRESH_PERIODS {
             return Ok(());
@@ -105,7 +106,7 @@ mod tests {
             Mode::Nominal,
             Mode::Uncertified,
         ] {
-            lamp.show(&command(mode)).unwrap();
+            lamp.show(mode).unwrap();
         }
         lamp.release().done();
     }
@@ -118,7 +119,7 @@ mod tests {
             .collect();
         let mut lamp = TakeoverRequest::new(Mock::new(&expected));
         for _ in 0..=(refreshes * REFRESH_PERIODS) {
-            lamp.show(&command(Mode::MinimumRisk)).unwrap();
+            lamp.show(Mode::MinimumRisk).unwrap();
         }
         lamp.release().done();
     }
@@ -131,10 +132,10 @@ mod tests {
         ];
         let mut lamp = TakeoverRequest::new(Mock::new(&expected));
         assert_eq!(
-            lamp.show(&command(Mode::MinimumRisk)),
+            lamp.show(Mode::MinimumRisk),
             Err(Error::Pin(MockError::Io(ErrorKind::BrokenPipe)))
         );
-        lamp.show(&command(Mode::MinimumRisk)).unwrap();
+        lamp.show(Mode::MinimumRisk).unwrap();
         lamp.release().done();
     }
 }

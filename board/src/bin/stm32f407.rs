@@ -186,19 +186,16 @@ fn main() -> ! {
         let _ = bus.bus_mut().enable_non_blocking();
         let sent = firmware::run_period_on_bus(&mut controller, &mut bus, &mut clock, &mut dog);
         target::keep_request_counter(bus.next_counter());
-        let command = match sent {
-            Ok(command) => command,
-            Err(e) => {
-                let why = match e {
-                    firmware::can::Error::Bus(_) => "receive overrun",
-                    firmware::can::Error::TransmitBusy => "transmit mailboxes full",
-                    _ => "frame construction",
-                };
-                defmt::warn!("acceleration request not sent: {=str}", why);
-                continue;
-            }
-        };
-        if takeover.show(&command).is_err() {
+        if let Err(e) = sent {
+            let why = match e {
+                firmware::can::Error::Bus(_) => "receive overrun",
+                firmware::can::Error::TransmitBusy => "transmit mailboxes full",
+                _ => "frame construction",
+            };
+            defmt::warn!("acceleration request not sent: {=str}", why);
+        }
+        // Shown whether or not the request went out: the driver sees the controller's state.
+        if takeover.show(controller.mode()).is_err() {
             defmt::warn!("takeover request not shown");
         }
     }
