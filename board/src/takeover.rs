@@ -76,17 +76,7 @@ mod tests {
     use super::*;
     use embedded_hal_mock::eh1::digital::{Mock, State, Transaction};
     use embedded_hal_mock::eh1::MockError;
-    use firmware::Fault;
     use std::io::ErrorKind;
-
-    fn command(mode: Mode) -> Command {
-        Command {
-            acceleration: 0.0,
-            mode,
-            fault: (mode == Mode::MinimumRisk).then_some(Fault::LeaderStale),
-            margin: None,
-        }
-    }
 
     #[test]
     fn lit_exactly_when_the_controller_is_not_certifying() {
