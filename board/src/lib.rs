@@ -63,7 +63,7 @@ pub mod can_timing;
 pub mod clock;
 pub mod last_resort;
 pub mod takeover;
-#[cfg(target_os = "none")]
+#[cfg(all(target_os = "none", any(feature = "stm32f407", feature = "qemu")))]
 pub mod target;
 
 /// The control period: 50 Hz, the firmware's default.

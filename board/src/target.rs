@@ -13,6 +13,48 @@ use crate::boot::{counter_from_words, counter_words, FaultMarker};
 extern "C" {
     static __table_slot_start: u8;
     static __table_slot_end: u8;
+    static _stack_start: u8;
+    static _stack_end: u8;
+}
+
+/// The word the free stack is painted with.
+const STACK_PAINT: u32 = 0x5AC4_5AC4;
+
+/// The stack region (`memory.x`): its lowest address and the one above its top.
+fn stack_region() -> (usize, usize) {
+    // Only the symbols' addresses are taken.
+    (
+        addr_of!(_stack_end) as usize,
+        addr_of!(_stack_start) as usize,
+    )
+}
+
+/// Paints the free stack, from the region's bottom to just below the stack pointer, so that
+/// [`stack_high_water`] can tell how deep the stack has ever been since. Call once, early.
+pub fn paint_stack() {
+    let (bottom, _) = stack_region();
+    let sp = cortex_m::register::msp::read() as usize;
+    // Leave the words right below the stack pointer alone: this function's own calls use them.
+    let top = sp.saturating_sub(64) & !3;
+    let mut at = bottom;
+    while at < top {
+        // SAFETY: [bottom, top) is stack below the stack pointer: nothing lives there.
+        unsafe { core::ptr::write_volatile(at as *mut u32, STACK_PAINT) };
+        at += 4;
+    }
+}
+
+/// The most stack used since [`paint_stack`], in bytes: from the top of the region down to the
+/// lowest word no longer painted (a lower bound if a frame happened to write the paint word).
+pub fn stack_high_water() -> usize {
+    let (bottom, top) = stack_region();
+    let mut at = bottom;
+    // SAFETY: reads of the stack region's words, below the stack pointer or in use: any value
+    // is a valid u32.
+    while at < top && unsafe { core::ptr::read_volatile(at as *const u32) } == STACK_PAINT {
+        at += 4;
+    }
+    top - at
 }
 
 /// The table's flash slot (the linker's `TABLE` region), read in place.

@@ -323,6 +323,7 @@ fn overflow(depth: u32) -> u32 {
 
 #[entry]
 fn main() -> ! {
+    target::paint_stack();
     let marker = target::take_fault_marker();
     // QEMU models no reset flags: the marker alone tells a fault restart.
     let restart = boot::restart_fault(ResetFlags::default(), marker);
@@ -364,7 +365,15 @@ fn main() -> ! {
                 run.last_ego_speed,
                 run.e2e_faults
             );
-            if !(run.nominal > 0
+            // Everything on the stack so far: main's frame (the controller), the loop's (the
+            // CAN driver, the plant) and the deepest control step.
+            let stack = target::stack_high_water();
+            defmt::info!(
+                "stack high-water mark after the closed loop: {=usize} of 16384 bytes",
+                stack
+            );
+            if !(stack < 16384
+                && run.nominal > 0
                 && run.minimum_risk == 0
                 && run.smallest_gap > 2.0
                 && run.last_ego_speed < 0.1

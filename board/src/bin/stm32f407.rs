@@ -76,6 +76,9 @@ fn main() -> ! {
         fault_exit();
     };
 
+    // The free stack is painted, so that its high-water mark can be logged.
+    target::paint_stack();
+
     // 1. Why we started, and whether the last run ended in a fault.
     let csr = dp.RCC.csr().read();
     let flags = ResetFlags {
@@ -172,7 +175,17 @@ fn main() -> ! {
 
     let mut dog = Iwdg(watchdog);
     let mut overruns: u32 = 0;
+    let mut periods: u32 = 0;
     loop {
+        periods = periods.wrapping_add(1);
+        if periods % 500 == 0 {
+            defmt::info!(
+                "{=u32} periods, stack high-water mark {=usize} of 16384 bytes, {=u32} overruns",
+                periods,
+                target::stack_high_water(),
+                overruns
+            );
+        }
         // The period's start: TIM3's update. Already there means the last step overran.
         if pace.wait().is_ok() {
             overruns = overruns.saturating_add(1);
