@@ -292,8 +292,9 @@ fn drive(controller: &mut Controller<'_>, steps: u32) -> Run {
             }
             _ => {}
         }
-        // The actuator reads the request off the bus.
+        // Kept for the run after a reset, as the board keeps it.
         target::keep_request_counter(bus.next_counter());
+        // The actuator reads the request off the bus.
         if let Some(f) = bus.bus_mut().tx.pop_front() {
             if f.id.as_raw() == ACCEL_REQUEST_ID {
                 let [a0, a1, _, counter, ..] = f.data;
