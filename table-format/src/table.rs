@@ -71,6 +71,19 @@ fn le_u32(bytes: &[u8], at: usize) -> Option<u32> {
     Some(u32::from_le_bytes(a))
 }
 
+/// Decodes and validates the header from exactly its announced bytes.
+fn decode_header(header_bytes: &[u8]) -> Result<Header<'_>, Error> {
+    let (header, rest): (Header<'_>, &[u8]) =
+        postcard::take_from_bytes(header_bytes).map_err(|_| Error::HeaderDecode)?;
+    if !rest.is_empty() {
+        return Err(Error::InvalidHeader(
+            "header length does not match its encoding",
+        ));
+    }
+    header.validate()?;
+    Ok(header)
+}
+
 /// The grid cell of a state: per axis the lower node index and the position in the cell.
 struct Cell {
     base: usize,
@@ -116,14 +129,7 @@ impl<'a> Table<'a> {
         let header_bytes = bytes
             .get(PREAMBLE_LEN..header_end)
             .ok_or(Error::HeaderDecode)?;
-        let (header, rest): (Header<'a>, &[u8]) =
-            postcard::take_from_bytes(header_bytes).map_err(|_| Error::HeaderDecode)?;
-        if !rest.is_empty() {
-            return Err(Error::InvalidHeader(
-                "header length does not match its encoding",
-            ));
-        }
-        header.validate()?;
+        let header = decode_header(header_bytes)?;
         let payload = bytes.get(header_end..body_len).ok_or(Error::HeaderDecode)?;
         let expected = header.payload_len()?;
         if payload.len() != expected {
@@ -229,15 +235,7 @@ impl<'a> Table<'a> {
                 needed: header_end,
                 found: region.len(),
             })?;
-        let (header, rest): (Header<'_>, &[u8]) =
-            postcard::take_from_bytes(header_bytes).map_err(|_| Error::HeaderDecode)?;
-        if !rest.is_empty() {
-            return Err(Error::InvalidHeader(
-                "header length does not match its encoding",
-            ));
-        }
-        header.validate()?;
-        header
+        decode_header(header_bytes)?
             .payload_len()?
             .checked_add(header_end + CRC_LEN)
             .ok_or(Error::InvalidHeader("grid has too many nodes"))

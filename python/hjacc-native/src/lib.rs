@@ -53,14 +53,20 @@ fn json_to_python(py: Python<'_>, value: &impl serde::Serialize) -> PyResult<Py<
     Ok(py.import("json")?.call_method1("loads", (text,))?.unbind())
 }
 
+impl Table {
+    /// Checks `bytes` whole and keeps them with the reader over them.
+    fn from_bytes(bytes: Vec<u8>) -> PyResult<Self> {
+        let parsed = Parsed::try_new(bytes, |bytes| Reader::parse(bytes)).map_err(value_error)?;
+        Ok(Table { parsed })
+    }
+}
+
 #[pymethods]
 impl Table {
     /// A table from its bytes.
     #[new]
     fn new(data: &Bound<'_, PyBytes>) -> PyResult<Self> {
-        let parsed = Parsed::try_new(data.as_bytes().to_vec(), |bytes| Reader::parse(bytes))
-            .map_err(value_error)?;
-        Ok(Table { parsed })
+        Self::from_bytes(data.as_bytes().to_vec())
     }
 
     /// A table from a file.
@@ -68,8 +74,7 @@ impl Table {
     fn open(path: PathBuf) -> PyResult<Self> {
         let bytes = std::fs::read(&path)
             .map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
-        let parsed = Parsed::try_new(bytes, |bytes| Reader::parse(bytes)).map_err(value_error)?;
-        Ok(Table { parsed })
+        Self::from_bytes(bytes)
     }
 
     /// The number of axes.
