@@ -12,17 +12,34 @@
 //! function as the firmware, so the two agree to the bit.
 //!
 //! # The response time
-//! With a response time `rho` the ego keeps an acceleration `a_r` (clamped to its speed range)
-//! for `rho`, then brakes at `beta`: the ego's dead time plus actuator lag, bounded above by
-//! a hold of the current command (a first-order lag with time constant `tau` reaches a braking
-//! command no later than a step after `tau`: its speed is never above the step's, by
-//! `integral_0^inf e^(-s/tau) ds = tau`).
+//! With a response time `rho` the ego keeps an acceleration `a_r` for `rho`, then brakes at
+//! `beta`: the ego's dead time plus actuator lag, bounded above by a hold of the largest
+//! acceleration still in the actuator's pipeline. Why a hold bounds a first-order lag: with
+//! `a(t) = c + (a_0 - c) e^(-t/tau)` towards the braking command `c = -beta`, `a_0 <= a_r`, and
+//! `v_s` the speed of the step "`a_r` until `tau`, then `c`",
+//! - for `t < tau`: `v_s(t) - v(t) >= (a_0 - c) (t - tau (1 - e^(-t/tau))) >= 0`, since
+//!   `1 - e^(-x) <= x`;
+//! - for `t >= tau`: `v_s(t) - v(t) >= (a_0 - c) tau e^(-t/tau) >= 0`;
+//!
+//! so the lagged ego is never faster, and never farther, than the step: a dead time `D` before
+//! the braking command takes force adds `D` to the hold. The property test
+//! `bounds_a_dead_time_and_a_first_order_lag` checks it against brute-force integration of the
+//! real actuator.
+//!
+//! During the response the ego's speed is **not** held at `max_speed`: nothing in the dynamics
+//! stops an accelerating actuator at the domain's edge (an ego at 34.8 m/s accelerating at
+//! 0.8 m/s^2 with 0.4 s of response reaches 35.12 m/s, and braking from there takes 1.2 m more
+//! than from 35). Keeping the ego inside `[0, max_speed]` is the controller's job, not an
+//! assumption of this function. Only the leader's speed is held in `[0, max_speed]`, by the
+//! model of the human, and a measured leader speed above it is taken at `max_speed` (a slower
+//! leader is never better for the ego).
 //!
 //! # Evaluation
-//! Between events (the response ends, a car stops, the ego reaches `v_max`) both accelerations
-//! are constant and the gap is a parabola in time: its smallest value on a segment is at an
-//! end or at the vertex, where the relative speed changes sign from closing to opening. There
-//! are at most five segments. f32 throughout; no panics, no loops without a bound.
+//! Between events (the response ends, a car stops) both accelerations are constant and the gap
+//! is a parabola in time: its smallest value on a segment is at an end or at the vertex, where
+//! the relative speed changes sign from closing to opening. There are at most four segments
+//! (the response ends, the leader stops, the ego stops, then nothing moves). f32 throughout; no
+//! panics, no loops without a bound.
 
 /// The front model: the leader's hardest braking, and the ego's braking level, response time,
 /// acceleration during the response and speed limit. All in SI units.
@@ -37,30 +54,31 @@ pub struct FrontModel {
     pub response_time: f32,
     /// The ego's acceleration during the response, m/s^2.
     pub response_acceleration: f32,
-    /// The largest speed, m/s.
+    /// The leader's largest speed, m/s (the human's model; the ego's speed is not held by it).
     pub max_speed: f32,
 }
 
 /// The smallest gap (m) to a leader `gap` metres ahead at `leader_speed`, for an ego at
 /// `ego_speed`, under [`FrontModel`]: the front game's value with constraint `l = gap`.
-/// Speeds are clamped into `[0, max_speed]`. Non-decreasing in `gap` and `leader_speed`,
-/// non-increasing in `ego_speed`. NaN in, NaN out.
+/// The leader's speed is taken in `[0, max_speed]`, the ego's at or above zero (module docs:
+/// no speed limit holds the ego). Non-decreasing in `gap` and `leader_speed`, non-increasing
+/// in `ego_speed`, `response_time` and `response_acceleration`. NaN in, NaN out.
 pub fn front_value(gap: f32, leader_speed: f32, ego_speed: f32, model: &FrontModel) -> f32 {
     let vmax = model.max_speed;
     let (bl, beta) = (model.leader_braking, model.ego_braking);
     let mut g = gap;
     // (Not `f32::clamp`: it asserts its bounds are ordered, a panic path.)
     let mut vl = leader_speed.max(0.0).min(vmax);
-    let mut ve = ego_speed.max(0.0).min(vmax);
+    let mut ve = ego_speed.max(0.0);
     let mut response = model.response_time.max(0.0);
     let mut least = g;
     // Each pass ends at an event that does not recur: the response ends, the leader stops, the
-    // ego stops or reaches v_max (once, during the response). Five passes cover them all.
+    // ego stops. Five passes cover them all with one to spare.
     for _ in 0..5 {
         let al = if vl > 0.0 { -bl } else { 0.0 };
         let ae = if response > 0.0 {
             let a = model.response_acceleration;
-            if (a > 0.0 && ve >= vmax) || (a < 0.0 && ve <= 0.0) {
+            if a < 0.0 && ve <= 0.0 {
                 0.0
             } else {
                 a
@@ -78,13 +96,7 @@ pub fn front_value(gap: f32, leader_speed: f32, ego_speed: f32, model: &FrontMod
         } else {
             f32::INFINITY
         };
-        let t_ego = if ae < 0.0 {
-            ve / -ae
-        } else if ae > 0.0 {
-            (vmax - ve) / ae
-        } else {
-            f32::INFINITY
-        };
+        let t_ego = if ae < 0.0 { ve / -ae } else { f32::INFINITY };
         let len = t_leader.min(t_response).min(t_ego);
         let dv = vl - ve;
         let da = al - ae;
@@ -110,13 +122,9 @@ pub fn front_value(gap: f32, leader_speed: f32, ego_speed: f32, model: &FrontMod
             (vl + al * len).max(0.0).min(vmax)
         };
         ve = if len >= t_ego {
-            if ae < 0.0 {
-                0.0
-            } else {
-                vmax
-            }
+            0.0
         } else {
-            (ve + ae * len).max(0.0).min(vmax)
+            (ve + ae * len).max(0.0)
         };
         response = if len >= t_response {
             0.0
@@ -136,12 +144,12 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// The smallest gap by brute-force integration (f64, 0.1 ms steps).
+    /// The smallest gap by brute-force integration (f64, 0.1 ms steps). The ego's speed is
+    /// held at or above zero only: nothing holds it at `max_speed`.
     fn simulated(gap: f64, vl: f64, ve: f64, m: &FrontModel) -> f64 {
         let dt = 1e-4;
         let (mut g, mut vl, mut ve, mut t) = (gap, vl, ve, 0.0);
         let mut least = g;
-        let vmax = f64::from(m.max_speed);
         while vl > 0.0 || ve > 0.0 {
             let ae = if t < f64::from(m.response_time) {
                 f64::from(m.response_acceleration)
@@ -149,7 +157,7 @@ mod tests {
                 -f64::from(m.ego_braking)
             };
             let nl = (vl - f64::from(m.leader_braking) * dt).max(0.0);
-            let ne = (ve + ae * dt).clamp(0.0, vmax);
+            let ne = (ve + ae * dt).max(0.0);
             g += 0.5 * (vl + nl) * dt - 0.5 * (ve + ne) * dt;
             vl = nl;
             ve = ne;
@@ -190,6 +198,23 @@ mod tests {
         assert!(front_value(f32::NAN, 0.0, 20.0, &m).is_nan());
     }
 
+    /// Issue 19 (A): an ego at 34.8 m/s with 0.4 s of response at +0.8 m/s^2 reaches
+    /// 35.12 m/s before it brakes. Held at 35 m/s, the value was 1.2 m too high, and a start
+    /// that collides at 9.9 s was certified.
+    #[test]
+    fn the_response_is_not_held_at_the_speed_limit() {
+        let m = model(6.0, 3.5, 0.4, 0.8);
+        let during = 34.8 * 0.4 + 0.5 * 0.8 * 0.4 * 0.4;
+        let braking = 35.12f32 * 35.12 / (2.0 * 3.5);
+        let exact = 300.0 - during - braking;
+        let v = front_value(300.0, 0.0, 34.8, &m);
+        assert!((v - exact).abs() < 2e-3, "{v} against {exact}");
+        // An ego measured above the speed limit is not taken at it.
+        let m = model(6.0, 3.5, 0.0, 0.0);
+        let v = front_value(300.0, 0.0, 36.0, &m);
+        assert!((v - (300.0 - 36.0 * 36.0 / 7.0)).abs() < 2e-3, "{v}");
+    }
+
     proptest! {
         #[test]
         fn matches_brute_force_integration(
@@ -200,6 +225,58 @@ mod tests {
             let exact = front_value(gap, vl, ve, &m);
             let brute = simulated(f64::from(gap), f64::from(vl), f64::from(ve), &m);
             prop_assert!((f64::from(exact) - brute).abs() < 0.01, "{} vs {}", exact, brute);
+        }
+
+        /// The response bounds the real actuator: the braking command takes force after a dead
+        /// time `D`, and the acceleration follows it through a first-order lag `tau` from
+        /// wherever it was (`a_0`, with the command in force `c_0`). The closed form with a hold
+        /// of `max(a_0, c_0)` for `D + tau` is never above the smallest gap of brute-force
+        /// integration (f64, 0.1 ms steps), and within the integration's error of it when there
+        /// is no lag to gain on.
+        #[test]
+        fn bounds_a_dead_time_and_a_first_order_lag(
+            gap in 0.0f32..150.0, vl in 0.0f32..35.0, ve in 0.0f32..35.0,
+            bl in 1.0f32..9.0, beta in 1.0f32..6.0,
+            dead in 0.0f32..0.1, tau in 0.0f32..0.3,
+            a0 in -1.0f32..1.0, c0 in -1.0f32..1.0,
+        ) {
+            let (a0, c0) = (if a0 < 0.0 { a0 * beta } else { 2.0 * a0 }, if c0 < 0.0 { c0 * beta } else { 2.0 * c0 });
+            let hold = a0.max(c0);
+            let m = FrontModel {
+                leader_braking: bl,
+                ego_braking: beta,
+                response_time: dead + tau,
+                response_acceleration: hold,
+                max_speed: 35.0,
+            };
+            let bound = f64::from(front_value(gap, vl, ve, &m));
+            // The real actuator.
+            let dt = 1e-4f64;
+            let (mut g, mut l, mut e, mut a, mut t) =
+                (f64::from(gap), f64::from(vl), f64::from(ve), f64::from(a0), 0.0f64);
+            let mut least = g;
+            while (l > 0.0 || e > 0.0) && t < 200.0 {
+                let command = if t < f64::from(dead) { f64::from(c0) } else { -f64::from(beta) };
+                // The lag's exact step, then the speed with the step's mean acceleration.
+                let mean = if tau > 0.0 {
+                    let k = (-dt / f64::from(tau)).exp();
+                    let next = command + (a - command) * k;
+                    let mean = command + (a - command) * f64::from(tau) * (1.0 - k) / dt;
+                    a = next;
+                    mean
+                } else {
+                    a = command;
+                    command
+                };
+                let nl = (l - f64::from(bl) * dt).max(0.0);
+                let ne = (e + mean * dt).max(0.0);
+                g += 0.5 * (l + nl) * dt - 0.5 * (e + ne) * dt;
+                l = nl;
+                e = ne;
+                t += dt;
+                least = least.min(g);
+            }
+            prop_assert!(bound <= least + 0.01, "closed form {} above the real {}", bound, least);
         }
 
         /// The property a safety filter rests on: braking at beta (no response time), the
