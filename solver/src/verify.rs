@@ -96,8 +96,10 @@ use table_format::{Game, Table};
 use crate::error::SolverError;
 
 /// The version of what `verify` proves, recorded in the tables it checks
-/// ([`table_format::Verification::verifier`]).
-pub const VERSION: u16 = 1;
+/// ([`table_format::Verification::verifier`]). Version 2 also bounds the value at every
+/// multiple of the shortest period inside each proving period
+/// ([`table_format::REAR_SAMPLE_TOLERANCE`]).
+pub const VERSION: u16 = table_format::REAR_SAMPLE_VERIFIER;
 
 /// Slack on both sides of the level, m: the firmware's `f32` interpolation is within about
 /// `1e-6` m of the exact one.
@@ -613,7 +615,21 @@ impl Default for Settings {
 
 /// Verifies one cell (module docs).
 pub fn verify_cell(table: &RearTable, cell: &StateBox, level: f64, s: &Settings) -> Verdict {
-    verify_cell_with(table, cell, level, s, None)
+    verify_cell_with(table, cell, level, s, None).0
+}
+
+/// The largest amount (m, at least 0) by which `W` can read below `level` at the multiples of
+/// `sample` strictly inside `(0, period)`, from any state of `b` (module docs: the samples
+/// between the proof's periods).
+fn sample_dip(table: &RearTable, b: &StateBox, period: f64, sample: f64, level: f64) -> f64 {
+    let mut dip = 0f64;
+    let mut k = 1u32;
+    while f64::from(k) * sample < period - 1e-9 {
+        let end = table.model.reach(b, f64::from(k) * sample).end;
+        dip = dip.max(level - table.extremes(&end).lo);
+        k += 1;
+    }
+    dip
 }
 
 /// [`verify_cell`], with the standstill lemma where its exit check passed.
@@ -623,8 +639,11 @@ fn verify_cell_with(
     level: f64,
     s: &Settings,
     lemma: Option<Standstill>,
-) -> Verdict {
+) -> (Verdict, f64) {
     debug_assert!(!s.periods.is_empty());
+    let shortest = s.periods.iter().copied().fold(f64::INFINITY, f64::min);
+    let sample_limit = f64::from(table_format::REAR_SAMPLE_TOLERANCE) - TOLERANCE;
+    let mut cell_dip = 0f64;
     let mut by_lemma = false;
     let mut certified = false;
     let mut worst: Option<(Reason, f64)> = None;
@@ -643,8 +662,12 @@ fn verify_cell_with(
             let safe = reach.least_gap > table.model.min_gap;
             let end = table.extremes(&reach.end).lo;
             if safe && end > level + TOLERANCE {
-                proven = true;
-                break;
+                let dip = sample_dip(table, &b, period, shortest, level);
+                if dip <= sample_limit {
+                    cell_dip = cell_dip.max(dip);
+                    proven = true;
+                    break;
+                }
             }
             let better = match best {
                 None => true,
@@ -699,12 +722,13 @@ fn verify_cell_with(
             worst = Some((reason, deficit));
         }
     }
-    match worst {
+    let verdict = match worst {
         None if !certified => Verdict::NotCertified,
         None if by_lemma => Verdict::ProvenAtStandstill,
         None => Verdict::Proven,
         Some((reason, deficit)) => Verdict::Unproven { reason, deficit },
-    }
+    };
+    (verdict, cell_dip)
 }
 
 /// The standstill lemma's gap `G` (module docs): `s0 / sqrt(1 - a_min / a)`, where the IDM
@@ -787,6 +811,11 @@ pub struct Report {
     /// their certified states may fall, under the best of the periods (0 when every cell is
     /// proven), m.
     pub dip: f64,
+    /// The largest amount by which `W` can read below the level at a multiple of the shortest
+    /// period inside the period that proves a box, over every box proven by a period (the
+    /// standstill lemma's sub-boxes excepted), m; a box is proven only when this is within
+    /// [`table_format::REAR_SAMPLE_TOLERANCE`].
+    pub sample_dip: f64,
     /// Wall time, s.
     pub seconds: f64,
     /// Every unproven cell.
@@ -843,13 +872,15 @@ pub fn verify(table: &RearTable, crc: u32, s: &Settings) -> Report {
     let lemma = standstill_gap(&table.model).and_then(|gap| {
         standstill_exit_speed(table, gap, level).map(|exit_speed| Standstill { gap, exit_speed })
     });
-    let verdicts: Vec<Verdict> = (0..ni * nj * nk)
+    let results: Vec<(Verdict, f64)> = (0..ni * nj * nk)
         .into_par_iter()
         .map(|n| {
             let (i, j, k) = (n / (nj * nk), (n / nk) % nj, n % nk);
             verify_cell_with(table, &table.cell(i, j, k), level, s, lemma)
         })
         .collect();
+    let sample_dip = results.iter().map(|r| r.1).fold(0.0, f64::max);
+    let verdicts: Vec<Verdict> = results.into_iter().map(|r| r.0).collect();
     let mut counts = UnprovenCounts::default();
     let mut unproven = Vec::new();
     let (mut certified, mut proven, mut proven_at_standstill) = (0, 0, 0);
@@ -901,6 +932,7 @@ pub fn verify(table: &RearTable, crc: u32, s: &Settings) -> Report {
         },
         unproven_by_reason: counts,
         dip,
+        sample_dip,
         seconds: t0.elapsed().as_secs_f64(),
         unproven,
         verdicts,

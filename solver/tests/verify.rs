@@ -422,3 +422,75 @@ fn the_command_writes_its_report_and_fails_cleanly_on_unproven_cells() {
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// `W = gap - 1` on [`linear_table`]'s grid, behind an ego that always accelerates at 6 to
+/// 8 m/s^2 (its band), ahead of [`braking_follower`]: from a standstill ego and a follower at
+/// `v`, the gap first shrinks by `v t - 3 t^2 ...` and then grows, so a long period closes a
+/// proof that a short one cannot, over a dip in between.
+fn dipping_table() -> RearTable {
+    let base = linear_table();
+    let axes = [
+        base.axis(0).to_vec(),
+        base.axis(1).to_vec(),
+        base.axis(2).to_vec(),
+    ];
+    let mut values = Vec::new();
+    for &g in &axes[0] {
+        for _ in &axes[1] {
+            for _ in &axes[2] {
+                values.push(g - 1.0);
+            }
+        }
+    }
+    let model = RearModel {
+        ego_min: 6.0,
+        ego_max: 8.0,
+        ..braking_follower()
+    };
+    RearTable::new(model, axes, values, 0.0).expect("a valid table")
+}
+
+/// The samples between a proof's periods (issue 19, D). From the cell `gap in [1, 1.25]`,
+/// follower speed in `[0, 1]`, ego speed in `[0, 1]`, the gap's least change at `t` is
+/// `3 t^2 - (t - 3 t^2)` until the follower stops: least at `t = 1/12` s, -4.17 cm. 20 ms is
+/// too short to prove the cell, 1 s proves it; the value at the samples in between dips by
+/// that much, and `verify` reports it. A follower at up to 4 m/s dips the value by 0.67 m,
+/// beyond `REAR_SAMPLE_TOLERANCE`: the long period no longer proves that cell.
+#[test]
+fn the_samples_between_the_proof_periods_are_bounded() {
+    let table = dipping_table();
+    let s = Settings {
+        periods: vec![0.02, 1.0],
+        rear_margin: 0.0,
+        max_depth: 9,
+    };
+    let slow = table.cell(4, 0, 0);
+    assert_eq!(slow.gap, Interval { lo: 1.0, hi: 1.25 });
+    assert!(matches!(
+        verify_cell(&table, &slow, 0.0, &s),
+        Verdict::Proven
+    ));
+    let only_short = Settings {
+        periods: vec![0.02],
+        ..s.clone()
+    };
+    assert!(matches!(
+        verify_cell(&table, &slow, 0.0, &only_short),
+        Verdict::Unproven { .. }
+    ));
+    let fast = table.cell(4, 3, 0);
+    assert!(matches!(
+        verify_cell(&table, &fast, 0.0, &s),
+        Verdict::Unproven { .. }
+    ));
+    // Over the whole table the reported bound is at least the slow cell's dip (the exact least
+    // change at a 20 ms sample is -4.16 cm at t = 0.08 s) and, over the boxes that were proven,
+    // within the tolerance (faster followers' cells are proven on sub-boxes that dip less).
+    let report = verify(&table, 0, &s);
+    let tolerance = f64::from(table_format::REAR_SAMPLE_TOLERANCE);
+    assert!(
+        report.sample_dip >= 0.0416 && report.sample_dip <= tolerance,
+        "{}",
+        report.sample_dip
+    );
+}

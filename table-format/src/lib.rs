@@ -62,6 +62,18 @@ pub use table::{EgoAction, Lookup, Table};
 #[cfg(feature = "std")]
 pub use writer::{encode, with_verification, TableContents, ValueBits};
 
+/// How far below its level a split table's rear value may read at a control period between
+/// the periods `solver verify` proves it over, m: the rear half's stated tolerance at every
+/// sample. `solver verify` from [`REAR_SAMPLE_VERIFIER`] on proves a box only if, at every
+/// multiple of its shortest period inside the proving period, the value over every state the
+/// box can reach stays above `level - REAR_SAMPLE_TOLERANCE`; the firmware refuses a split
+/// table whose record is older.
+pub const REAR_SAMPLE_TOLERANCE: f32 = 0.1;
+
+/// The first version of `solver verify` ([`Verification::verifier`]) that proves
+/// [`REAR_SAMPLE_TOLERANCE`] at every sample.
+pub const REAR_SAMPLE_VERIFIER: u16 = 2;
+
 /// The four bytes every table starts with: `HJTB` (Hamilton-Jacobi TaBle).
 pub const MAGIC: [u8; 4] = *b"HJTB";
 
