@@ -118,6 +118,7 @@ use table_format::{Bounds, Game, Table};
 use crate::fmt::{log_info, log_warn};
 use crate::inputs::{Inputs, Measurement, Track};
 use crate::math;
+use crate::rear;
 
 /// Tuning of the controller. Units: SI.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -330,6 +331,13 @@ pub enum Fault {
         /// The axis.
         axis: u8,
     },
+    /// The measurements' times are so far apart that the box of rear states they leave holds
+    /// more than [`crate::rear::MAX_INTERIOR`] of the table's breakpoints on this axis: the
+    /// step does not evaluate the rear half ([`Mode::Uncertified`], the front still enforced).
+    RearBoxTooWide {
+        /// The axis.
+        axis: u8,
+    },
     /// The clock went backwards. Recovers after [`CLOCK_RECOVERY_PERIODS`] good periods.
     ClockWentBackwards,
     /// The configuration is outside the limits the certificate is argued for (period, stale
@@ -342,8 +350,9 @@ pub enum Fault {
     /// step. Recovers after [`CLOCK_RECOVERY_PERIODS`] good periods.
     ClockJumped,
     /// The table carries no record of `solver verify`, a record of a proof that left cells
-    /// unproven, or one for another `rear_margin` than the configuration's (a proof at one
-    /// level says nothing about another).
+    /// unproven, one for another `rear_margin` than the configuration's (a proof at one level
+    /// says nothing about another), or one of a `verify` older than
+    /// [`table_format::REAR_SAMPLE_VERIFIER`] (which did not bound the samples in between).
     TableNotVerified,
     /// The board restarted after a fault of its own: the watchdog expired, or a HardFault
     /// (a stack overflow among them) or a panic ended the last run. The minimum-risk manoeuvre
@@ -368,21 +377,39 @@ pub struct Command {
     pub margin: Option<f32>,
 }
 
-/// The two halves of the certificate at a state, each as a margin over its level (m): the
-/// state is certified when both are positive.
+/// The certificate at a state: its two halves, each as a margin over its level (m), and the
+/// ego's speed headroom (m/s). The state is certified when both halves are positive and the
+/// headroom is not negative ([`Certificate::is_certified`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Certificate {
-    /// The front value less `front_margin`.
+    /// The front value less `front_margin`, m.
     pub front: f32,
-    /// The rear value less the table's error bound and `rear_margin`.
+    /// The rear value less the table's error bound and `rear_margin`, m.
     pub rear: f32,
+    /// The ego's speed headroom, m/s: the domain's largest ego speed less the highest speed
+    /// the ego can reach before braking at beta takes full effect. The ego's speed is the
+    /// firmware's to keep in the domain, not an assumption: a negative headroom means the
+    /// commands already issued can take it out.
+    pub speed: f32,
 }
 
 impl Certificate {
-    /// The smaller of the two margins.
+    /// The smaller of the two halves' margins (m); when the speed headroom is negative, the
+    /// headroom (m/s) if it is smaller still. Positive exactly when the state is certified (the
+    /// units differ only on the uncertified side).
     pub fn margin(&self) -> f32 {
-        math::min(self.front, self.rear)
+        let halves = math::min(self.front, self.rear);
+        if self.speed < 0.0 {
+            math::min(halves, self.speed)
+        } else {
+            halves
+        }
+    }
+
+    /// Both halves positive and the speed headroom not negative.
+    pub fn is_certified(&self) -> bool {
+        self.front > 0.0 && self.rear > 0.0 && self.speed >= 0.0
     }
 }
 
@@ -392,6 +419,20 @@ impl Certificate {
 /// `1e-3 (1 + |F|)`, 1.5 mm at `F = 0.5 m`). A certified state (margin above zero) is claimed
 /// to keep its margin above `-CERTIFICATE_TOLERANCE`, 1 cm.
 pub const CERTIFICATE_TOLERANCE: f32 = 0.01;
+
+/// How far below its level the rear value may read at a control period between the periods
+/// `solver verify` proves it over, m ([`table_format::REAR_SAMPLE_TOLERANCE`]). `verify` (from
+/// its version [`table_format::REAR_SAMPLE_VERIFIER`]) proves, for every certified cell, that
+/// at every multiple of its shortest period inside the period that closes the cell's proof the
+/// table's value stays above `level - REAR_SAMPLE_TOLERANCE` (measured on the deployed table:
+/// at most 8.3 cm by its interval bounds); the firmware refuses a table with an older record.
+/// So the rear half's claim at every 20 ms sample is `rear > -REAR_SAMPLE_TOLERANCE`, at the
+/// proof's own periods `rear > 0`, and the gap to the follower stays above zero throughout.
+pub const REAR_SAMPLE_TOLERANCE: f32 = table_format::REAR_SAMPLE_TOLERANCE;
+
+/// How far below zero the ego's speed headroom may read, m/s: `f32` rounding of a speed near
+/// 35 m/s (its spacing there is 3.8e-6 m/s) over a few operations.
+pub const SPEED_TOLERANCE: f32 = 1e-3;
 
 /// Something worth a line in the log.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -447,7 +488,9 @@ impl Model {
 }
 
 /// The ACC safety controller. It owns the table and a log of recent events; it never allocates
-/// and never panics.
+/// and never panics. A clone is an independent controller in the same state (host-side
+/// searches look ahead with one).
+#[derive(Clone)]
 pub struct Controller<'t> {
     table: Result<(Table<'t>, Model), Fault>,
     config: Config,
@@ -475,6 +518,7 @@ struct Issued {
 /// larger than every later one), so that the largest is the front entry: O(1) per step. Up to
 /// `MEMORY` entries: at the smallest period (10 ms) and the largest stale limit, dead time and
 /// lag, the memory is 10 x 100 + 100 + 5 x 300 = 2,600 ms, 260 commands.
+#[derive(Clone)]
 struct IssuedCommands {
     window: Deque<Issued, 272>,
     /// The first command issued since boot (or since the window overflowed): before it, what
@@ -564,7 +608,10 @@ fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
         return Err(Fault::TableOutsideEnvelope);
     }
     match header.verification {
-        Some(v) if v.is_complete() && v.rear_margin == config.rear_margin => {}
+        Some(v)
+            if v.is_complete()
+                && v.rear_margin == config.rear_margin
+                && v.verifier >= table_format::REAR_SAMPLE_VERIFIER => {}
         _ => return Err(Fault::TableNotVerified),
     }
     // The rear table must cover every speed the game allows: the domain check below relies on
@@ -689,20 +736,30 @@ impl<'t> Controller<'t> {
     ) -> Option<Certificate> {
         let (table, model) = self.table.as_ref().ok()?;
         let [gap_leader, leader_speed, gap_follower, follower_speed, ego_speed] = state;
-        let rear = rear_value(table, model, gap_follower, follower_speed, ego_speed).ok()?;
+        let rear = rear_value(
+            table,
+            model,
+            gap_follower,
+            (follower_speed, follower_speed),
+            (ego_speed, ego_speed),
+        )
+        .ok()?;
         let front = front_value(
             gap_leader,
             leader_speed,
             ego_speed,
             &model.front(response_time, response_acceleration),
         );
-        Some(self.certificate_of(front, rear, model))
+        let peak =
+            ego_speed + math::max(response_acceleration, 0.0) * math::max(response_time, 0.0);
+        Some(self.certificate_of(front, rear, model.max_ego_speed - peak, model))
     }
 
-    fn certificate_of(&self, front: f32, rear: f32, model: &Model) -> Certificate {
+    fn certificate_of(&self, front: f32, rear: f32, speed: f32, model: &Model) -> Certificate {
         Certificate {
             front: front - self.config.front_margin,
             rear: rear - model.error_bound - self.config.rear_margin,
+            speed,
         }
     }
 
@@ -858,30 +915,19 @@ impl<'t> Controller<'t> {
         }
         let ego_speed = ego.value;
         let nominal = self.nominal(leader, ego_speed, model.ego);
-        // The follower's absolute speed; measured slightly below zero it is taken at rest (a
-        // slower follower is never worse).
-        let follower_speed = math::max(ego_speed - follower.rel_speed, 0.0);
-        let rear = match rear_value(table, &model, follower.gap, follower_speed, ego_speed) {
-            Ok(w) => w,
-            Err(fault) => {
-                return Command {
-                    acceleration: nominal,
-                    mode: Mode::Uncertified,
-                    fault: Some(fault),
-                    margin: None,
-                }
-            }
-        };
         let c = &self.config;
         let h = c.period_us as f32 * 1e-6;
         // The delays (module docs): the front is argued from the leader track's measurement
-        // time `t_m`. Until the ego's braking at beta takes full effect (the measurement's age,
-        // the dead time, and one lag time constant after a braking command is issued), its
-        // acceleration is at most `pending`: the largest command issued since `t_m`, less the
-        // dead time and five lag time constants, plus what older commands can still add
-        // through the lag (at most e^-5 of the band's width).
+        // time `t_m`, the rear from the follower track's `t_f`. Until the ego's braking at beta
+        // takes full effect (the measurements' age, the dead time, and one lag time constant
+        // after a braking command is issued), its acceleration is at most `pending`: the
+        // largest command issued since the oldest measurement, less the dead time and five lag
+        // time constants, plus what older commands can still add through the lag (at most
+        // e^-5 of the band's width).
         let t_m = inputs.leader.timestamp_us;
-        let t_0 = t_m.min(ego.timestamp_us);
+        let t_f = inputs.follower.timestamp_us;
+        let t_e = ego.timestamp_us;
+        let t_0 = t_m.min(t_f).min(t_e);
         let dead_us = u64::from(c.actuator_dead_time_us);
         let lag = c.actuator_lag_us as f32 * 1e-6;
         let tail = if c.actuator_lag_us > 0 {
@@ -891,32 +937,71 @@ impl<'t> Controller<'t> {
         };
         let span = dead_us + 5 * u64::from(c.actuator_lag_us);
         let pending = self.issued.largest_since(t_0, span, model.ego.max) + tail;
-        // The ego's speed at `t_m`, from its own measurement, within the accelerations it can
-        // have had in between: the highest for the ego's motion, the lowest for the leader's
-        // speed (a faster ego and a slower leader are never better).
-        let (ego_low, ego_high) = if ego.timestamp_us <= t_m {
-            let dt = (t_m - ego.timestamp_us) as f32 * 1e-6;
-            (ego_speed + model.ego.min * dt, ego_speed + pending * dt)
-        } else {
-            let dt = (ego.timestamp_us - t_m) as f32 * 1e-6;
-            (ego_speed - pending * dt, ego_speed - model.ego.min * dt)
+        // The ego's speed at time `t`, from its own measurement, within the accelerations it
+        // can have had in between: `(lowest, highest)`.
+        let ego_at = |t: u64| {
+            let (low, high) = if t_e <= t {
+                let dt = (t - t_e) as f32 * 1e-6;
+                (ego_speed + model.ego.min * dt, ego_speed + pending * dt)
+            } else {
+                let dt = (t_e - t) as f32 * 1e-6;
+                (ego_speed - pending * dt, ego_speed - model.ego.min * dt)
+            };
+            (math::max(low, 0.0), math::max(high, 0.0))
         };
-        let ego_low = math::max(ego_low, 0.0);
-        let ego_high = math::max(ego_high, 0.0);
+        // The rear state at `t_f`: the ego's speed in its interval there, the follower's
+        // (`ego - rel_speed`) with it, held in the human's model `[0, max_speed]` (module
+        // docs); the least value over that box.
+        let (ego_f_low, ego_f_high) = ego_at(t_f);
+        let follower_low = math::max(ego_f_low - follower.rel_speed, 0.0);
+        let follower_high = math::min(
+            math::max(ego_f_high - follower.rel_speed, 0.0),
+            model.max_speed,
+        );
+        let rear = rear_value(
+            table,
+            &model,
+            follower.gap,
+            (follower_low, follower_high),
+            (ego_f_low, ego_f_high),
+        );
+        // The front at `t_m`: the highest speed for the ego's motion, the lowest for the
+        // leader's speed (a faster ego and a slower leader are never better).
+        let (ego_low, ego_high) = ego_at(t_m);
         let leader_at_m = math::max(ego_low + leader.rel_speed, 0.0);
         let age = (now - t_m) as f32 * 1e-6;
         let dead = dead_us as f32 * 1e-6;
         // The certified front value: braking at beta, commanded since the current run of such
         // commands began, or from now.
-        let braking_from = self.braking_since_us.unwrap_or(now);
-        let braking_age = braking_from.min(now).saturating_sub(t_m) as f32 * 1e-6;
+        let braking_from = self.braking_since_us.unwrap_or(now).min(now);
+        let braking_age = braking_from.saturating_sub(t_m) as f32 * 1e-6;
         let front = front_value(
             leader.gap,
             leader_at_m,
             ego_high,
             &model.front(braking_age + dead + lag, pending),
         );
+        // The speed headroom (module docs): until the braking takes full effect the ego's
+        // speed grows at most at `pending` from its measurement.
+        let since_e = |t: u64| t.saturating_sub(t_e) as f32 * 1e-6;
+        let headroom = model.max_ego_speed
+            - (ego_speed + math::max(pending, 0.0) * (since_e(braking_from) + dead + lag));
         // The look-ahead (module docs): `u` held for one period before the braking at beta.
+        // First the speed: the largest command whose response keeps the ego in the domain.
+        let response_end = since_e(now) + h + dead + lag;
+        let room = model.max_ego_speed - (ego_speed + math::max(pending, 0.0) * response_end);
+        let speed_cap = if room < 0.0 {
+            // Nothing passes: brake at beta (which keeps a certified headroom, module docs).
+            model.ego.min
+        } else if response_end > 0.0 {
+            math::max(
+                (model.max_ego_speed - ego_speed) / response_end,
+                model.ego.min,
+            )
+        } else {
+            model.ego.max
+        };
+        let capped = math::min(nominal, speed_cap);
         let margin_front = c.front_margin;
         let ahead = |u: f32| {
             front_value(
@@ -926,23 +1011,41 @@ impl<'t> Controller<'t> {
                 &model.front(age + h + dead + lag, math::max(pending, u)),
             )
         };
-        let at_nominal = ahead(nominal);
-        let (acceleration, mode) = if at_nominal > margin_front {
-            (nominal, Mode::Nominal)
+        let at_capped = ahead(capped);
+        let (acceleration, mode) = if room >= 0.0 && at_capped > margin_front {
+            (
+                capped,
+                if capped < nominal {
+                    Mode::Override
+                } else {
+                    Mode::Nominal
+                },
+            )
+        } else if room < 0.0 {
+            (model.ego.min, Mode::Override)
         } else {
             (
-                least_braking(
-                    nominal,
-                    at_nominal,
-                    model.ego.min,
-                    front,
-                    margin_front,
-                    |u| ahead(u) > margin_front,
-                ),
+                least_braking(capped, at_capped, model.ego.min, front, margin_front, |u| {
+                    ahead(u) > margin_front
+                }),
                 Mode::Override,
             )
         };
-        let margin = self.certificate_of(front, rear, &model).margin();
+        let acceleration = math::clamp(acceleration, model.ego.min, model.ego.max);
+        // Outside the rear table's domain the front override (and the speed cap) still act:
+        // only the rear half is unknown (module docs).
+        let rear = match rear {
+            Ok(w) => w,
+            Err(fault) => {
+                return Command {
+                    acceleration,
+                    mode: Mode::Uncertified,
+                    fault: Some(fault),
+                    margin: None,
+                }
+            }
+        };
+        let margin = self.certificate_of(front, rear, headroom, &model).margin();
         // Diagnostics: the state itself is no longer certified (logged once per excursion).
         let outside = margin.is_nan() || margin <= 0.0;
         if outside && !self.margin_lost {
@@ -950,7 +1053,7 @@ impl<'t> Controller<'t> {
         }
         self.margin_lost = outside;
         Command {
-            acceleration: math::clamp(acceleration, model.ego.min, model.ego.max),
+            acceleration,
             mode,
             fault: None,
             margin: Some(margin),
@@ -974,31 +1077,40 @@ impl<'t> Controller<'t> {
     }
 }
 
-/// The rear value at `(gap_follower, follower_speed, ego_speed)`: the table's interpolation
-/// inside the grid, the last gap face's smallest value beyond it (module docs), and
-/// [`Fault::OutsideDomain`] below the grid or above the speed range.
+/// The rear value over a box of rear states: `gap_follower` and the intervals of the
+/// follower's and the ego's speeds (`(lowest, highest)`). The table's least value over the box
+/// inside the grid ([`rear::least_over_box`]), the last gap face's smallest value beyond it
+/// (module docs), and [`Fault::OutsideDomain`] below the grid or above the speed range;
+/// [`Fault::RearBoxTooWide`] for a box the step does not evaluate.
 fn rear_value(
     table: &Table<'_>,
     model: &Model,
     gap_follower: f32,
-    follower_speed: f32,
-    ego_speed: f32,
+    follower_speed: (f32, f32),
+    ego_speed: (f32, f32),
 ) -> Result<f32, Fault> {
     if gap_follower.is_nan() || gap_follower < model.gap_min {
         return Err(Fault::OutsideDomain { axis: 0 });
     }
-    if !(follower_speed >= 0.0 && follower_speed <= model.max_speed) {
+    let within = |(low, high): (f32, f32), max: f32| low >= 0.0 && high <= max && low <= high;
+    if !within(follower_speed, model.max_speed) {
         return Err(Fault::OutsideDomain { axis: 1 });
     }
-    if !(ego_speed >= 0.0 && ego_speed <= model.max_ego_speed) {
+    if !within(ego_speed, model.max_ego_speed) {
         return Err(Fault::OutsideDomain { axis: 2 });
     }
     if gap_follower > model.gap_max {
         return Ok(model.beyond_grid);
     }
-    table
-        .value_at(&[gap_follower, follower_speed, ego_speed])
-        .map_err(|_| Fault::OutsideDomain { axis: 0 })
+    rear::least_over_box(
+        table,
+        [gap_follower, follower_speed.0, ego_speed.0],
+        [gap_follower, follower_speed.1, ego_speed.1],
+    )
+    .map_err(|e| match e {
+        rear::BoxError::TooWide(axis) => Fault::RearBoxTooWide { axis },
+        rear::BoxError::Outside(axis) => Fault::OutsideDomain { axis },
+    })
 }
 
 /// The override's command: a gentler braking than `beta_command` where one passes the

@@ -38,9 +38,11 @@ pub mod can;
 pub mod controller;
 pub mod inputs;
 pub mod math;
+pub mod rear;
 
 pub use controller::{
     Certificate, Command, Config, Controller, Event, Fault, Mode, CERTIFICATE_TOLERANCE,
+    REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
 };
 pub use inputs::{Actuator, Clock, Inputs, Measurement, Sensors, Track, Watchdog};
 pub use table_format;

@@ -680,7 +680,7 @@ fn split_table_unverified(ego: (f32, f32)) -> Vec<u8> {
 /// A record of a proof that covered every certified cell, for `rear_margin`.
 fn complete_record(rear_margin: f32) -> table_format::Verification {
     table_format::Verification {
-        verifier: 1,
+        verifier: table_format::REAR_SAMPLE_VERIFIER,
         rear_margin,
         certified_cells: 10,
         proven_cells: 10,
@@ -713,6 +713,15 @@ fn a_table_without_a_complete_proof_for_the_configured_margin_is_refused() {
         table_format::with_verification(&split, incomplete).unwrap(),
         // A proof for another level.
         table_format::with_verification(&split, complete_record(0.2)).unwrap(),
+        // A proof by a verify that did not bound the samples between its periods.
+        table_format::with_verification(
+            &split,
+            table_format::Verification {
+                verifier: 1,
+                ..complete_record(0.0)
+            },
+        )
+        .unwrap(),
     ];
     for bytes in &cases {
         let mut c = Controller::new(bytes, ideal());
@@ -744,4 +753,80 @@ fn a_checksummed_table_with_wild_ego_bounds_is_refused() {
     // The same table with the default table's band loads.
     let bytes = split_table((-3.5, 2.0));
     assert!(Controller::new(&bytes, ideal()).table().is_some());
+}
+
+/// Issue 19 (B): above the speed domain the rear half is unknown, not the front. An ego at
+/// 35.2 m/s, 0.05 m of front value above the margin behind a leader at 33 m/s: the nominal law
+/// asks for about -1.6 m/s^2, which the look-ahead refuses. Before, the command was that
+/// nominal law, uncertified; now it is the override's braking, still reported uncertified.
+#[test]
+fn above_the_speed_domain_the_front_override_still_acts() {
+    use table_format::front::{front_value, FrontModel};
+    let (beta, _, leader_braking) = band_and_leader();
+    let model = FrontModel {
+        leader_braking,
+        ego_braking: -beta,
+        response_time: 0.0,
+        response_acceleration: 0.0,
+        max_speed: 35.0,
+    };
+    let ego = 35.2;
+    let offset = front_value(0.0, 33.0, ego, &model);
+    let gap = 0.55 - offset;
+    let mut c = controller();
+    let cmd = c.step(&inputs((gap, 33.0 - ego), (60.0, 1.0), ego));
+    assert_eq!(cmd.mode, Mode::Uncertified, "{cmd:?}");
+    assert_eq!(cmd.fault, Some(Fault::OutsideDomain { axis: 2 }), "{cmd:?}");
+    assert!(cmd.acceleration < -2.0, "{cmd:?}");
+}
+
+/// Issue 19 (A): the look-ahead keeps the ego's speed in the domain. A controller that has
+/// issued nothing yet must assume the actuator may accelerate at the band's top through its
+/// dead time and lag (about 0.42 s): at 34.5 m/s that could reach 35.4 m/s, so even with the
+/// road clear it brakes; at 30 m/s it drives.
+#[test]
+fn no_command_may_take_the_ego_past_the_speed_domain() {
+    let clear = |ego: f32| {
+        let mut i = inputs((f32::INFINITY, 0.0), (120.0, 0.0), ego);
+        i.ego_speed.timestamp_us = NOW;
+        i
+    };
+    let config = Config {
+        set_speed: 40.0,
+        ..Config::default()
+    };
+    let cmd = Controller::new(DEFAULT_TABLE, config).step(&clear(34.5));
+    assert_eq!(cmd.mode, Mode::Override, "{cmd:?}");
+    let cmd = Controller::new(DEFAULT_TABLE, config).step(&clear(30.0));
+    assert_eq!(cmd.mode, Mode::Nominal, "{cmd:?}");
+    // With its own commands known, the cap is what the response leaves: at 34.9 m/s and
+    // 0.42 s of response, at most (35 - 34.9) / 0.42 m/s^2.
+    let mut c = Controller::new(DEFAULT_TABLE, config);
+    let mut largest = c.step(&clear(34.9)).acceleration;
+    for k in 1..=150u64 {
+        largest = largest.max(c.step(&at(clear(34.9), NOW + k * 20_000)).acceleration);
+    }
+    assert!(largest > 0.0 && largest <= 0.1 / 0.42 + 1e-3, "{largest}");
+}
+
+/// Issue 19 (C): a follower at exactly 35 m/s, its track 60 ms older than the ego's speed,
+/// behind an ego accelerating at 0.85 m/s^2. Subtracting the two as if taken at once gives
+/// 35.05 m/s, outside the domain; moved to the track's time within the ego's possible
+/// accelerations, the follower's speed is an interval inside it, and the state is certified.
+#[test]
+fn the_follower_speed_is_taken_at_the_follower_tracks_time() {
+    let ego_now = 26.9;
+    let ego_then = ego_now - 0.85 * 0.06;
+    let mut i = inputs((f32::INFINITY, 0.0), (45.0, ego_then - 35.0), ego_now);
+    i.follower.timestamp_us = NOW - 60_000;
+    i.ego_speed.timestamp_us = NOW;
+    let cmd = controller().step(&i);
+    assert_eq!(cmd.fault, None, "{cmd:?}");
+    assert!(cmd.margin.is_some_and(|m| m > 0.0), "{cmd:?}");
+    // A follower really beyond the domain at its own time is still refused.
+    let mut beyond = i;
+    beyond.follower.value.rel_speed = ego_now - 35.6;
+    beyond.follower.timestamp_us = NOW;
+    let cmd = controller().step(&beyond);
+    assert_eq!(cmd.fault, Some(Fault::OutsideDomain { axis: 1 }), "{cmd:?}");
 }
