@@ -2,17 +2,14 @@
 //! from initial states sampled over the whole certified set of the firmware's table, standstill
 //! included.
 //!
-//! What an episode judges, on the *true* state (not the measured one):
-//! - a **collision**: a gap reaches zero, inside a period or at a sample;
-//! - a **certificate loss**: the certificate's margin ([`firmware::Controller::certificate`])
-//!   falls to `-firmware::CERTIFICATE_TOLERANCE` (f32 rounding) or below, or the state leaves
-//!   the table's domain, at a sample while the firmware runs; the firmware's mode at that moment
-//!   and the half of the certificate that was lost are kept. From a certified start, with humans that keep to the model, both must be zero, or
-//!   the certificate is wrong;
-//! - whether the **humans alone** made a collision unavoidable first (the follower can no
-//!   longer stop short of where the leader stops).
+//! What an episode judges, on the *true* state (not the measured one), is
+//! [`crate::world`]'s: collisions, certificate losses (each part of the certificate against its
+//! own tolerance, [`crate::world::Tolerances`]) by the firmware's mode and the part lost, and
+//! whether the humans alone had made a collision unavoidable first. From a certified start,
+//! with humans that keep to the model, collisions and losses must both be zero, or the
+//! certificate is wrong.
 
-use firmware::{Config, Controller, Mode, CERTIFICATE_TOLERANCE};
+use firmware::{Config, Controller};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
@@ -20,14 +17,9 @@ use serde::Serialize;
 use table_format::Table;
 
 use crate::humans::{Follower, HumanModel, Humans, Leader};
-use crate::sim::{
-    humans_make_a_collision_unavoidable, lowest_gap, Actuator, ActuatorModel, Car, SensorModel,
-    Sensors,
-};
-
-/// Sub-steps per control period in the plant: the actuator's lag changes the ego's
-/// acceleration within a period (5 ms steps against a lag of 0.3 s).
-const SUB_STEPS: u32 = 4;
+use crate::sim::{ActuatorModel, Car, SensorModel};
+pub use crate::world::{state_of, Half, ModeName, Trace, TracePoint};
+use crate::world::{Start, Tolerances, World};
 
 /// One episode's setting.
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -49,43 +41,6 @@ pub struct Episode {
     pub seed: u64,
 }
 
-/// The firmware's mode, for reports.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ModeName {
-    /// [`Mode::Nominal`].
-    Nominal,
-    /// [`Mode::Override`].
-    Override,
-    /// [`Mode::MinimumRisk`].
-    MinimumRisk,
-    /// [`Mode::Uncertified`].
-    Uncertified,
-}
-
-impl From<Mode> for ModeName {
-    fn from(m: Mode) -> Self {
-        match m {
-            Mode::Nominal => ModeName::Nominal,
-            Mode::Override => ModeName::Override,
-            Mode::MinimumRisk => ModeName::MinimumRisk,
-            Mode::Uncertified => ModeName::Uncertified,
-        }
-    }
-}
-
-/// Which half of the certificate was lost.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Half {
-    /// The front value.
-    Front,
-    /// The rear value.
-    Rear,
-    /// The state left the table's domain.
-    Domain,
-}
-
 /// What happened.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct Outcome {
@@ -96,12 +51,14 @@ pub struct Outcome {
     /// The first time the humans alone made a collision unavoidable, s.
     pub unavoidable_from: Option<f32>,
     /// The first time the true state was not certified, s, the firmware's mode then, and the
-    /// half lost.
+    /// part lost.
     pub certificate_lost: Option<(f32, ModeName, Half)>,
     /// The smallest certificate margin over the episode, m.
     pub min_margin: f32,
     /// The smallest front and rear margins over the episode, m (each half on its own).
     pub min_half_margins: (f32, f32),
+    /// The smallest speed headroom over the episode, m/s.
+    pub min_speed_headroom: f32,
     /// Smallest gap to the leader, m.
     pub min_gap_leader: f32,
     /// Smallest gap to the follower, m.
@@ -122,39 +79,30 @@ pub struct Outcome {
     pub initial_margin: f32,
 }
 
-/// A recorded trajectory, one entry per period.
-#[derive(Debug, Clone, Copy, Serialize)]
-pub struct TracePoint {
-    /// Time, s.
-    pub t: f32,
-    /// Gap to the leader, m.
-    pub gap_leader: f32,
-    /// Gap to the follower, m.
-    pub gap_follower: f32,
-    /// Speeds of leader, ego and follower, m/s.
-    pub speeds: [f32; 3],
-    /// The ego's command, m/s^2.
-    pub command: f32,
-    /// The firmware's mode.
-    pub mode: ModeName,
-    /// The certificate margin at the true state, m.
-    pub margin: f32,
-    /// The certificate margin the firmware computed from its measurements (NaN: none), m.
-    pub firmware_margin: f32,
-}
-
-/// A recorded trajectory.
-pub type Trace = Vec<TracePoint>;
-
-/// The true state `(gap_leader, leader_speed, gap_follower, follower_speed, ego_speed)`.
-pub fn state_of([leader, ego, follower]: [Car; 3]) -> [f32; 5] {
-    [
-        leader.x - ego.x,
-        leader.v,
-        ego.x - follower.x,
-        follower.v,
-        ego.v,
-    ]
+impl Outcome {
+    /// The outcome of an episode from its score.
+    pub fn of(world: &World<'_>, initial: [f32; 5], initial_margin: f32) -> Self {
+        let s = world.score();
+        let n = s.periods.max(1) as f32;
+        Outcome {
+            collided: s.collision_time.is_some(),
+            collision_time: s.collision_time,
+            unavoidable_from: s.unavoidable_from,
+            certificate_lost: s.certificate_lost,
+            min_margin: s.min_margin(),
+            min_half_margins: (s.min_front, s.min_rear),
+            min_speed_headroom: s.min_speed,
+            min_gap_leader: s.min_gap_leader,
+            min_gap_follower: s.min_gap_follower,
+            override_share: s.periods_by_mode[1] as f32 / n,
+            minimum_risk_share: s.periods_by_mode[2] as f32 / n,
+            uncertified_share: s.periods_by_mode[3] as f32 / n,
+            max_jerk: s.max_jerk,
+            leader_stops: s.leader_stops,
+            initial,
+            initial_margin,
+        }
+    }
 }
 
 /// Draws an initial state over the whole certified set (`margin > 0` for an actuator at rest
@@ -183,7 +131,7 @@ pub fn sample_start(
         let state = [gap_leader, vl, gap_follower, vf, ve];
         if let Some(certificate) = controller.certificate_with_response(state, response_time, 0.0) {
             let margin = certificate.margin();
-            if margin > 0.0 {
+            if certificate.is_certified() {
                 let ego = Car { x: 0.0, v: ve };
                 let leader = Car {
                     x: gap_leader,
@@ -210,136 +158,38 @@ pub fn run_episode(
 ) -> Option<Outcome> {
     let mut rng = StdRng::seed_from_u64(episode.seed);
     let config = episode.config;
-    let mut controller = Controller::new(bytes, config);
+    let controller = Controller::new(bytes, config);
     let model = HumanModel::of(table)?;
     let gap_max = table.axis_bounds(0)?.max;
     let response_time = episode.actuator.dead_time + episode.actuator.lag;
-    let ([mut leader, mut ego, mut follower], initial_margin) =
+    let (cars, initial_margin) =
         sample_start(&controller, &model, gap_max, response_time, &mut rng)?;
-    let initial = state_of([leader, ego, follower]);
+    let initial = state_of(cars);
     let mut humans = Humans::new(table, episode.leader, episode.follower, &mut rng)?;
-    let mut sensors = Sensors::new(episode.sensors);
-    let mut actuator = Actuator::new(episode.actuator);
-    let h = config.period_us as f32 * 1e-6;
+    let start = Start {
+        cars,
+        engaged_acceleration: 0.0,
+    };
+    let mut world = World::new(
+        bytes,
+        config,
+        model,
+        start,
+        episode.sensors,
+        episode.actuator,
+        Tolerances::default(),
+        rng.random(),
+    );
+    let h = world.period_seconds();
     let steps = (episode.seconds / h).round() as u64;
-    let (mut min_front, mut min_rear) = (f32::INFINITY, f32::INFINITY);
-    let (mut overrides, mut mrm, mut uncertified) = (0u64, 0u64, 0u64);
-    let mut max_jerk = 0f32;
-    let mut last_accel: Option<f32> = None;
-    let mut collision_time = None;
-    let mut unavoidable_from = None;
-    let mut certificate_lost = None;
-    let mut min_margin = f32::INFINITY;
-    let mut min_half = (f32::INFINITY, f32::INFINITY);
-    let mut leader_stops = 0u32;
-    let (leader_braking, follower_braking) = humans.hardest_braking();
     let mut trace = trace;
-    for k in 0..steps {
-        let t = k as f32 * h;
-        let now_us = k * u64::from(config.period_us);
-        if unavoidable_from.is_none()
-            && humans_make_a_collision_unavoidable(
-                leader,
-                follower,
-                leader_braking,
-                follower_braking,
-            )
-        {
-            unavoidable_from = Some(t);
-        }
-        let inputs = sensors.measure(now_us, [leader, ego, follower], &mut rng);
-        let command = controller.step(&inputs);
-        // The certificate at the true state, with what the actuator has yet to do.
-        let (response_time, response_acceleration) = actuator.response(t, model.band_min);
-        let certificate = controller.certificate_with_response(
-            state_of([leader, ego, follower]),
-            response_time,
-            response_acceleration,
-        );
-        let m = certificate.map_or(f32::NEG_INFINITY, |c| c.margin());
-        min_margin = min_margin.min(m);
-        if let Some(c) = certificate {
-            min_half.0 = min_half.0.min(c.front);
-            min_half.1 = min_half.1.min(c.rear);
-        }
-        if certificate_lost.is_none() && (m.is_nan() || m <= -CERTIFICATE_TOLERANCE) {
-            let half = match certificate {
-                None => Half::Domain,
-                Some(c) if c.front <= c.rear => Half::Front,
-                Some(_) => Half::Rear,
-            };
-            certificate_lost = Some((t, command.mode.into(), half));
-        }
-        match command.mode {
-            Mode::Override => overrides += 1,
-            Mode::MinimumRisk => mrm += 1,
-            Mode::Uncertified => uncertified += 1,
-            Mode::Nominal => {}
-        }
-        let a_ego = command.acceleration;
-        if let Some(prev) = last_accel {
-            max_jerk = max_jerk.max((a_ego - prev).abs() / h);
-        }
-        last_accel = Some(a_ego);
-        actuator.request(t, a_ego);
-        let (a_leader, a_follower) = humans.accelerations(t, h, [leader, ego, follower], &mut rng);
-        // The period in sub-steps: the ego's acceleration follows the actuator within it.
-        let before = [leader, ego, follower];
-        let mut collided = false;
-        for j in 0..SUB_STEPS {
-            let dt = h / SUB_STEPS as f32;
-            let a_actual = actuator.advance(t + j as f32 * dt, dt);
-            let front = lowest_gap(leader, a_leader, ego, a_actual, dt);
-            let rear = lowest_gap(ego, a_actual, follower, a_follower, dt);
-            min_front = min_front.min(front);
-            min_rear = min_rear.min(rear);
-            if front <= 0.0 || rear <= 0.0 {
-                collided = true;
-                break;
-            }
-            leader.advance(a_leader, dt);
-            ego.advance(a_actual, dt);
-            follower.advance(a_follower, dt);
-        }
-        if let Some(tr) = trace.as_deref_mut() {
-            let [l, e, f] = before;
-            tr.push(TracePoint {
-                t,
-                gap_leader: l.x - e.x,
-                gap_follower: e.x - f.x,
-                speeds: [l.v, e.v, f.v],
-                command: a_ego,
-                mode: command.mode.into(),
-                margin: m,
-                firmware_margin: command.margin.unwrap_or(f32::NAN),
-            });
-        }
-        if collided {
-            collision_time = Some(t);
+    for _ in 0..steps {
+        let (a_leader, a_follower) = humans.accelerations(world.time(), h, world.cars(), &mut rng);
+        if !world.step(a_leader, a_follower, trace.as_deref_mut()) {
             break;
         }
-        if before[0].v > 0.0 && leader.v <= 0.0 {
-            leader_stops += 1;
-        }
     }
-    let n = steps.max(1) as f32;
-    Some(Outcome {
-        collided: collision_time.is_some(),
-        collision_time,
-        unavoidable_from,
-        certificate_lost,
-        min_margin,
-        min_half_margins: min_half,
-        min_gap_leader: min_front,
-        min_gap_follower: min_rear,
-        override_share: overrides as f32 / n,
-        minimum_risk_share: mrm as f32 / n,
-        uncertified_share: uncertified as f32 / n,
-        max_jerk,
-        leader_stops,
-        initial,
-        initial_margin,
-    })
+    Some(Outcome::of(&world, initial, initial_margin))
 }
 
 /// Certificate losses by the firmware's mode at the moment of loss.
@@ -357,6 +207,8 @@ pub struct LossesByMode {
     pub front: usize,
     /// Of all, those where the rear value was lost.
     pub rear: usize,
+    /// Of all, those where the ego's speed headroom was lost.
+    pub speed: usize,
     /// Of all, those where the state left the domain.
     pub domain: usize,
 }
@@ -451,6 +303,7 @@ pub fn run_group(
         match half {
             Half::Front => by_mode.front += 1,
             Half::Rear => by_mode.rear += 1,
+            Half::Speed => by_mode.speed += 1,
             Half::Domain => by_mode.domain += 1,
         }
     }

@@ -12,8 +12,10 @@
 #![warn(missing_docs)]
 
 pub mod campaign;
+pub mod falsify;
 pub mod humans;
 pub mod sim;
+pub mod world;
 
 pub use campaign::{run_episode, run_group, Episode, GroupSummary, Outcome};
 pub use humans::{Follower, Leader};

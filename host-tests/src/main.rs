@@ -5,6 +5,12 @@
 //! each group with the smallest certificate margin. Exits non-zero if a group ran no episodes
 //! (no certified start could be drawn), or if humans within the model collided with the ego or
 //! took the state out of the certified set: either means the certificate is wrong.
+//!
+//! `cargo run -p host-tests --release -- falsify [--episodes N] [--seed S] [--out DIR]` runs the
+//! adversarial search ([`host_tests::falsify`]), prints its figures per method, writes
+//! `DIR/findings.json`, and exits non-zero on any collision or certificate loss.
+//! `replay FINDINGS (--worst METHOD | --finding K) [--out DIR]` replays one case of a findings
+//! file to `DIR/trace.json` and `DIR/trace.png`.
 
 use std::path::PathBuf;
 
@@ -55,6 +61,43 @@ enum Command {
         dropout: f32,
         /// Output folder.
         #[arg(long, default_value = "out/campaign")]
+        out: PathBuf,
+        /// A table file to run instead of the firmware's default table.
+        #[arg(long, value_name = "FILE")]
+        table: Option<PathBuf>,
+    },
+    /// Runs the adversarial search: certified starts on the boundary and the domain's edges,
+    /// humans chosen by search within the model.
+    Falsify {
+        /// Episodes over every method, about.
+        #[arg(long, default_value_t = 5_000)]
+        episodes: usize,
+        /// Simulated seconds per episode.
+        #[arg(long, default_value_t = 120.0)]
+        seconds: f32,
+        /// The search's seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Output folder.
+        #[arg(long, default_value = "out/falsify")]
+        out: PathBuf,
+        /// A table file to run instead of the firmware's default table.
+        #[arg(long, value_name = "FILE")]
+        table: Option<PathBuf>,
+    },
+    /// Replays one case of a findings file and writes its trace.
+    Replay {
+        /// The findings file (`falsify`'s `findings.json`).
+        findings: PathBuf,
+        /// The case with the smallest margin of this method (structured, random,
+        /// cross_entropy, hill_climbing, greedy).
+        #[arg(long, conflicts_with = "finding")]
+        worst: Option<String>,
+        /// The K-th collision or loss (from 0).
+        #[arg(long)]
+        finding: Option<usize>,
+        /// Output folder.
+        #[arg(long, default_value = "out/replay")]
         out: PathBuf,
         /// A table file to run instead of the firmware's default table.
         #[arg(long, value_name = "FILE")]
@@ -229,11 +272,239 @@ fn main() -> std::process::ExitCode {
     }
 }
 
+/// The table's bytes: the file, or the firmware's default table.
+fn table_bytes(table: &Option<PathBuf>) -> Result<&'static [u8]> {
+    Ok(match table {
+        Some(path) => std::fs::read(path)
+            .with_context(|| format!("reading {}", path.display()))?
+            .leak(),
+        None => firmware::DEFAULT_TABLE,
+    })
+}
+
+/// A split table and its model of the humans.
+fn split_table(bytes: &'static [u8]) -> Result<(Table<'static>, host_tests::humans::HumanModel)> {
+    let table =
+        Table::parse(bytes).map_err(|e| anyhow::anyhow!("the table does not parse: {e}"))?;
+    let model = host_tests::humans::HumanModel::of(&table).ok_or_else(|| {
+        anyhow::anyhow!(
+            "the closed loop runs split three-car tables (the firmware's); this one is {:?}",
+            table.header().game.kind()
+        )
+    })?;
+    Ok((table, model))
+}
+
+/// Refuses a count of zero, naming the argument.
+fn positive_count(name: &str, n: usize) -> Result<()> {
+    anyhow::ensure!(
+        n > 0,
+        "--{name} must be at least 1 (got 0): nothing would be tested"
+    );
+    Ok(())
+}
+
+/// Refuses a duration that is not a finite number of seconds above zero, naming the argument.
+fn positive_seconds(name: &str, s: f32) -> Result<()> {
+    anyhow::ensure!(
+        s.is_finite() && s > 0.0,
+        "--{name} must be a finite number of seconds above 0 (got {s})"
+    );
+    Ok(())
+}
+
 fn real_main() -> Result<()> {
     plotters::style::register_font("sans-serif", FontStyle::Normal, PLOT_FONT).map_err(|_| {
         anyhow::anyhow!("the bundled font assets/fonts/DejaVuSans.ttf does not parse")
     })?;
-    let Command::Campaign {
+    match Args::parse().command {
+        Command::Falsify {
+            episodes,
+            seconds,
+            seed,
+            out,
+            table,
+        } => falsify(episodes, seconds, seed, &out, &table),
+        Command::Replay {
+            findings,
+            worst,
+            finding,
+            out,
+            table,
+        } => replay(&findings, worst.as_deref(), finding, &out, &table),
+        Command::Campaign {
+            episodes,
+            seconds,
+            seed,
+            noise,
+            latency,
+            dead_time_ms,
+            lag,
+            dropout,
+            out,
+            table,
+        } => campaign(CampaignArgs {
+            episodes,
+            seconds,
+            seed,
+            noise,
+            latency,
+            dead_time_ms,
+            lag,
+            dropout,
+            out,
+            table,
+        }),
+    }
+}
+
+fn falsify(
+    episodes: usize,
+    seconds: f32,
+    seed: u64,
+    out: &std::path::Path,
+    table: &Option<PathBuf>,
+) -> Result<()> {
+    use host_tests::falsify::{search, Budget, Setting};
+    positive_count("episodes", episodes)?;
+    positive_seconds("seconds", seconds)?;
+    let bytes = table_bytes(table)?;
+    let (table, model) = split_table(bytes)?;
+    let setting = Setting {
+        bytes,
+        table: &table,
+        model,
+        config: firmware::Config::default(),
+        tolerances: host_tests::world::Tolerances::default(),
+    };
+    let budget = Budget::scaled(episodes, seconds);
+    let bar = ProgressBar::new(budget.episodes() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("[{bar:40}] {pos}/{len} episodes ({elapsed}, eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let report = search(&setting, &budget, seed, &|n| bar.inc(n as u64));
+    bar.finish_and_clear();
+    println!(
+        "| method | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | uncertified periods | min front [m] | min rear [m] | min speed headroom [m/s] | min gap front [m] | min gap rear [m] | max ego speed [m/s] | accelerating starts at 34-35 m/s | followers at 35 m/s |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for m in &report.methods {
+        let (b, p) = (m.losses_by_mode, m.losses_by_part);
+        println!(
+            "| {:?} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {} | {:.4} | {:.4} | {:.4} | {:.2} | {:.3} | {:.3} | {} | {} |",
+            m.method, m.episodes, m.collisions, m.collisions_unavoidable, m.certificate_losses,
+            b[0], b[1], b[2], b[3], p[0], p[1], p[2], p[3], m.uncertified_periods,
+            m.min_front_m, m.min_rear_m, m.min_speed_headroom_m_per_s, m.min_gap_leader_m,
+            m.min_gap_follower_m, m.max_ego_speed_m_per_s, m.fast_accelerating_starts,
+            m.follower_at_max_speed_starts
+        );
+    }
+    let (collisions, losses) = report.failures();
+    println!(
+        "adversarial search, humans within the model, {seconds} s: {collisions} collisions and \
+         {losses} certificate losses in {} episodes ({:.0} s)",
+        report.episodes(),
+        report.seconds
+    );
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let path = out.join("findings.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&report)?)
+        .with_context(|| format!("writing {}", path.display()))?;
+    println!("wrote {}", path.display());
+    anyhow::ensure!(
+        collisions == 0 && losses == 0,
+        "the search broke the certificate: {collisions} collisions and {losses} certificate \
+         losses; replay them with `host-tests replay {} --finding K`",
+        path.display()
+    );
+    Ok(())
+}
+
+fn replay(
+    findings: &std::path::Path,
+    worst: Option<&str>,
+    finding: Option<usize>,
+    out: &std::path::Path,
+    table: &Option<PathBuf>,
+) -> Result<()> {
+    use host_tests::falsify::{Case, Setting};
+    let text = std::fs::read_to_string(findings)
+        .with_context(|| format!("reading {}", findings.display()))?;
+    let json: serde_json::Value = serde_json::from_str(&text)
+        .with_context(|| format!("{} is not JSON", findings.display()))?;
+    let pick = |list: &str, k: usize| json.get(list).and_then(|l| l.get(k)).cloned();
+    let entry = match (worst, finding) {
+        (Some(method), None) => json
+            .get("worst")
+            .and_then(|l| l.as_array())
+            .and_then(|l| {
+                l.iter()
+                    .find(|f| f["case"]["method"].as_str() == Some(method))
+                    .cloned()
+            })
+            .ok_or_else(|| anyhow::anyhow!("--worst {method}: no such method in the file"))?,
+        (None, Some(k)) => pick("findings", k)
+            .ok_or_else(|| anyhow::anyhow!("--finding {k}: the file has no finding {k}"))?,
+        _ => anyhow::bail!("say which case: --worst METHOD or --finding K"),
+    };
+    let case: Case = serde_json::from_value(entry["case"].clone())
+        .context("the entry's case does not decode")?;
+    let bytes = table_bytes(table)?;
+    let (table, model) = split_table(bytes)?;
+    let setting = Setting {
+        bytes,
+        table: &table,
+        model,
+        config: firmware::Config::default(),
+        tolerances: host_tests::world::Tolerances::default(),
+    };
+    let mut trace = Trace::new();
+    let score = setting.run(&case, Some(&mut trace));
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    std::fs::write(
+        out.join("trace.json"),
+        serde_json::to_string_pretty(&serde_json::json!({
+            "case": case,
+            "score": score,
+            "trace": trace,
+        }))?,
+    )?;
+    plot_trace(
+        &out.join("trace.png"),
+        &format!(
+            "replay: {:?} humans, {:?} start (smallest margin {:.3} m)",
+            case.method,
+            case.start_kind,
+            score.min_margin()
+        ),
+        &trace,
+    )?;
+    println!(
+        "collision at {:?} s, certificate lost {:?}, smallest margin {:.4} m; wrote {}",
+        score.collision_time,
+        score.certificate_lost,
+        score.min_margin(),
+        out.display()
+    );
+    Ok(())
+}
+
+struct CampaignArgs {
+    episodes: usize,
+    seconds: f32,
+    seed: u64,
+    noise: f32,
+    latency: u32,
+    dead_time_ms: f32,
+    lag: f32,
+    dropout: f32,
+    out: PathBuf,
+    table: Option<PathBuf>,
+}
+
+fn campaign(args: CampaignArgs) -> Result<()> {
+    let CampaignArgs {
         episodes,
         seconds,
         seed,
@@ -244,25 +515,32 @@ fn real_main() -> Result<()> {
         dropout,
         out,
         table,
-    } = Args::parse().command;
-    let bytes: &'static [u8] = match &table {
-        Some(path) => std::fs::read(path)
-            .with_context(|| format!("reading {}", path.display()))?
-            .leak(),
-        None => firmware::DEFAULT_TABLE,
-    };
-    let table =
-        Table::parse(bytes).map_err(|e| anyhow::anyhow!("the table does not parse: {e}"))?;
+    } = args;
+    positive_count("episodes", episodes)?;
+    positive_seconds("seconds", seconds)?;
     anyhow::ensure!(
-        host_tests::humans::HumanModel::of(&table).is_some(),
-        "the campaign runs split three-car tables (the firmware's); this one is {:?}",
-        table.header().game.kind()
+        noise.is_finite() && noise >= 0.0,
+        "--noise must be a finite standard deviation of at least 0 m (got {noise})"
     );
+    anyhow::ensure!(
+        (0.0..=1.0).contains(&dropout),
+        "--dropout must be a probability in [0, 1] (got {dropout})"
+    );
+    anyhow::ensure!(
+        dead_time_ms.is_finite() && dead_time_ms >= 0.0,
+        "--dead-time-ms must be a finite number of milliseconds of at least 0 (got {dead_time_ms})"
+    );
+    anyhow::ensure!(
+        lag.is_finite() && lag >= 0.0,
+        "--lag must be a finite time constant of at least 0 s (got {lag})"
+    );
+    let bytes = table_bytes(&table)?;
+    let (table, _) = split_table(bytes)?;
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     let sensors = SensorModel {
         gap_noise: noise,
         speed_noise: noise * 0.1,
-        latency_periods: latency,
+        latency_periods: [latency; 3],
         dropout,
     };
     let actuator = ActuatorModel {
@@ -288,7 +566,7 @@ fn real_main() -> Result<()> {
     );
     let mut summaries = Vec::new();
     println!(
-        "| leader | follower | in model | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/domain) | min margin [m] (front, rear) | min gap front [m] | min gap rear [m] | override | leader stops | standstill starts | max jerk [m/s^3] |"
+        "| leader | follower | in model | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | min margin [m] (front, rear) | min gap front [m] | min gap rear [m] | override | leader stops | standstill starts | max jerk [m/s^3] |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (i, (leader, follower)) in groups.iter().enumerate() {
@@ -305,7 +583,7 @@ fn real_main() -> Result<()> {
         let l = summary.certificate_losses_by_mode;
         bar.suspend(|| {
             println!(
-                "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {:.1} | {} | {:.0} |",
+                "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {:.1} | {} | {:.0} |",
                 summary.leader,
                 summary.follower,
                 summary.in_model,
@@ -319,6 +597,7 @@ fn real_main() -> Result<()> {
                 l.uncertified,
                 l.front,
                 l.rear,
+                l.speed,
                 l.domain,
                 summary.min_margin,
                 summary.min_front_margin,

@@ -6,7 +6,7 @@ use rand::Rng;
 
 /// One vehicle: front-bumper position (m) and speed (m/s, never negative). Gaps are
 /// bumper-to-bumper, so vehicle lengths are folded into the positions.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Car {
     /// Position, m.
     pub x: f32,
@@ -73,7 +73,7 @@ pub fn humans_make_a_collision_unavoidable(
 
 /// The ego's actuator: a dead time, then a first-order lag, between the firmware's command and
 /// the car's acceleration.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ActuatorModel {
     /// Dead time, s.
     pub dead_time: f32,
@@ -87,14 +87,32 @@ impl ActuatorModel {
         dead_time: 0.0,
         lag: 0.0,
     };
+
+    /// The dead time in whole microseconds (rounded to the nearest).
+    pub fn dead_time_us(&self) -> u64 {
+        seconds_to_us(self.dead_time)
+    }
 }
 
-/// The actuator's state: commands in the dead-time pipeline, the one in force, and the
-/// acceleration the lag has reached.
+/// Seconds to whole microseconds, rounded to the nearest; negative and NaN become 0.
+pub fn seconds_to_us(s: f32) -> u64 {
+    if s.is_nan() || s <= 0.0 {
+        0
+    } else {
+        (f64::from(s) * 1e6).round() as u64
+    }
+}
+
+/// The actuator's state: commands in the dead-time pipeline (each with the microsecond at
+/// which it takes force), the one in force, and the acceleration the lag has reached.
+///
+/// Time is kept in integer microseconds, as the firmware keeps it: in `f32` seconds a 100 ms
+/// dead time lost its last microseconds from about two minutes on (the spacing of `f32` near
+/// 128 s is 7.6 us), and a fifth of the commands took force a sub-step late.
 #[derive(Debug, Clone)]
 pub struct Actuator {
     model: ActuatorModel,
-    pipeline: std::collections::VecDeque<(f32, f32)>,
+    pipeline: std::collections::VecDeque<(u64, f32)>,
     in_force: f32,
     acceleration: f32,
 }
@@ -102,33 +120,43 @@ pub struct Actuator {
 impl Actuator {
     /// At rest: no command in force, zero acceleration.
     pub fn new(model: ActuatorModel) -> Self {
+        Actuator::engaged(model, 0.0)
+    }
+
+    /// Engaged while the car already accelerates at `acceleration` (the driver's, or the
+    /// previous controller's, command in force and fully reached).
+    pub fn engaged(model: ActuatorModel, acceleration: f32) -> Self {
         Actuator {
             model,
             pipeline: std::collections::VecDeque::new(),
-            in_force: 0.0,
-            acceleration: 0.0,
+            in_force: acceleration,
+            acceleration,
         }
     }
 
-    /// The firmware issues `command` at time `t`; it takes force at `t + dead_time`.
-    pub fn request(&mut self, t: f32, command: f32) {
-        self.pipeline.push_back((t + self.model.dead_time, command));
+    /// The firmware issues `command` at `t_us`; it takes force at `t_us + dead_time`.
+    pub fn request(&mut self, t_us: u64, command: f32) {
+        self.pipeline
+            .push_back((t_us + self.model.dead_time_us(), command));
     }
 
-    /// Moves from `t` to `t + dt`: takes the commands due by `t` into force, then lets the lag
-    /// act for `dt`. Returns the mean acceleration over the interval (the exact integral of the
-    /// lag's exponential, divided by `dt`).
-    pub fn advance(&mut self, t: f32, dt: f32) -> f32 {
-        while self.pipeline.front().is_some_and(|(at, _)| *at <= t + 1e-6) {
+    /// Moves from `t_us` over `dt_us`: takes the commands due by `t_us` into force, then lets
+    /// the lag act for `dt_us`. Returns the mean acceleration over the interval (the exact
+    /// integral of the lag's exponential, divided by the interval).
+    pub fn advance(&mut self, t_us: u64, dt_us: u64) -> f32 {
+        while self.pipeline.front().is_some_and(|(at, _)| *at <= t_us) {
             if let Some((_, c)) = self.pipeline.pop_front() {
                 self.in_force = c;
             }
         }
         let c = self.in_force;
-        if self.model.lag <= 0.0 {
-            self.acceleration = c;
-            return c;
+        if self.model.lag <= 0.0 || dt_us == 0 {
+            if self.model.lag <= 0.0 {
+                self.acceleration = c;
+            }
+            return if dt_us == 0 { self.acceleration } else { c };
         }
+        let dt = dt_us as f32 * 1e-6;
         let decay = (-dt / self.model.lag).exp();
         let start = self.acceleration;
         self.acceleration = c + (start - c) * decay;
@@ -140,13 +168,13 @@ impl Actuator {
         self.acceleration
     }
 
-    /// The response the certificate allows for, at `now`, if braking at `braking` (the band's
-    /// lowest command) is commanded from now on: `(response_time, response_acceleration)`,
-    /// such that the acceleration is at most `response_acceleration` until `response_time`
-    /// from now and the braking then acts in full (a first-order lag's speed never exceeds
-    /// that of a step delayed by its time constant, see `table_format::front`). Braking
-    /// already in the pipeline counts from when it takes force.
-    pub fn response(&self, now: f32, braking: f32) -> (f32, f32) {
+    /// The response the certificate allows for, at `now_us`, if braking at `braking` (the
+    /// band's lowest command) is commanded from now on: `(response_time, response_acceleration)`
+    /// in seconds and m/s^2, such that the acceleration is at most `response_acceleration`
+    /// until `response_time` from now and the braking then acts in full (a first-order lag's
+    /// speed never exceeds that of a step delayed by its time constant, see
+    /// `table_format::front`). Braking already in the pipeline counts from when it takes force.
+    pub fn response(&self, now_us: u64, braking: f32) -> (f32, f32) {
         // The trailing run of braking commands in the pipeline, and whether the one in force
         // is braking too.
         let run = self
@@ -157,14 +185,15 @@ impl Actuator {
             .count();
         let before_run = self.pipeline.len() - run;
         let all_braking = before_run == 0 && self.in_force <= braking;
+        let dead_end = now_us + self.model.dead_time_us();
         let braking_takes_force = if all_braking {
-            now
+            now_us
         } else if run > 0 {
             self.pipeline
                 .get(before_run)
-                .map_or(now + self.model.dead_time, |(at, _)| *at)
+                .map_or(dead_end, |(at, _)| *at)
         } else {
-            now + self.model.dead_time
+            dead_end
         };
         let pending = self.pipeline.iter().take(before_run).map(|(_, c)| *c).fold(
             self.acceleration
@@ -172,21 +201,22 @@ impl Actuator {
             f32::max,
         );
         (
-            (braking_takes_force - now).max(0.0) + self.model.lag,
+            braking_takes_force.saturating_sub(now_us) as f32 * 1e-6 + self.model.lag,
             pending,
         )
     }
 }
 
 /// Sensor imperfections.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SensorModel {
     /// Standard deviation of the gap noise, m (uniform noise of that standard deviation).
     pub gap_noise: f32,
     /// Standard deviation of the relative-speed and ego-speed noise, m/s.
     pub speed_noise: f32,
-    /// Measurement latency, control periods (the value the firmware sees is that old).
-    pub latency_periods: u32,
+    /// Measurement latency per channel (leader track, follower track, ego speed), control
+    /// periods: the value the firmware sees on that channel is that old, stamped with its time.
+    pub latency_periods: [u32; 3],
     /// Probability that a measurement is not refreshed in a period (it keeps its old stamp).
     pub dropout: f32,
 }
@@ -196,13 +226,22 @@ impl SensorModel {
     pub const IDEAL: SensorModel = SensorModel {
         gap_noise: 0.0,
         speed_noise: 0.0,
-        latency_periods: 0,
+        latency_periods: [0; 3],
         dropout: 0.0,
     };
+
+    /// Exact measurements, every channel `periods` old.
+    pub fn exact_with_latency(periods: u32) -> Self {
+        SensorModel {
+            latency_periods: [periods; 3],
+            ..SensorModel::IDEAL
+        }
+    }
 }
 
 /// The world the firmware sees through its sensors: keeps a short history for latency and the
 /// last delivered measurements for dropouts.
+#[derive(Debug, Clone)]
 pub struct Sensors {
     model: SensorModel,
     history: std::collections::VecDeque<(u64, [Car; 3])>,
@@ -222,10 +261,25 @@ impl Sensors {
     /// The firmware's inputs at `now_us` for the true state `cars` (leader, ego, follower).
     pub fn measure(&mut self, now_us: u64, cars: [Car; 3], rng: &mut impl Rng) -> Inputs {
         self.history.push_back((now_us, cars));
-        while self.history.len() > self.model.latency_periods as usize + 1 {
+        let deepest = self
+            .model
+            .latency_periods
+            .iter()
+            .copied()
+            .max()
+            .unwrap_or(0) as usize;
+        while self.history.len() > deepest + 1 {
             self.history.pop_front();
         }
-        let (stamp, [leader, ego, follower]) = self.history[0];
+        // Each channel's state and stamp, `latency` periods back (the oldest kept, early on).
+        let back = |latency: u32| {
+            let n = self.history.len();
+            self.history[n - 1 - (latency as usize).min(n - 1)]
+        };
+        let [l_lat, f_lat, e_lat] = self.model.latency_periods;
+        let (leader_stamp, [leader, ego_l, _]) = back(l_lat);
+        let (follower_stamp, [_, ego_f, follower]) = back(f_lat);
+        let (ego_stamp, [_, ego, _]) = back(e_lat);
         let mut noise = |sd: f32| {
             if sd > 0.0 {
                 // Uniform on [-sqrt(3) sd, sqrt(3) sd]: standard deviation sd.
@@ -237,19 +291,22 @@ impl Sensors {
         let fresh = Inputs {
             leader: Measurement::new(
                 Track {
-                    gap: leader.x - ego.x + noise(self.model.gap_noise),
-                    rel_speed: leader.v - ego.v + noise(self.model.speed_noise),
+                    gap: leader.x - ego_l.x + noise(self.model.gap_noise),
+                    rel_speed: leader.v - ego_l.v + noise(self.model.speed_noise),
                 },
-                stamp,
+                leader_stamp,
             ),
             follower: Measurement::new(
                 Track {
-                    gap: ego.x - follower.x + noise(self.model.gap_noise),
-                    rel_speed: ego.v - follower.v + noise(self.model.speed_noise),
+                    gap: ego_f.x - follower.x + noise(self.model.gap_noise),
+                    rel_speed: ego_f.v - follower.v + noise(self.model.speed_noise),
                 },
-                stamp,
+                follower_stamp,
             ),
-            ego_speed: Measurement::new((ego.v + noise(self.model.speed_noise)).max(0.0), stamp),
+            ego_speed: Measurement::new(
+                (ego.v + noise(self.model.speed_noise)).max(0.0),
+                ego_stamp,
+            ),
             now_us,
         };
         let mut inputs = fresh;
@@ -279,16 +336,14 @@ mod tests {
             dead_time: 0.1,
             lag: 0.3,
         });
-        a.request(0.0, -3.0);
+        a.request(0, -3.0);
         // Nothing for 100 ms.
         for k in 0..10 {
-            assert_eq!(a.advance(k as f32 * 0.01, 0.01), 0.0);
+            assert_eq!(a.advance(k * 10_000, 10_000), 0.0);
         }
         // Then an exponential approach: after one time constant, 1 - 1/e of the way.
-        let mut t = 0.1;
-        while t < 0.4 - 1e-4 {
-            a.advance(t, 0.01);
-            t += 0.01;
+        for k in 10..40 {
+            a.advance(k * 10_000, 10_000);
         }
         assert!(
             (a.acceleration() + 3.0 * (1.0 - (-1.0f32).exp())).abs() < 0.02,
@@ -296,18 +351,49 @@ mod tests {
             a.acceleration()
         );
         // Braking in force: a lag's time constant more, from the acceleration reached.
-        let (time, accel) = a.response(0.4, -3.0);
+        let (time, accel) = a.response(400_000, -3.0);
         assert!(
             (time - 0.3).abs() < 1e-6 && accel == a.acceleration(),
             "{time} {accel}"
         );
         // A command to accelerate in the pipeline: the braking acts after it, a dead time on.
-        a.request(0.4, 1.0);
-        let (time, accel) = a.response(0.4, -3.0);
+        a.request(400_000, 1.0);
+        let (time, accel) = a.response(400_000, -3.0);
         assert!((time - 0.4).abs() < 1e-6 && accel == 1.0, "{time} {accel}");
-        a.request(0.42, -3.0);
-        let (time, accel) = a.response(0.42, -3.0);
+        a.request(420_000, -3.0);
+        let (time, accel) = a.response(420_000, -3.0);
         assert!((time - 0.4).abs() < 1e-5 && accel == 1.0, "{time} {accel}");
+    }
+
+    /// Issue 19 (E): in `f32` seconds, from about 128 s on a fifth of the commands took force
+    /// 5 ms late. In microseconds every one takes force exactly one dead time after it is
+    /// issued, at 300 s as at 0 s.
+    #[test]
+    fn the_dead_time_is_exact_late_in_a_long_episode() {
+        let model = ActuatorModel {
+            dead_time: 0.1,
+            lag: 0.0,
+        };
+        let mut a = Actuator::new(model);
+        let (period, sub) = (20_000u64, 5_000u64);
+        let mut late = 0;
+        for k in 0..15_000u64 {
+            let t = k * period;
+            let command = if k % 2 == 0 { 1.0 } else { -1.0 };
+            a.request(t, command);
+            for j in 0..4 {
+                let at = t + j * sub;
+                let applied = a.advance(at, sub);
+                // The command issued 100 ms (5 periods) before this period's start is in force.
+                if k >= 5 {
+                    let expected = if (k - 5) % 2 == 0 { 1.0 } else { -1.0 };
+                    if applied != expected {
+                        late += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(late, 0);
     }
 
     #[test]

@@ -20,7 +20,7 @@ const ACTUATOR_AT_LIMITS: ActuatorModel = ActuatorModel {
 const LATE: SensorModel = SensorModel {
     gap_noise: 0.0,
     speed_noise: 0.0,
-    latency_periods: 5,
+    latency_periods: [5; 3],
     dropout: 0.0,
 };
 
@@ -141,7 +141,7 @@ fn sensor_noise_and_dropouts_are_outside_the_certificate_and_reported() {
     let noisy = SensorModel {
         gap_noise: 0.2,
         speed_noise: 0.05,
-        latency_periods: 5,
+        latency_periods: [5; 3],
         dropout: 0.05,
     };
     let (mut collisions, mut losses, mut stale) = (0, 0, 0);

@@ -1,0 +1,1016 @@
+//! The adversarial search: starts and human inputs chosen to break the certificate, within the
+//! model the certificate is argued for.
+//!
+//! One responsibility: look for collisions and certificate losses the sampled campaign does not
+//! draw. The campaign samples starts and humans; this module *searches*:
+//! - **Starts** ([`StartKind`]): on and near the certified boundary (either half's margin in
+//!   `[0, 0.2]` m, found by bisection on its gap), at the domain's edges (each speed near 0 and
+//!   near `max_speed`, a follower at exactly `max_speed`), engaged at any acceleration in the
+//!   band, and at standstill. Every start is certified at the true state, with the engaged
+//!   acceleration held through the actuator's dead time and lag.
+//! - **Humans** ([`Method`]), every input within the model (the leader's acceleration in its
+//!   bounds, the follower an IDM whose time gap is anywhere in its range at every instant):
+//!   structured cases (hard stops, stop-and-go at many frequencies, time-gap switches timed to
+//!   the override's), random piecewise-constant schedules, cross-entropy over schedules,
+//!   hill climbing on the smallest margin, and greedy rollouts that choose the next inputs to
+//!   minimise the margin a few seconds ahead (on a clone of the loop).
+//! - **Sensors and actuator**: exact measurements whose ages differ per channel (0-100 ms, the
+//!   firmware's stale limit), the actuator's dead time and lag at or below the firmware's
+//!   declared limits.
+//!
+//! Every case is a value ([`Case`]): deterministic for its seed, written to the findings file,
+//! and replayed to a trace by `host-tests replay`.
+
+use firmware::Config;
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use table_format::Table;
+
+use crate::humans::{follower_speed_gradient, idm, HumanModel};
+use crate::sim::{ActuatorModel, Car, SensorModel};
+use crate::world::{state_of, Half, ModeName, Score, Start, Tolerances, Trace, World};
+
+/// How the humans' inputs were chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Hard stops, stop-and-go at many frequencies, time-gap switches timed to the override.
+    Structured,
+    /// Random piecewise-constant schedules.
+    Random,
+    /// Cross-entropy over piecewise-constant schedules.
+    CrossEntropy,
+    /// Hill climbing on the smallest margin.
+    HillClimbing,
+    /// Greedy rollouts: the next inputs that minimise the margin a few seconds ahead.
+    Greedy,
+}
+
+impl Method {
+    /// Every method, in report order.
+    pub const ALL: [Method; 5] = [
+        Method::Structured,
+        Method::Random,
+        Method::CrossEntropy,
+        Method::HillClimbing,
+        Method::Greedy,
+    ];
+}
+
+/// Where a start was drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StartKind {
+    /// Anywhere in the certified set.
+    Anywhere,
+    /// The front half's margin in `[0, 0.2]` m.
+    FrontBoundary,
+    /// The rear half's margin in `[0, 0.2]` m.
+    RearBoundary,
+    /// The ego at 33-35 m/s, accelerating.
+    FastEgo,
+    /// The follower at 34-35 m/s, half the time at exactly `max_speed`.
+    FastFollower,
+    /// Every speed near zero.
+    Slow,
+    /// Everyone at standstill.
+    Standstill,
+}
+
+const START_KINDS: [StartKind; 7] = [
+    StartKind::Anywhere,
+    StartKind::FrontBoundary,
+    StartKind::RearBoundary,
+    StartKind::FastEgo,
+    StartKind::FastFollower,
+    StartKind::Slow,
+    StartKind::Standstill,
+];
+
+/// How the follower's time gap is chosen at each period.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FollowerRule {
+    /// The schedule's time gap.
+    Schedule,
+    /// The rear game's worst case: `T_max` where `dW/dv_follower > 0`, else `T_min`.
+    WorstCase,
+    /// `T_max` while the firmware overrides, `T_min` otherwise (or the reverse).
+    WithOverride {
+        /// `T_min` while it overrides instead.
+        inverted: bool,
+    },
+}
+
+/// The humans' inputs, piecewise constant over segments: the leader's in `[-1, 1]` (-1 its
+/// hardest braking, 1 its largest acceleration), the follower's time gap in `[0, 1]` of its
+/// range. Past the last segment the last one holds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Schedule {
+    /// Segment length, s.
+    pub segment_s: f32,
+    /// The leader's input per segment.
+    pub leader: Vec<f32>,
+    /// The follower's time gap per segment.
+    pub time_gap: Vec<f32>,
+}
+
+impl Schedule {
+    fn at(&self, t: f32) -> (f32, f32) {
+        let i = if self.segment_s > 0.0 {
+            (t / self.segment_s).floor().max(0.0) as usize
+        } else {
+            0
+        };
+        let pick = |v: &Vec<f32>, default: f32| {
+            v.get(i.min(v.len().saturating_sub(1)))
+                .copied()
+                .unwrap_or(default)
+        };
+        (pick(&self.leader, 0.0), pick(&self.time_gap, 0.5))
+    }
+
+    fn random(segments: usize, segment_s: f32, rng: &mut impl Rng) -> Self {
+        Schedule {
+            segment_s,
+            leader: (0..segments)
+                .map(|_| rng.random_range(-1.0..=1.0))
+                .collect(),
+            time_gap: (0..segments).map(|_| rng.random_range(0.0..=1.0)).collect(),
+        }
+    }
+}
+
+/// One searched episode, replayable.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Case {
+    /// How the inputs were chosen.
+    pub method: Method,
+    /// Where the start was drawn.
+    pub start_kind: StartKind,
+    /// The start.
+    pub start: Start,
+    /// The humans' inputs.
+    pub schedule: Schedule,
+    /// The follower's time-gap rule.
+    pub follower_rule: FollowerRule,
+    /// Sensors.
+    pub sensors: SensorModel,
+    /// The ego's actuator.
+    pub actuator: ActuatorModel,
+    /// Simulated seconds.
+    pub seconds: f32,
+    /// The seed of the sensors' random numbers.
+    pub seed: u64,
+}
+
+/// The search's fixed setting: the table, its model and the firmware's configuration.
+#[derive(Clone, Copy)]
+pub struct Setting<'t> {
+    /// The table's bytes.
+    pub bytes: &'t [u8],
+    /// The table.
+    pub table: &'t Table<'t>,
+    /// Its model of the humans.
+    pub model: HumanModel,
+    /// The firmware's configuration.
+    pub config: Config,
+    /// What counts as a loss.
+    pub tolerances: Tolerances,
+}
+
+impl<'t> Setting<'t> {
+    fn world(&self, case: &Case) -> World<'t> {
+        World::new(
+            self.bytes,
+            self.config,
+            self.model,
+            case.start,
+            case.sensors,
+            case.actuator,
+            self.tolerances,
+            case.seed,
+        )
+    }
+
+    /// The humans' accelerations for the next period of `world` under `case` (within the
+    /// model: the leader's bounds, the IDM with a time gap in range, speeds in `[0, v_max]`).
+    fn humans(&self, world: &World<'_>, schedule: &Schedule, rule: FollowerRule) -> (f32, f32) {
+        let m = &self.model;
+        let t = world.time();
+        let h = world.period_seconds();
+        let [leader, ego, follower] = world.cars();
+        let (u, tau) = schedule.at(t);
+        let u = u.clamp(-1.0, 1.0);
+        let a_leader = if u < 0.0 {
+            -u * m.leader.0
+        } else {
+            u * m.leader.1
+        };
+        let (tmin, tmax) = m.time_gap;
+        let time_gap = match rule {
+            FollowerRule::Schedule => tmin + tau.clamp(0.0, 1.0) * (tmax - tmin),
+            FollowerRule::WorstCase => {
+                let gap_max = self.table.axis_bounds(0).map_or(f32::INFINITY, |b| b.max);
+                let z = [(ego.x - follower.x).min(gap_max), follower.v, ego.v];
+                match follower_speed_gradient(self.table, z) {
+                    Some(p) if p > 0.0 => tmax,
+                    _ => tmin,
+                }
+            }
+            FollowerRule::WithOverride { inverted } => {
+                let overriding = world
+                    .last()
+                    .is_some_and(|(c, _)| c.mode == firmware::Mode::Override);
+                if overriding != inverted {
+                    tmax
+                } else {
+                    tmin
+                }
+            }
+        };
+        let a_follower = idm(&m.idm, follower.v, ego.v, ego.x - follower.x, time_gap)
+            .clamp(m.follower.0, m.follower.1);
+        let limit = |a: f32, v: f32| {
+            if a > 0.0 {
+                a.min(((m.max_speed - v) / h).max(0.0))
+            } else {
+                a
+            }
+        };
+        (limit(a_leader, leader.v), limit(a_follower, follower.v))
+    }
+
+    /// Runs `case` to its end (or its collision); with `trace`, records it.
+    pub fn run(&self, case: &Case, trace: Option<&mut Trace>) -> Score {
+        let mut world = self.world(case);
+        let steps = (case.seconds / world.period_seconds()).round() as u64;
+        let mut trace = trace;
+        for _ in 0..steps {
+            let (a, b) = self.humans(&world, &case.schedule, case.follower_rule);
+            if !world.step(a, b, trace.as_deref_mut()) {
+                break;
+            }
+        }
+        *world.score()
+    }
+
+    /// Whether `start` is certified at the true state, the engaged acceleration held through
+    /// the actuator's dead time and lag.
+    fn certified(&self, start: &Start, actuator: &ActuatorModel) -> Option<firmware::Certificate> {
+        let controller = firmware::Controller::new(self.bytes, self.config);
+        let c = controller.certificate_with_response(
+            state_of(start.cars),
+            actuator.dead_time + actuator.lag,
+            start.engaged_acceleration,
+        )?;
+        c.is_certified().then_some(c)
+    }
+
+    /// Draws a certified start of `kind` (`None` after 2,000 rejected draws).
+    pub fn draw_start(
+        &self,
+        kind: StartKind,
+        actuator: &ActuatorModel,
+        rng: &mut impl Rng,
+    ) -> Option<Start> {
+        let m = &self.model;
+        let vmax = m.max_speed;
+        let band = (m.band_min, self.config.envelope.max_acceleration.min(2.0));
+        let gap_max = self.table.axis_bounds(0).map_or(150.0, |b| b.max);
+        for _ in 0..2_000 {
+            let mut speed = || rng.random_range(0.0..=vmax);
+            let (mut vl, mut ve, mut vf) = (speed(), speed(), speed());
+            let mut a0 = rng.random_range(band.0..=band.1);
+            let mut gap_leader = rng.random_range(0.0..=150.0f32);
+            let mut gap_follower = rng.random_range(0.0..=gap_max);
+            match kind {
+                StartKind::FastEgo => {
+                    ve = rng.random_range(33.0..=vmax);
+                    a0 = rng.random_range(0.0..=band.1);
+                }
+                StartKind::FastFollower => {
+                    vf = if rng.random::<bool>() {
+                        vmax
+                    } else {
+                        rng.random_range(34.0..=vmax)
+                    };
+                    gap_follower = rng.random_range(0.0..=60.0);
+                }
+                StartKind::Slow => {
+                    let mut slow = || rng.random_range(0.0..=1.0f32);
+                    (vl, ve, vf) = (slow(), slow(), slow());
+                    gap_leader = rng.random_range(0.0..=20.0);
+                    gap_follower = rng.random_range(0.0..=20.0);
+                }
+                StartKind::Standstill => {
+                    (vl, ve, vf) = (0.0, 0.0, 0.0);
+                    a0 = rng.random_range(band.0..=0.0);
+                    gap_leader = rng.random_range(0.0..=10.0);
+                    gap_follower = rng.random_range(0.0..=10.0);
+                }
+                _ => {}
+            }
+            let cars = |gl: f32, gf: f32| {
+                [
+                    Car { x: gl, v: vl },
+                    Car { x: 0.0, v: ve },
+                    Car { x: -gf, v: vf },
+                ]
+            };
+            let start = |gl: f32, gf: f32| Start {
+                cars: cars(gl, gf),
+                engaged_acceleration: a0,
+            };
+            match kind {
+                StartKind::FrontBoundary | StartKind::RearBoundary => {
+                    // Bisection on the half's own gap: certified far out, not at zero.
+                    let front = kind == StartKind::FrontBoundary;
+                    let with = |g: f32| {
+                        if front {
+                            start(g, gap_follower)
+                        } else {
+                            start(gap_leader, g)
+                        }
+                    };
+                    let (mut lo, mut hi) = (0.0f32, if front { 400.0 } else { gap_max });
+                    if self.certified(&with(hi), actuator).is_none() {
+                        continue;
+                    }
+                    if self.certified(&with(lo), actuator).is_some() {
+                        continue;
+                    }
+                    let target = rng.random_range(0.0..=0.2f32);
+                    for _ in 0..40 {
+                        let mid = 0.5 * (lo + hi);
+                        match self.certified(&with(mid), actuator) {
+                            Some(c) if (if front { c.front } else { c.rear }) <= target => {
+                                return Some(with(mid));
+                            }
+                            Some(_) => hi = mid,
+                            None => lo = mid,
+                        }
+                    }
+                    let s = with(hi);
+                    if self.certified(&s, actuator).is_some() {
+                        return Some(s);
+                    }
+                }
+                _ => {
+                    let s = start(gap_leader, gap_follower);
+                    if self.certified(&s, actuator).is_some() {
+                        return Some(s);
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    /// A fresh case's sensors and actuator: exact measurements aged 0-5 periods per channel,
+    /// the dead time at 0, half or all of the firmware's limit and the lag anywhere up to it.
+    fn draw_delays(&self, rng: &mut impl Rng) -> (SensorModel, ActuatorModel) {
+        let c = &self.config;
+        let stale = c.stale_periods;
+        let sensors = SensorModel {
+            latency_periods: [
+                rng.random_range(0..=stale),
+                rng.random_range(0..=stale),
+                rng.random_range(0..=stale),
+            ],
+            ..SensorModel::IDEAL
+        };
+        let dead_limit = c.actuator_dead_time_us as f32 * 1e-6;
+        let actuator = ActuatorModel {
+            dead_time: dead_limit * [0.0, 0.5, 1.0, 1.0][rng.random_range(0..4)],
+            lag: if rng.random::<bool>() {
+                c.actuator_lag_us as f32 * 1e-6
+            } else {
+                rng.random_range(0.0..=c.actuator_lag_us as f32 * 1e-6)
+            },
+        };
+        (sensors, actuator)
+    }
+
+    /// A case with a fresh start of `kind` and `schedule` (`None`: no start found).
+    fn case(
+        &self,
+        method: Method,
+        kind: StartKind,
+        schedule: Schedule,
+        rule: FollowerRule,
+        seconds: f32,
+        rng: &mut impl Rng,
+    ) -> Option<Case> {
+        let (sensors, actuator) = self.draw_delays(rng);
+        let start = self.draw_start(kind, &actuator, rng)?;
+        Some(Case {
+            method,
+            start_kind: kind,
+            start,
+            schedule,
+            follower_rule: rule,
+            sensors,
+            actuator,
+            seconds,
+            seed: rng.random(),
+        })
+    }
+}
+
+/// What the search aims at: the smallest margin, with failures below every margin.
+fn objective(score: &Score) -> f32 {
+    if score.collision_time.is_some() {
+        -1e6
+    } else if score.certificate_lost.is_some() {
+        -1e3 + score.min_margin().max(-100.0)
+    } else {
+        score.min_margin()
+    }
+}
+
+/// The search's size.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Budget {
+    /// Structured cases.
+    pub structured: usize,
+    /// Random-schedule episodes.
+    pub random: usize,
+    /// Cross-entropy runs (each `ce_population x ce_iterations` episodes).
+    pub ce_runs: usize,
+    /// Episodes per cross-entropy generation.
+    pub ce_population: usize,
+    /// Cross-entropy generations.
+    pub ce_iterations: usize,
+    /// Hill-climbing runs.
+    pub hill_runs: usize,
+    /// Steps per hill-climbing run (one episode each).
+    pub hill_steps: usize,
+    /// Greedy episodes.
+    pub greedy: usize,
+    /// Seconds per episode.
+    pub seconds: f32,
+}
+
+impl Budget {
+    /// Episodes over every method.
+    pub fn episodes(&self) -> usize {
+        self.structured
+            + self.random
+            + self.ce_runs * self.ce_population * self.ce_iterations
+            + self.hill_runs * self.hill_steps
+            + self.greedy
+    }
+
+    /// About `episodes` episodes in the proportions the long search uses (greedy episodes cost
+    /// about twenty plain ones).
+    pub fn scaled(episodes: usize, seconds: f32) -> Self {
+        let share = |f: f64| ((episodes as f64 * f).round() as usize).max(1);
+        let ce_population = 24;
+        let ce_iterations = 6;
+        let hill_steps = 50;
+        Budget {
+            structured: share(0.24),
+            random: share(0.36),
+            ce_runs: share(0.2 / (ce_population * ce_iterations) as f64),
+            ce_population,
+            ce_iterations,
+            hill_runs: share(0.16 / hill_steps as f64),
+            hill_steps,
+            greedy: share(0.04),
+            seconds,
+        }
+    }
+}
+
+/// One method's figures.
+#[derive(Debug, Clone, Serialize)]
+pub struct MethodSummary {
+    /// The method.
+    pub method: Method,
+    /// Episodes run.
+    pub episodes: usize,
+    /// Episodes with a collision.
+    pub collisions: usize,
+    /// Of those, collisions the humans alone had made unavoidable first.
+    pub collisions_unavoidable: usize,
+    /// Episodes with a certificate loss.
+    pub certificate_losses: usize,
+    /// Losses by the firmware's mode then: nominal, override, minimum risk, uncertified.
+    pub losses_by_mode: [usize; 4],
+    /// Losses by the part lost: front, rear, speed, domain.
+    pub losses_by_part: [usize; 4],
+    /// Periods the firmware spent uncertified.
+    pub uncertified_periods: u64,
+    /// The smallest front margin, m.
+    pub min_front_m: f32,
+    /// The smallest rear margin, m.
+    pub min_rear_m: f32,
+    /// The smallest speed headroom, m/s.
+    pub min_speed_headroom_m_per_s: f32,
+    /// The smallest gap to the leader, m.
+    pub min_gap_leader_m: f32,
+    /// The smallest gap to the follower, m.
+    pub min_gap_follower_m: f32,
+    /// The largest ego speed, m/s.
+    pub max_ego_speed_m_per_s: f32,
+    /// Engaged starts accelerating at 34-35 m/s.
+    pub fast_accelerating_starts: usize,
+    /// Starts with the follower at exactly `max_speed`.
+    pub follower_at_max_speed_starts: usize,
+}
+
+/// A case and what it did.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Finding {
+    /// The case.
+    pub case: Case,
+    /// Time of its collision, s.
+    pub collision_time_s: Option<f32>,
+    /// Its first loss: time (s), mode, part.
+    pub certificate_lost: Option<(f32, ModeName, Half)>,
+    /// When the humans alone made a collision unavoidable, s.
+    pub unavoidable_from_s: Option<f32>,
+    /// Its smallest margin, m.
+    pub min_margin_m: f32,
+}
+
+impl Finding {
+    fn of(case: Case, s: &Score) -> Self {
+        Finding {
+            case,
+            collision_time_s: s.collision_time,
+            certificate_lost: s.certificate_lost,
+            unavoidable_from_s: s.unavoidable_from,
+            min_margin_m: s.min_margin(),
+        }
+    }
+}
+
+/// Everything the search found.
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    /// The budget.
+    pub budget: Budget,
+    /// The first seed.
+    pub seed: u64,
+    /// Per method.
+    pub methods: Vec<MethodSummary>,
+    /// Every collision or loss (the first 200).
+    pub findings: Vec<Finding>,
+    /// Per method, the case with the smallest margin.
+    pub worst: Vec<Finding>,
+    /// Wall time, s.
+    pub seconds: f64,
+}
+
+impl Report {
+    /// Episodes over every method.
+    pub fn episodes(&self) -> usize {
+        self.methods.iter().map(|m| m.episodes).sum()
+    }
+
+    /// Collisions and losses over every method.
+    pub fn failures(&self) -> (usize, usize) {
+        (
+            self.methods.iter().map(|m| m.collisions).sum(),
+            self.methods.iter().map(|m| m.certificate_losses).sum(),
+        )
+    }
+}
+
+struct Tally {
+    summary: MethodSummary,
+    findings: Vec<Finding>,
+    worst: Option<Finding>,
+}
+
+impl Tally {
+    fn new(method: Method) -> Self {
+        Tally {
+            summary: MethodSummary {
+                method,
+                episodes: 0,
+                collisions: 0,
+                collisions_unavoidable: 0,
+                certificate_losses: 0,
+                losses_by_mode: [0; 4],
+                losses_by_part: [0; 4],
+                uncertified_periods: 0,
+                min_front_m: f32::INFINITY,
+                min_rear_m: f32::INFINITY,
+                min_speed_headroom_m_per_s: f32::INFINITY,
+                min_gap_leader_m: f32::INFINITY,
+                min_gap_follower_m: f32::INFINITY,
+                max_ego_speed_m_per_s: 0.0,
+                fast_accelerating_starts: 0,
+                follower_at_max_speed_starts: 0,
+            },
+            findings: Vec::new(),
+            worst: None,
+        }
+    }
+
+    fn add(&mut self, case: &Case, s: &Score, vmax: f32) {
+        let m = &mut self.summary;
+        m.episodes += 1;
+        let [_, ego, follower] = case.start.cars;
+        if ego.v >= vmax - 1.0 && case.start.engaged_acceleration > 0.0 {
+            m.fast_accelerating_starts += 1;
+        }
+        if follower.v == vmax {
+            m.follower_at_max_speed_starts += 1;
+        }
+        if s.collision_time.is_some() {
+            m.collisions += 1;
+            if s.unavoidable_from.is_some() {
+                m.collisions_unavoidable += 1;
+            }
+        }
+        if let Some((_, mode, half)) = s.certificate_lost {
+            m.certificate_losses += 1;
+            m.losses_by_mode[mode as usize] += 1;
+            m.losses_by_part[half as usize] += 1;
+        }
+        m.uncertified_periods += s.periods_by_mode[3];
+        m.min_front_m = m.min_front_m.min(s.min_front);
+        m.min_rear_m = m.min_rear_m.min(s.min_rear);
+        m.min_speed_headroom_m_per_s = m.min_speed_headroom_m_per_s.min(s.min_speed);
+        m.min_gap_leader_m = m.min_gap_leader_m.min(s.min_gap_leader);
+        m.min_gap_follower_m = m.min_gap_follower_m.min(s.min_gap_follower);
+        m.max_ego_speed_m_per_s = m.max_ego_speed_m_per_s.max(s.max_ego_speed);
+        if s.failed() && self.findings.len() < 200 {
+            self.findings.push(Finding::of(case.clone(), s));
+        }
+        if self
+            .worst
+            .as_ref()
+            .is_none_or(|w| s.min_margin() < w.min_margin_m)
+        {
+            self.worst = Some(Finding::of(case.clone(), s));
+        }
+    }
+}
+
+/// Runs `cases` in parallel, in order.
+fn run_all(setting: &Setting<'_>, cases: Vec<Case>) -> Vec<(Case, Score)> {
+    cases
+        .into_par_iter()
+        .map(|c| {
+            let s = setting.run(&c, None);
+            (c, s)
+        })
+        .collect()
+}
+
+/// A structured leader: a hard stop at `t0`, or stop-and-go with period `p` (braking for half,
+/// accelerating for half); the time gap switching every `switch` seconds (0: fixed at `tau`).
+fn structured_schedule(kind: usize, rng: &mut impl Rng, seconds: f32) -> (Schedule, FollowerRule) {
+    let segment_s = 0.1;
+    let n = (seconds / segment_s).ceil() as usize;
+    let t0 = rng.random_range(0.0..10.0f32);
+    let period = [4.0f32, 6.0, 8.0, 12.0, 16.0, 24.0, 40.0][rng.random_range(0..7)];
+    let phase = rng.random_range(0.0..period);
+    let switch = [0.0f32, 0.3, 1.0, 2.0, 5.0][rng.random_range(0..5)];
+    let tau = if rng.random::<bool>() { 0.0 } else { 1.0 };
+    let leader: Vec<f32> = (0..n)
+        .map(|i| {
+            let t = i as f32 * segment_s;
+            match kind % 3 {
+                0 => {
+                    if t < t0 {
+                        0.0
+                    } else {
+                        -1.0
+                    }
+                }
+                _ => {
+                    if ((t + phase) % period) < 0.5 * period {
+                        -1.0
+                    } else {
+                        1.0
+                    }
+                }
+            }
+        })
+        .collect();
+    let time_gap: Vec<f32> = (0..n)
+        .map(|i| {
+            let t = i as f32 * segment_s;
+            if switch > 0.0 && ((t / switch) as u32) % 2 == 1 {
+                1.0 - tau
+            } else {
+                tau
+            }
+        })
+        .collect();
+    let rule = match kind % 4 {
+        0 | 1 => FollowerRule::Schedule,
+        2 => FollowerRule::WorstCase,
+        _ => FollowerRule::WithOverride {
+            inverted: rng.random::<bool>(),
+        },
+    };
+    (
+        Schedule {
+            segment_s,
+            leader,
+            time_gap,
+        },
+        rule,
+    )
+}
+
+/// Greedy rollouts: every `decide_s` seconds, each candidate input pair is held over a
+/// look-ahead of `ahead_s` seconds on a clone of the loop, and the one with the smallest margin
+/// over it is played. The played inputs are recorded as the case's schedule (so it replays).
+fn greedy_case(setting: &Setting<'_>, mut case: Case) -> (Case, Score) {
+    let decide_s = 0.5f32;
+    let ahead_s = 2.0f32;
+    let candidates: [(f32, f32); 6] = [
+        (-1.0, 0.0),
+        (-1.0, 1.0),
+        (0.0, 0.0),
+        (0.0, 1.0),
+        (1.0, 0.0),
+        (1.0, 1.0),
+    ];
+    let mut world = setting.world(&case);
+    let h = world.period_seconds();
+    let per_decision = (decide_s / h).round() as usize;
+    let ahead = (ahead_s / h).round() as usize;
+    let decisions = (case.seconds / decide_s).ceil() as usize;
+    let mut schedule = Schedule {
+        segment_s: decide_s,
+        leader: Vec::new(),
+        time_gap: Vec::new(),
+    };
+    'episode: for _ in 0..decisions {
+        let mut best = (f32::INFINITY, candidates[0]);
+        for &(u, tau) in &candidates {
+            let hold = Schedule {
+                segment_s: 1e9,
+                leader: vec![u],
+                time_gap: vec![tau],
+            };
+            let mut probe = world.clone();
+            let mut least = f32::INFINITY;
+            for _ in 0..ahead {
+                let (a, b) = setting.humans(&probe, &hold, FollowerRule::Schedule);
+                let alive = probe.step(a, b, None);
+                if let Some((_, Some(c))) = probe.last() {
+                    least = least.min(c.margin());
+                }
+                if !alive {
+                    least = f32::NEG_INFINITY;
+                    break;
+                }
+            }
+            if least < best.0 {
+                best = (least, (u, tau));
+            }
+        }
+        let (u, tau) = best.1;
+        schedule.leader.push(u);
+        schedule.time_gap.push(tau);
+        let hold = Schedule {
+            segment_s: 1e9,
+            leader: vec![u],
+            time_gap: vec![tau],
+        };
+        for _ in 0..per_decision {
+            let (a, b) = setting.humans(&world, &hold, FollowerRule::Schedule);
+            if !world.step(a, b, None) {
+                break 'episode;
+            }
+        }
+    }
+    case.schedule = schedule;
+    case.follower_rule = FollowerRule::Schedule;
+    // The recorded schedule, replayed from the start, is the case's verdict.
+    let score = setting.run(&case, None);
+    (case, score)
+}
+
+/// Runs the whole search (module docs), deterministic for `seed`; `progress` is told how many
+/// episodes each batch ran.
+pub fn search(
+    setting: &Setting<'_>,
+    budget: &Budget,
+    seed: u64,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Report {
+    let t0 = std::time::Instant::now();
+    let vmax = setting.model.max_speed;
+    let seconds = budget.seconds;
+    let segments_of = |segment_s: f32| (seconds / segment_s).ceil() as usize;
+    let mut tallies: Vec<Tally> = Method::ALL.iter().map(|&m| Tally::new(m)).collect();
+    let tally = |tallies: &mut Vec<Tally>, method: Method, results: &[(Case, Score)]| {
+        if let Some(t) = tallies.iter_mut().find(|t| t.summary.method == method) {
+            for (c, s) in results {
+                t.add(c, s, vmax);
+            }
+        }
+        progress(results.len());
+    };
+    let kind_of = |i: usize| START_KINDS[i % START_KINDS.len()];
+
+    // Structured and random cases: drawn sequentially (deterministic), run in parallel.
+    for (method, count) in [
+        (Method::Structured, budget.structured),
+        (Method::Random, budget.random),
+    ] {
+        let cases: Vec<Case> = (0..count)
+            .into_par_iter()
+            .map_init(
+                || (),
+                |_, i| {
+                    let mut r =
+                        StdRng::seed_from_u64(seed.wrapping_add((method as u64) << 40) ^ i as u64);
+                    let (schedule, rule) = if method == Method::Structured {
+                        structured_schedule(i, &mut r, seconds)
+                    } else {
+                        let segment_s = [0.5f32, 1.0, 2.0, 5.0][i % 4];
+                        (
+                            Schedule::random(segments_of(segment_s), segment_s, &mut r),
+                            FollowerRule::Schedule,
+                        )
+                    };
+                    setting.case(method, kind_of(i), schedule, rule, seconds, &mut r)
+                },
+            )
+            .flatten()
+            .collect();
+        for chunk in cases.chunks(2_000) {
+            let results = run_all(setting, chunk.to_vec());
+            tally(&mut tallies, method, &results);
+        }
+    }
+
+    // Cross-entropy: per run one start, a Gaussian per segment input, refitted to the elites.
+    let ce_segment = 2.0f32;
+    let ce_n = segments_of(ce_segment);
+    let mut ce_best: Vec<Case> = Vec::new();
+    for run in 0..budget.ce_runs {
+        let mut rng = StdRng::seed_from_u64(seed ^ 0xCE00_0000 ^ run as u64);
+        let Some(base) = setting.case(
+            Method::CrossEntropy,
+            kind_of(run + 1),
+            Schedule::random(ce_n, ce_segment, &mut rng),
+            FollowerRule::Schedule,
+            seconds,
+            &mut rng,
+        ) else {
+            continue;
+        };
+        let mut mean = vec![0.0f32; 2 * ce_n];
+        let mut sd = vec![0.7f32; 2 * ce_n];
+        for (k, m) in mean.iter_mut().enumerate() {
+            *m = if k < ce_n { 0.0 } else { 0.5 };
+        }
+        let mut best: Option<(f32, Case)> = None;
+        for _ in 0..budget.ce_iterations {
+            let population: Vec<Case> = (0..budget.ce_population)
+                .map(|_| {
+                    let mut draw = |k: usize, lo: f32, hi: f32| {
+                        // Box-Muller from two uniforms.
+                        let (a, b): (f32, f32) = (rng.random_range(1e-6..1.0), rng.random());
+                        let z = (-2.0 * a.ln()).sqrt() * (std::f32::consts::TAU * b).cos();
+                        (mean[k] + sd[k] * z).clamp(lo, hi)
+                    };
+                    let leader: Vec<f32> = (0..ce_n).map(|k| draw(k, -1.0, 1.0)).collect();
+                    let time_gap: Vec<f32> = (0..ce_n).map(|k| draw(ce_n + k, 0.0, 1.0)).collect();
+                    Case {
+                        schedule: Schedule {
+                            segment_s: ce_segment,
+                            leader,
+                            time_gap,
+                        },
+                        ..base.clone()
+                    }
+                })
+                .collect();
+            let mut results = run_all(setting, population);
+            tally(&mut tallies, Method::CrossEntropy, &results);
+            results.sort_by(|a, b| objective(&a.1).total_cmp(&objective(&b.1)));
+            let elites = &results[..(budget.ce_population / 4).max(2).min(results.len())];
+            if let Some((c, s)) = elites.first() {
+                if best.as_ref().is_none_or(|(o, _)| objective(s) < *o) {
+                    best = Some((objective(s), c.clone()));
+                }
+            }
+            for k in 0..2 * ce_n {
+                let values: Vec<f32> = elites
+                    .iter()
+                    .map(|(c, _)| {
+                        if k < ce_n {
+                            c.schedule.leader[k]
+                        } else {
+                            c.schedule.time_gap[k - ce_n]
+                        }
+                    })
+                    .collect();
+                let mu = values.iter().sum::<f32>() / values.len() as f32;
+                let var =
+                    values.iter().map(|v| (v - mu).powi(2)).sum::<f32>() / values.len() as f32;
+                mean[k] = mu;
+                sd[k] = var.sqrt().max(0.05);
+            }
+        }
+        if let Some((_, c)) = best {
+            ce_best.push(c);
+        }
+    }
+
+    // Hill climbing: from the cross-entropy's best case of the same run (or a random one),
+    // perturb one to three segments, keep the change when the margin falls.
+    let hill_results: Vec<Vec<(Case, Score)>> = (0..budget.hill_runs)
+        .into_par_iter()
+        .map(|run| {
+            let mut rng = StdRng::seed_from_u64(seed ^ 0x4111_0000 ^ run as u64);
+            let start = match ce_best.get(run) {
+                Some(c) => Some(c.clone()),
+                None => setting.case(
+                    Method::HillClimbing,
+                    kind_of(run + 2),
+                    Schedule::random(ce_n, ce_segment, &mut rng),
+                    FollowerRule::Schedule,
+                    seconds,
+                    &mut rng,
+                ),
+            };
+            let Some(mut current) = start else {
+                return Vec::new();
+            };
+            current.method = Method::HillClimbing;
+            let mut current_score = setting.run(&current, None);
+            let mut out = Vec::with_capacity(budget.hill_steps);
+            for _ in 0..budget.hill_steps {
+                let mut next = current.clone();
+                let n = next.schedule.leader.len().max(1);
+                for _ in 0..rng.random_range(1..=3) {
+                    let k = rng.random_range(0..n);
+                    if let Some(u) = next.schedule.leader.get_mut(k) {
+                        *u = (*u + rng.random_range(-1.0..=1.0f32)).clamp(-1.0, 1.0);
+                    }
+                    if let Some(tau) = next.schedule.time_gap.get_mut(k) {
+                        if rng.random::<f32>() < 0.5 {
+                            *tau = 1.0 - *tau;
+                        }
+                    }
+                }
+                let s = setting.run(&next, None);
+                out.push((next.clone(), s));
+                if objective(&s) < objective(&current_score) {
+                    current = next;
+                    current_score = s;
+                }
+            }
+            out
+        })
+        .collect();
+    for r in &hill_results {
+        tally(&mut tallies, Method::HillClimbing, r);
+    }
+
+    // Greedy rollouts.
+    let greedy_cases: Vec<Case> = (0..budget.greedy)
+        .filter_map(|i| {
+            let mut r = StdRng::seed_from_u64(seed ^ 0x6EED_0000 ^ i as u64);
+            setting.case(
+                Method::Greedy,
+                kind_of(i),
+                Schedule::random(1, 1.0, &mut r),
+                FollowerRule::Schedule,
+                seconds,
+                &mut r,
+            )
+        })
+        .collect();
+    for chunk in greedy_cases.chunks(64) {
+        let results: Vec<(Case, Score)> = chunk
+            .par_iter()
+            .map(|c| greedy_case(setting, c.clone()))
+            .collect();
+        tally(&mut tallies, Method::Greedy, &results);
+    }
+
+    let mut findings = Vec::new();
+    let mut worst = Vec::new();
+    let mut methods = Vec::new();
+    for t in tallies {
+        findings.extend(t.findings);
+        worst.extend(t.worst);
+        methods.push(t.summary);
+    }
+    Report {
+        budget: *budget,
+        seed,
+        methods,
+        findings,
+        worst,
+        seconds: t0.elapsed().as_secs_f64(),
+    }
+}

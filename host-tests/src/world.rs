@@ -1,0 +1,419 @@
+//! One episode's closed loop, one control period at a time: the plant, the sensors, the
+//! actuator and the firmware's `Controller`, judged on the *true* state after every period.
+//!
+//! One responsibility: step the loop and keep score. Who drives the humans is the caller's
+//! business (the sampled campaign's [`crate::humans::Humans`], or the adversarial search's
+//! schedules and rollouts), so every method of driving them is judged the same way. A `World`
+//! is a value: a clone is an independent copy of the loop in the same state, which is how the
+//! search looks ahead.
+//!
+//! What a period judges:
+//! - a **collision**: a gap reaches zero, inside the period (each sub-step's exact least gap)
+//!   or at a sample;
+//! - a **certificate loss**: at a sample, the true state's certificate
+//!   ([`firmware::Controller::certificate_with_response`], with what the actuator has yet to do)
+//!   has a half below its own tolerance ([`Tolerances`]), or the state is outside the table's
+//!   domain; the firmware's mode then and the half are kept;
+//! - whether the **humans alone** had made a collision unavoidable first.
+
+use firmware::{Certificate, Command, Config, Controller, Mode};
+use rand::rngs::StdRng;
+use rand::SeedableRng;
+use serde::{Deserialize, Serialize};
+
+use crate::humans::HumanModel;
+use crate::sim::{
+    humans_make_a_collision_unavoidable, lowest_gap, Actuator, ActuatorModel, Car, SensorModel,
+    Sensors,
+};
+
+/// Sub-steps per control period in the plant: the actuator's lag changes the ego's
+/// acceleration within a period (5 ms steps against a lag of 0.3 s).
+pub const SUB_STEPS: u64 = 4;
+
+/// The firmware's mode, for reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ModeName {
+    /// [`Mode::Nominal`].
+    Nominal,
+    /// [`Mode::Override`].
+    Override,
+    /// [`Mode::MinimumRisk`].
+    MinimumRisk,
+    /// [`Mode::Uncertified`].
+    Uncertified,
+}
+
+impl From<Mode> for ModeName {
+    fn from(m: Mode) -> Self {
+        match m {
+            Mode::Nominal => ModeName::Nominal,
+            Mode::Override => ModeName::Override,
+            Mode::MinimumRisk => ModeName::MinimumRisk,
+            Mode::Uncertified => ModeName::Uncertified,
+        }
+    }
+}
+
+/// Which part of the certificate was lost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Half {
+    /// The front value.
+    Front,
+    /// The rear value.
+    Rear,
+    /// The ego's speed headroom (the ego may leave the speed domain).
+    Speed,
+    /// The state left the table's domain.
+    Domain,
+}
+
+/// How far below zero each part of the true state's certificate may read at a sample before it
+/// counts as lost, each stated with its reason.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Tolerances {
+    /// The front half, m: `f32` rounding of the closed form and the plant
+    /// ([`firmware::CERTIFICATE_TOLERANCE`]).
+    pub front_m: f32,
+    /// The rear half, m: what `solver verify` proves of the rear value at every control period
+    /// between its proof periods ([`firmware::REAR_SAMPLE_TOLERANCE`]).
+    pub rear_m: f32,
+    /// The speed headroom, m/s: `f32` rounding of a speed near 35 m/s.
+    pub speed_m_per_s: f32,
+}
+
+impl Default for Tolerances {
+    fn default() -> Self {
+        Tolerances {
+            front_m: firmware::CERTIFICATE_TOLERANCE,
+            rear_m: firmware::REAR_SAMPLE_TOLERANCE,
+            speed_m_per_s: firmware::SPEED_TOLERANCE,
+        }
+    }
+}
+
+impl Tolerances {
+    /// The part lost at `certificate` (`None` outside the domain), if any: the front first,
+    /// then the rear, then the speed.
+    pub fn lost(&self, certificate: Option<&Certificate>) -> Option<Half> {
+        let Some(c) = certificate else {
+            return Some(Half::Domain);
+        };
+        if c.front.is_nan() || c.front <= -self.front_m {
+            Some(Half::Front)
+        } else if c.rear.is_nan() || c.rear <= -self.rear_m {
+            Some(Half::Rear)
+        } else if c.speed.is_nan() || c.speed < -self.speed_m_per_s {
+            Some(Half::Speed)
+        } else {
+            None
+        }
+    }
+}
+
+/// Where an episode starts: the three cars and the ego's acceleration at engagement (the
+/// command in force and reached by the actuator; the firmware does not know it).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Start {
+    /// Leader, ego, follower.
+    pub cars: [Car; 3],
+    /// The ego's acceleration at engagement, m/s^2.
+    pub engaged_acceleration: f32,
+}
+
+/// The running score of an episode.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Score {
+    /// Time of the first collision, s.
+    pub collision_time: Option<f32>,
+    /// The first time the humans alone made a collision unavoidable, s.
+    pub unavoidable_from: Option<f32>,
+    /// The first loss: time (s), the firmware's mode then, and the part lost.
+    pub certificate_lost: Option<(f32, ModeName, Half)>,
+    /// The smallest front, rear and speed margins at the samples (m, m, m/s).
+    pub min_front: f32,
+    /// See `min_front`.
+    pub min_rear: f32,
+    /// See `min_front`.
+    pub min_speed: f32,
+    /// Smallest gap to the leader, m.
+    pub min_gap_leader: f32,
+    /// Smallest gap to the follower, m.
+    pub min_gap_follower: f32,
+    /// Periods per firmware mode: nominal, override, minimum risk, uncertified.
+    pub periods_by_mode: [u64; 4],
+    /// Periods run.
+    pub periods: u64,
+    /// Largest |jerk| of the ego's command, m/s^3.
+    pub max_jerk: f32,
+    /// Times the leader came to a standstill.
+    pub leader_stops: u32,
+    /// The largest ego speed, m/s.
+    pub max_ego_speed: f32,
+}
+
+impl Score {
+    fn new() -> Self {
+        Score {
+            collision_time: None,
+            unavoidable_from: None,
+            certificate_lost: None,
+            min_front: f32::INFINITY,
+            min_rear: f32::INFINITY,
+            min_speed: f32::INFINITY,
+            min_gap_leader: f32::INFINITY,
+            min_gap_follower: f32::INFINITY,
+            periods_by_mode: [0; 4],
+            periods: 0,
+            max_jerk: 0.0,
+            leader_stops: 0,
+            max_ego_speed: 0.0,
+        }
+    }
+
+    /// The smaller of the front and rear margins, m (the speed headroom when it is negative and
+    /// smaller): what a search minimises.
+    pub fn min_margin(&self) -> f32 {
+        let halves = self.min_front.min(self.min_rear);
+        if self.min_speed < 0.0 {
+            halves.min(self.min_speed)
+        } else {
+            halves
+        }
+    }
+
+    /// A collision or a loss.
+    pub fn failed(&self) -> bool {
+        self.collision_time.is_some() || self.certificate_lost.is_some()
+    }
+}
+
+/// One sample of a trajectory.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct TracePoint {
+    /// Time, s.
+    pub t: f32,
+    /// Gap to the leader, m.
+    pub gap_leader: f32,
+    /// Gap to the follower, m.
+    pub gap_follower: f32,
+    /// Speeds of leader, ego and follower, m/s.
+    pub speeds: [f32; 3],
+    /// The ego's actual acceleration at the sample, m/s^2.
+    pub ego_acceleration: f32,
+    /// The humans' accelerations over the period (leader, follower), m/s^2.
+    pub human_accelerations: [f32; 2],
+    /// The ego's command, m/s^2.
+    pub command: f32,
+    /// The firmware's mode.
+    pub mode: ModeName,
+    /// The certificate margin at the true state, m (see [`Certificate::margin`]).
+    pub margin: f32,
+    /// The true state's front and rear margins (m) and speed headroom (m/s); NaN outside the
+    /// domain.
+    pub parts: [f32; 3],
+    /// The certificate margin the firmware computed from its measurements (NaN: none), m.
+    pub firmware_margin: f32,
+}
+
+/// A recorded trajectory.
+pub type Trace = Vec<TracePoint>;
+
+/// The true state `(gap_leader, leader_speed, gap_follower, follower_speed, ego_speed)`.
+pub fn state_of([leader, ego, follower]: [Car; 3]) -> [f32; 5] {
+    [
+        leader.x - ego.x,
+        leader.v,
+        ego.x - follower.x,
+        follower.v,
+        ego.v,
+    ]
+}
+
+/// The loop of one episode (module docs).
+#[derive(Clone)]
+pub struct World<'t> {
+    controller: Controller<'t>,
+    sensors: Sensors,
+    actuator: Actuator,
+    cars: [Car; 3],
+    period: u64,
+    period_us: u64,
+    model: HumanModel,
+    tolerances: Tolerances,
+    rng: StdRng,
+    last_command: Option<f32>,
+    last: Option<(Command, Option<Certificate>)>,
+    score: Score,
+}
+
+impl<'t> World<'t> {
+    /// The loop on `bytes` (a split table with `model`) from `start`; `seed` drives the sensor
+    /// noise and dropouts.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        bytes: &'t [u8],
+        config: Config,
+        model: HumanModel,
+        start: Start,
+        sensors: SensorModel,
+        actuator: ActuatorModel,
+        tolerances: Tolerances,
+        seed: u64,
+    ) -> Self {
+        World {
+            controller: Controller::new(bytes, config),
+            sensors: Sensors::new(sensors),
+            actuator: Actuator::engaged(actuator, start.engaged_acceleration),
+            cars: start.cars,
+            period: 0,
+            period_us: u64::from(config.period_us),
+            model,
+            tolerances,
+            rng: StdRng::seed_from_u64(seed),
+            last_command: None,
+            last: None,
+            score: Score::new(),
+        }
+    }
+
+    /// The true cars: leader, ego, follower.
+    pub fn cars(&self) -> [Car; 3] {
+        self.cars
+    }
+
+    /// The time of the next period's start, s.
+    pub fn time(&self) -> f32 {
+        (self.period * self.period_us) as f32 * 1e-6
+    }
+
+    /// The control period, s.
+    pub fn period_seconds(&self) -> f32 {
+        self.period_us as f32 * 1e-6
+    }
+
+    /// The score so far.
+    pub fn score(&self) -> &Score {
+        &self.score
+    }
+
+    /// The last period's command and true certificate.
+    pub fn last(&self) -> Option<(Command, Option<Certificate>)> {
+        self.last
+    }
+
+    /// The firmware's controller.
+    pub fn controller(&self) -> &Controller<'t> {
+        &self.controller
+    }
+
+    /// The certificate at the true state now, with what the actuator has yet to do.
+    pub fn certificate(&self) -> Option<Certificate> {
+        let now_us = self.period * self.period_us;
+        let (time, accel) = self.actuator.response(now_us, self.model.band_min);
+        self.controller
+            .certificate_with_response(state_of(self.cars), time, accel)
+    }
+
+    /// One period: the firmware measures and commands, the humans hold `a_leader` and
+    /// `a_follower` (m/s^2, the caller keeps them within the model) over the period. Returns
+    /// false once the episode has ended in a collision (nothing moves after it).
+    pub fn step(&mut self, a_leader: f32, a_follower: f32, trace: Option<&mut Trace>) -> bool {
+        if self.score.collision_time.is_some() {
+            return false;
+        }
+        let now_us = self.period * self.period_us;
+        let t = self.time();
+        let [leader, _, follower] = self.cars;
+        let (leader_braking, follower_braking) = (-self.model.leader.0, -self.model.follower.0);
+        if self.score.unavoidable_from.is_none()
+            && humans_make_a_collision_unavoidable(
+                leader,
+                follower,
+                leader_braking,
+                follower_braking,
+            )
+        {
+            self.score.unavoidable_from = Some(t);
+        }
+        let inputs = self.sensors.measure(now_us, self.cars, &mut self.rng);
+        let command = self.controller.step(&inputs);
+        let certificate = self.certificate();
+        let s = &mut self.score;
+        if let Some(c) = certificate {
+            s.min_front = s.min_front.min(c.front);
+            s.min_rear = s.min_rear.min(c.rear);
+            s.min_speed = s.min_speed.min(c.speed);
+        }
+        if s.certificate_lost.is_none() {
+            if let Some(half) = self.tolerances.lost(certificate.as_ref()) {
+                s.certificate_lost = Some((t, command.mode.into(), half));
+            }
+        }
+        let mode_index = match command.mode {
+            Mode::Nominal => 0,
+            Mode::Override => 1,
+            Mode::MinimumRisk => 2,
+            Mode::Uncertified => 3,
+        };
+        s.periods_by_mode[mode_index] += 1;
+        s.periods += 1;
+        let h = self.period_us as f32 * 1e-6;
+        if let Some(prev) = self.last_command {
+            s.max_jerk = s.max_jerk.max((command.acceleration - prev).abs() / h);
+        }
+        self.last_command = Some(command.acceleration);
+        self.last = Some((command, certificate));
+        let ego_acceleration = self.actuator.acceleration();
+        self.actuator.request(now_us, command.acceleration);
+        let before = self.cars;
+        let [mut leader, mut ego, mut follower] = self.cars;
+        let dt_us = self.period_us / SUB_STEPS;
+        let dt = dt_us as f32 * 1e-6;
+        let mut collided = false;
+        for j in 0..SUB_STEPS {
+            let a_ego = self.actuator.advance(now_us + j * dt_us, dt_us);
+            let front = lowest_gap(leader, a_leader, ego, a_ego, dt);
+            let rear = lowest_gap(ego, a_ego, follower, a_follower, dt);
+            s.min_gap_leader = s.min_gap_leader.min(front);
+            s.min_gap_follower = s.min_gap_follower.min(rear);
+            if front <= 0.0 || rear <= 0.0 {
+                collided = true;
+                break;
+            }
+            leader.advance(a_leader, dt);
+            ego.advance(a_ego, dt);
+            follower.advance(a_follower, dt);
+        }
+        s.max_ego_speed = s.max_ego_speed.max(ego.v);
+        self.cars = [leader, ego, follower];
+        if let Some(tr) = trace {
+            let [l, e, f] = before;
+            let parts = certificate.map_or([f32::NAN; 3], |c| [c.front, c.rear, c.speed]);
+            tr.push(TracePoint {
+                t,
+                gap_leader: l.x - e.x,
+                gap_follower: e.x - f.x,
+                speeds: [l.v, e.v, f.v],
+                ego_acceleration,
+                human_accelerations: [a_leader, a_follower],
+                command: command.acceleration,
+                mode: command.mode.into(),
+                margin: certificate.map_or(f32::NEG_INFINITY, |c| c.margin()),
+                parts,
+                firmware_margin: command.margin.unwrap_or(f32::NAN),
+            });
+        }
+        self.period += 1;
+        if collided {
+            s.collision_time = Some(t);
+            return false;
+        }
+        if before[0].v > 0.0 && leader.v <= 0.0 {
+            s.leader_stops += 1;
+        }
+        true
+    }
+}
