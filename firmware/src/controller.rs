@@ -55,6 +55,23 @@
 //! `now + h`), with a `pending` no larger, from a later state that one of the behaviours the
 //! look-ahead took the minimum over has reached; so it is at least the look-ahead's value.
 //!
+//! # The ego's speed: kept in the domain, not assumed
+//! The rear value is the rear game's value over speeds in `[0, max_speed]`, so a certified
+//! state must stay inside that range, and the ego's speed is the firmware's to keep there: no
+//! human model bounds it. The **speed headroom** of a state is `max_ego_speed` less the
+//! highest speed the ego can reach before braking at beta takes full effect: from its
+//! measurement at `t_e`, `ego_speed + max(pending, 0) (t_b + D + tau - t_e)` (the response's
+//! end as in the front value; a first-order lag's speed never exceeds the step's). A certified
+//! state has a headroom of zero or more ([`Certificate::is_certified`]). The look-ahead of a
+//! command `u` caps it so that `ego_speed + max(pending, u, 0) (now + h + D + tau - t_e)` stays
+//! within `max_ego_speed`: the cap is `(max_ego_speed - ego_speed) / (now + h + D + tau - t_e)`,
+//! and when even `pending` alone breaks it, nothing passes and the command is beta. Why it is
+//! invariant: braking at beta keeps the response's end where it was and `pending` no larger, as
+//! for the front value, and a capped command ends its response at `now + h + D + tau`, which the
+//! next step's headroom uses. Before (issue 19), the front value held the ego at `max_speed`
+//! during its response, which the dynamics do not: a start 0.05 m above the margin, engaged at
+//! 34.8 m/s and +0.8 m/s^2, collided.
+//!
 //! # The domain
 //! The rear table covers `gap_follower` up to its last breakpoint, and speeds in
 //! `[0, max_speed]`. A follower farther back than the grid (or none: a gap of `+inf`) is safe
@@ -62,13 +79,30 @@
 //! face of the grid, computed once when the table is loaded: that is its rear value. A leader
 //! farther than any gap (or none) has an infinite front value. A measured speed of a human
 //! slightly below zero is taken as zero (a slower follower and a faster leader are never
-//! worse). An ego or follower faster than `max_speed`, or a follower gap below the grid, is
-//! outside the domain: [`Fault::OutsideDomain`], [`Mode::Uncertified`], with the nominal law as
-//! the minimum-risk behaviour: its set speed (30 m/s by default, below the table's 35) slows
-//! an ego that is too fast back into the domain, and its braking, like every command's, is at
-//! most `beta`, which spares the follower: a rear table certifies nothing unless the follower
-//! can out-brake the band (measured: with the follower's braking equal to `beta` the rear
-//! value's plateau is -0.99 m, README).
+//! worse).
+//!
+//! **The rear state at one time.** The rear value is argued at the follower track's time
+//! `t_f`: from a certified state at `t_f` the rear is safe for ever while every command is in
+//! the band, whatever came after. The follower's speed is `ego_speed - rel_speed` with the
+//! ego's speed *at `t_f`*, which its own measurement at `t_e` gives only within the
+//! accelerations possible in between: `[ego - pending dt, ego + beta dt]` for an older track,
+//! `[ego - beta dt, ego + pending dt]` for a newer one. So the rear value is the table's least
+//! value over the box of those ego speeds and the follower speeds that go with them, held in
+//! the human's `[0, max_speed]` ([`crate::rear`]: exact for the multilinear interpolation, one
+//! lookup when the times agree, at most `6^3` with [`crate::rear::MAX_INTERIOR`] breakpoints
+//! inside). Before (issue 19), the two were subtracted as if taken at once: a follower at
+//! exactly 35 m/s read 35.05 m/s behind an accelerating ego, and the firmware ran uncertified.
+//!
+//! An ego or follower faster than `max_speed` at that time, or a follower gap below the grid,
+//! is outside the domain: [`Fault::OutsideDomain`], [`Mode::Uncertified`]. Only the rear half
+//! is unknown there: the command is the nominal law under the same speed cap and front
+//! look-ahead as in the domain, so the front override still acts (before issue 19 the nominal
+//! law ran unchecked, and an ego at 35.14 m/s braked at -1.5 m/s^2 into a stopped leader). The
+//! nominal law's set speed (30 m/s by default, below the table's 35) and the cap bring a fast
+//! ego back into the domain, and its braking, like every command's, is at most `beta`, which
+//! spares the follower: a rear table certifies nothing unless the follower can out-brake the
+//! band (measured: with the follower's braking equal to `beta` the rear value's plateau is
+//! -0.99 m, README).
 //!
 //! # Faults and the minimum-risk manoeuvre
 //! A table that does not parse, is not a split table, whose band does not fit the vehicle's
@@ -98,16 +132,26 @@
 //! 537,280 certified cells, 26 s on two cores (`solver::verify` has the method and why the
 //! deployment table is solved with the follower pushed 0.2 m/s^2 beyond its model). The actuator's
 //! dead time and lag do not enter: whatever they do, the realised acceleration stays in the
-//! band when every command is in it. What it does not claim: that the rear test passes at every
-//! 20 ms step in between (the value may dip there; the campaign measures by how much), and
-//! anything about `f32` rounding beyond `solver::verify::TOLERANCE`.
+//! band when every command is in it. Between those periods the value may dip below the level:
+//! by at most [`REAR_SAMPLE_TOLERANCE`] (10 cm; 8.3 cm measured by verify's bounds on the
+//! deployed table) at every 20 ms sample, which verify proves from its version 2 on. What it
+//! does not claim: anything about `f32` rounding beyond `solver::verify::TOLERANCE`.
+//!
+//! # The tolerances, per part
+//! Each part of a certified state's certificate is claimed to stay above its own stated
+//! tolerance at every control period: the front half above `-CERTIFICATE_TOLERANCE` (1 cm,
+//! `f32` rounding of the closed form), the rear half above `-REAR_SAMPLE_TOLERANCE` (10 cm,
+//! proven by verify; above zero at its proof periods), the speed headroom above
+//! `-SPEED_TOLERANCE` (1 mm/s, `f32` rounding near 35 m/s).
 //!
 //! # What is assumed
-//! The humans keep to the table's model (the leader brakes at most `-leader.min`, the follower
-//! drives by the IDM with its time gap in range); the measurements are exact and time-stamped
-//! on the controller's clock, at most the stale limit old; the actuator is a dead time and a
-//! first-order lag no slower than the configuration declares, and brakes at beta when told
-//! to. Noise is not in the argument. The front value is exact, and its look-ahead over the
+//! The humans keep to the table's model (the leader brakes at most `-leader.min` and keeps its
+//! speed in `[0, max_speed]`, the follower drives by the IDM with its time gap in range and
+//! keeps its speed there too); the measurements are exact and time-stamped on the controller's
+//! clock, at most the stale limit old (each channel may have its own age); the actuator is a
+//! dead time and a first-order lag no slower than the configuration declares, and brakes at
+//! beta when told to. Nothing is assumed of the ego's speed: the firmware keeps it in the
+//! domain (above). Noise is not in the argument. The front value is exact, and its look-ahead over the
 //! delays is argued above and checked by property tests; its `f32` evaluation is within about
 //! 1.4 mm (measured), inside [`CERTIFICATE_TOLERANCE`].
 
@@ -941,10 +985,10 @@ impl<'t> Controller<'t> {
         // can have had in between: `(lowest, highest)`.
         let ego_at = |t: u64| {
             let (low, high) = if t_e <= t {
-                let dt = (t - t_e) as f32 * 1e-6;
+                let dt = seconds(t - t_e);
                 (ego_speed + model.ego.min * dt, ego_speed + pending * dt)
             } else {
-                let dt = (t_e - t) as f32 * 1e-6;
+                let dt = seconds(t_e - t);
                 (ego_speed - pending * dt, ego_speed - model.ego.min * dt)
             };
             (math::max(low, 0.0), math::max(high, 0.0))
@@ -969,12 +1013,12 @@ impl<'t> Controller<'t> {
         // leader's speed (a faster ego and a slower leader are never better).
         let (ego_low, ego_high) = ego_at(t_m);
         let leader_at_m = math::max(ego_low + leader.rel_speed, 0.0);
-        let age = (now - t_m) as f32 * 1e-6;
-        let dead = dead_us as f32 * 1e-6;
+        let age = seconds(now - t_m);
+        let dead = seconds(dead_us);
         // The certified front value: braking at beta, commanded since the current run of such
         // commands began, or from now.
         let braking_from = self.braking_since_us.unwrap_or(now).min(now);
-        let braking_age = braking_from.saturating_sub(t_m) as f32 * 1e-6;
+        let braking_age = seconds(braking_from.saturating_sub(t_m));
         let front = front_value(
             leader.gap,
             leader_at_m,
@@ -983,7 +1027,7 @@ impl<'t> Controller<'t> {
         );
         // The speed headroom (module docs): until the braking takes full effect the ego's
         // speed grows at most at `pending` from its measurement.
-        let since_e = |t: u64| t.saturating_sub(t_e) as f32 * 1e-6;
+        let since_e = |t: u64| seconds(t.saturating_sub(t_e));
         let headroom = model.max_ego_speed
             - (ego_speed + math::max(pending, 0.0) * (since_e(braking_from) + dead + lag));
         // The look-ahead (module docs): `u` held for one period before the braking at beta.
@@ -1077,6 +1121,14 @@ impl<'t> Controller<'t> {
     }
 }
 
+/// Microseconds to seconds. The step's time differences are bounded by the stale limit and the
+/// delays (seconds at most), so they go through `u32`, which the Cortex-M4F converts in one
+/// instruction (`u64` takes a library routine); a difference beyond `u32` (71 minutes) is
+/// taken at `u32::MAX`.
+fn seconds(us: u64) -> f32 {
+    u32::try_from(us).unwrap_or(u32::MAX) as f32 * 1e-6
+}
+
 /// The rear value over a box of rear states: `gap_follower` and the intervals of the
 /// follower's and the ego's speeds (`(lowest, highest)`). The table's least value over the box
 /// inside the grid ([`rear::least_over_box`]), the last gap face's smallest value beyond it
@@ -1101,6 +1153,12 @@ fn rear_value(
     }
     if gap_follower > model.gap_max {
         return Ok(model.beyond_grid);
+    }
+    // Measurements of one time leave a point: one lookup, no candidates to build.
+    if follower_speed.0 == follower_speed.1 && ego_speed.0 == ego_speed.1 {
+        return table
+            .value_at(&[gap_follower, follower_speed.0, ego_speed.0])
+            .map_err(|_| Fault::OutsideDomain { axis: 0 });
     }
     rear::least_over_box(
         table,

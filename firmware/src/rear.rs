@@ -22,7 +22,8 @@
 //! those candidate points (at most `(MAX_INTERIOR + 2)^3`, one when the box is a point) is the
 //! minimum over the box, up to `f32` rounding of the interpolation (about `1e-6` m, inside
 //! `solver verify`'s tolerance). A box wider than [`MAX_INTERIOR`] breakpoints on an axis is
-//! not evaluated ([`BoxError::TooWide`]): the caller treats the rear half as unknown.
+//! not evaluated: the controller reports `Fault::RearBoxTooWide` and treats the rear half as
+//! unknown.
 
 use table_format::Table;
 
@@ -97,7 +98,9 @@ fn candidates(
 }
 
 /// The least interpolated value over the box `[lo, hi]` (module docs). Every corner must lie in
-/// the grid.
+/// the grid. Out of line: the common case, measurements of one time, never enters it, and the
+/// control step stays as lean as before.
+#[inline(never)]
 pub(crate) fn least_over_box(
     table: &Table<'_>,
     lo: [f32; 3],

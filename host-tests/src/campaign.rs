@@ -195,13 +195,13 @@ pub fn run_episode(
 /// Certificate losses by the firmware's mode at the moment of loss.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
 pub struct LossesByMode {
-    /// In [`Mode::Nominal`].
+    /// In [`firmware::Mode::Nominal`].
     pub nominal: usize,
-    /// In [`Mode::Override`].
+    /// In [`firmware::Mode::Override`].
     pub r#override: usize,
-    /// In [`Mode::MinimumRisk`].
+    /// In [`firmware::Mode::MinimumRisk`].
     pub minimum_risk: usize,
-    /// In [`Mode::Uncertified`].
+    /// In [`firmware::Mode::Uncertified`].
     pub uncertified: usize,
     /// Of all, those where the front value was lost.
     pub front: usize,

@@ -179,9 +179,33 @@ pub struct Setting<'t> {
     pub config: Config,
     /// What counts as a loss.
     pub tolerances: Tolerances,
+    /// The slowest actuator the search draws: the configuration's declared dead time and lag
+    /// for a search within the model ([`Setting::within_model`]); slower for a planted hole.
+    pub plant: ActuatorModel,
 }
 
 impl<'t> Setting<'t> {
+    /// The search within the model: the firmware's `config`, the stated tolerances, an actuator
+    /// no slower than `config` declares.
+    pub fn within_model(
+        bytes: &'t [u8],
+        table: &'t Table<'t>,
+        model: HumanModel,
+        config: Config,
+    ) -> Self {
+        Setting {
+            bytes,
+            table,
+            model,
+            config,
+            tolerances: Tolerances::default(),
+            plant: ActuatorModel {
+                dead_time: config.actuator_dead_time_us as f32 * 1e-6,
+                lag: config.actuator_lag_us as f32 * 1e-6,
+            },
+        }
+    }
+
     fn world(&self, case: &Case) -> World<'t> {
         World::new(
             self.bytes,
@@ -370,7 +394,8 @@ impl<'t> Setting<'t> {
     }
 
     /// A fresh case's sensors and actuator: exact measurements aged 0-5 periods per channel,
-    /// the dead time at 0, half or all of the firmware's limit and the lag anywhere up to it.
+    /// the dead time at 0, half or all of the plant's limit and the lag anywhere up to it (half
+    /// the time at it).
     fn draw_delays(&self, rng: &mut impl Rng) -> (SensorModel, ActuatorModel) {
         let c = &self.config;
         let stale = c.stale_periods;
@@ -382,13 +407,12 @@ impl<'t> Setting<'t> {
             ],
             ..SensorModel::IDEAL
         };
-        let dead_limit = c.actuator_dead_time_us as f32 * 1e-6;
         let actuator = ActuatorModel {
-            dead_time: dead_limit * [0.0, 0.5, 1.0, 1.0][rng.random_range(0..4)],
+            dead_time: self.plant.dead_time * [0.0, 0.5, 1.0, 1.0][rng.random_range(0..4)],
             lag: if rng.random::<bool>() {
-                c.actuator_lag_us as f32 * 1e-6
+                self.plant.lag
             } else {
-                rng.random_range(0.0..=c.actuator_lag_us as f32 * 1e-6)
+                rng.random_range(0.0..=self.plant.lag)
             },
         };
         (sensors, actuator)

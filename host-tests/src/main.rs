@@ -33,39 +33,7 @@ struct Args {
 #[derive(Subcommand)]
 enum Command {
     /// Runs the safety campaign.
-    Campaign {
-        /// Episodes per (leader, follower) group.
-        #[arg(long, default_value_t = 500)]
-        episodes: usize,
-        /// Simulated seconds per episode.
-        #[arg(long, default_value_t = 120.0)]
-        seconds: f32,
-        /// First seed.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Gap noise (standard deviation, m); speed noise is a tenth of it per metre.
-        #[arg(long, default_value_t = 0.0)]
-        noise: f32,
-        /// Sensor latency, control periods.
-        #[arg(long, default_value_t = 0)]
-        latency: u32,
-        /// The ego actuator's dead time, ms (the firmware's default covers up to 100).
-        #[arg(long, default_value_t = 100.0)]
-        dead_time_ms: f32,
-        /// The ego actuator's first-order lag time constant, s (the firmware's default covers
-        /// up to 0.3).
-        #[arg(long, default_value_t = 0.3)]
-        lag: f32,
-        /// Probability of a dropped measurement per period.
-        #[arg(long, default_value_t = 0.0)]
-        dropout: f32,
-        /// Output folder.
-        #[arg(long, default_value = "out/campaign")]
-        out: PathBuf,
-        /// A table file to run instead of the firmware's default table.
-        #[arg(long, value_name = "FILE")]
-        table: Option<PathBuf>,
-    },
+    Campaign(CampaignArgs),
     /// Runs the adversarial search: certified starts on the boundary and the domain's edges,
     /// humans chosen by search within the model.
     Falsify {
@@ -295,6 +263,15 @@ fn split_table(bytes: &'static [u8]) -> Result<(Table<'static>, host_tests::huma
     Ok((table, model))
 }
 
+/// The search's setting on a table: within the model of the firmware's default configuration.
+fn search_setting<'t>(
+    bytes: &'t [u8],
+    table: &'t Table<'t>,
+    model: host_tests::humans::HumanModel,
+) -> host_tests::falsify::Setting<'t> {
+    host_tests::falsify::Setting::within_model(bytes, table, model, firmware::Config::default())
+}
+
 /// Refuses a count of zero, naming the argument.
 fn positive_count(name: &str, n: usize) -> Result<()> {
     anyhow::ensure!(
@@ -332,29 +309,7 @@ fn real_main() -> Result<()> {
             out,
             table,
         } => replay(&findings, worst.as_deref(), finding, &out, &table),
-        Command::Campaign {
-            episodes,
-            seconds,
-            seed,
-            noise,
-            latency,
-            dead_time_ms,
-            lag,
-            dropout,
-            out,
-            table,
-        } => campaign(CampaignArgs {
-            episodes,
-            seconds,
-            seed,
-            noise,
-            latency,
-            dead_time_ms,
-            lag,
-            dropout,
-            out,
-            table,
-        }),
+        Command::Campaign(args) => campaign(args),
     }
 }
 
@@ -365,18 +320,12 @@ fn falsify(
     out: &std::path::Path,
     table: &Option<PathBuf>,
 ) -> Result<()> {
-    use host_tests::falsify::{search, Budget, Setting};
+    use host_tests::falsify::{search, Budget};
     positive_count("episodes", episodes)?;
     positive_seconds("seconds", seconds)?;
     let bytes = table_bytes(table)?;
     let (table, model) = split_table(bytes)?;
-    let setting = Setting {
-        bytes,
-        table: &table,
-        model,
-        config: firmware::Config::default(),
-        tolerances: host_tests::world::Tolerances::default(),
-    };
+    let setting = search_setting(bytes, &table, model);
     let budget = Budget::scaled(episodes, seconds);
     let bar = ProgressBar::new(budget.episodes() as u64);
     bar.set_style(
@@ -428,7 +377,7 @@ fn replay(
     out: &std::path::Path,
     table: &Option<PathBuf>,
 ) -> Result<()> {
-    use host_tests::falsify::{Case, Setting};
+    use host_tests::falsify::Case;
     let text = std::fs::read_to_string(findings)
         .with_context(|| format!("reading {}", findings.display()))?;
     let json: serde_json::Value = serde_json::from_str(&text)
@@ -452,13 +401,7 @@ fn replay(
         .context("the entry's case does not decode")?;
     let bytes = table_bytes(table)?;
     let (table, model) = split_table(bytes)?;
-    let setting = Setting {
-        bytes,
-        table: &table,
-        model,
-        config: firmware::Config::default(),
-        tolerances: host_tests::world::Tolerances::default(),
-    };
+    let setting = search_setting(bytes, &table, model);
     let mut trace = Trace::new();
     let score = setting.run(&case, Some(&mut trace));
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
@@ -490,16 +433,39 @@ fn replay(
     Ok(())
 }
 
+/// The campaign's arguments.
+#[derive(clap::Args)]
 struct CampaignArgs {
+    /// Episodes per (leader, follower) group.
+    #[arg(long, default_value_t = 500)]
     episodes: usize,
+    /// Simulated seconds per episode.
+    #[arg(long, default_value_t = 120.0)]
     seconds: f32,
+    /// First seed.
+    #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Gap noise (standard deviation, m); speed noise is a tenth of it per metre.
+    #[arg(long, default_value_t = 0.0)]
     noise: f32,
+    /// Sensor latency, control periods.
+    #[arg(long, default_value_t = 0)]
     latency: u32,
+    /// The ego actuator's dead time, ms (the firmware's default covers up to 100).
+    #[arg(long, default_value_t = 100.0)]
     dead_time_ms: f32,
+    /// The ego actuator's first-order lag time constant, s (the firmware's default covers
+    /// up to 0.3).
+    #[arg(long, default_value_t = 0.3)]
     lag: f32,
+    /// Probability of a dropped measurement per period.
+    #[arg(long, default_value_t = 0.0)]
     dropout: f32,
+    /// Output folder.
+    #[arg(long, default_value = "out/campaign")]
     out: PathBuf,
+    /// A table file to run instead of the firmware's default table.
+    #[arg(long, value_name = "FILE")]
     table: Option<PathBuf>,
 }
 
