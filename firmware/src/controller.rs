@@ -113,7 +113,12 @@
 //! [`MAX_STEP_GAP_PERIODS`] periods): each is a [`Fault`], reported in the command and logged,
 //! and the command is the minimum-risk manoeuvre: a controlled deceleration of
 //! `mrm_deceleration` (default 2 m/s^2, at most 4), softened to `mrm_gentle_deceleration` when
-//! the follower is known, close and closing, so as not to provoke a rear-end collision. A clock
+//! the follower is known, close and closing, so as not to provoke a rear-end collision. Where
+//! the table is loaded and the leader track and the ego's speed are good (the fault is
+//! elsewhere: the follower track, the clock), the front half still applies to that
+//! deceleration exactly as to the nominal law: the speed cap and the look-ahead, so the
+//! manoeuvre brakes harder, up to beta, when the leader needs it (after a clock jump the
+//! forgotten history makes the look-ahead assume the band's top). A clock
 //! jump is never latched: the new time is adopted, the command history forgotten, and the
 //! manoeuvre ends after [`CLOCK_RECOVERY_PERIODS`] good periods. A board that restarted after
 //! a fault of its own (watchdog, HardFault, panic) latches the manoeuvre until power-on
@@ -887,7 +892,34 @@ impl<'t> Controller<'t> {
             c.mrm_deceleration
         };
         let acceleration = match &self.table {
-            Ok((_, model)) => math::clamp(-deceleration, model.ego.min, model.ego.max),
+            Ok((_, model)) => {
+                let planned = math::clamp(-deceleration, model.ego.min, model.ego.max);
+                // The front half still applies where its inputs are good (module docs): the
+                // manoeuvre brakes harder when the leader needs it, never more than beta.
+                let now = inputs.now_us;
+                let ego = inputs.ego_speed;
+                let ego_good = ego.valid
+                    && math::is_finite(ego.value)
+                    && ego.value >= 0.0
+                    && ego.value <= 100.0
+                    && self.is_fresh(&ego, now);
+                let leader = self.check_track(
+                    &inputs.leader,
+                    now,
+                    Fault::LeaderInvalid,
+                    Fault::LeaderStale,
+                );
+                match leader {
+                    Ok(track) if ego_good => {
+                        let t_m = inputs.leader.timestamp_us;
+                        let t_e = ego.timestamp_us;
+                        let pending = self.pending(t_m.min(t_e), model);
+                        self.enforce_front(model, track, t_m, ego.value, t_e, now, pending, planned)
+                            .command
+                    }
+                    _ => planned,
+                }
+            }
             Err(_) => -deceleration,
         };
         Command {
@@ -959,44 +991,17 @@ impl<'t> Controller<'t> {
         }
         let ego_speed = ego.value;
         let nominal = self.nominal(leader, ego_speed, model.ego);
-        let c = &self.config;
-        let h = c.period_us as f32 * 1e-6;
         // The delays (module docs): the front is argued from the leader track's measurement
-        // time `t_m`, the rear from the follower track's `t_f`. Until the ego's braking at beta
-        // takes full effect (the measurements' age, the dead time, and one lag time constant
-        // after a braking command is issued), its acceleration is at most `pending`: the
-        // largest command issued since the oldest measurement, less the dead time and five lag
-        // time constants, plus what older commands can still add through the lag (at most
-        // e^-5 of the band's width).
+        // time `t_m`, the rear from the follower track's `t_f`; `pending` bounds the ego's
+        // acceleration since the oldest of them.
         let t_m = inputs.leader.timestamp_us;
         let t_f = inputs.follower.timestamp_us;
         let t_e = ego.timestamp_us;
-        let t_0 = t_m.min(t_f).min(t_e);
-        let dead_us = u64::from(c.actuator_dead_time_us);
-        let lag = c.actuator_lag_us as f32 * 1e-6;
-        let tail = if c.actuator_lag_us > 0 {
-            LAG_TAIL * (model.ego.max - model.ego.min)
-        } else {
-            0.0
-        };
-        let span = dead_us + 5 * u64::from(c.actuator_lag_us);
-        let pending = self.issued.largest_since(t_0, span, model.ego.max) + tail;
-        // The ego's speed at time `t`, from its own measurement, within the accelerations it
-        // can have had in between: `(lowest, highest)`.
-        let ego_at = |t: u64| {
-            let (low, high) = if t_e <= t {
-                let dt = seconds(t - t_e);
-                (ego_speed + model.ego.min * dt, ego_speed + pending * dt)
-            } else {
-                let dt = seconds(t_e - t);
-                (ego_speed - pending * dt, ego_speed - model.ego.min * dt)
-            };
-            (math::max(low, 0.0), math::max(high, 0.0))
-        };
+        let pending = self.pending(t_m.min(t_f).min(t_e), &model);
         // The rear state at `t_f`: the ego's speed in its interval there, the follower's
         // (`ego - rel_speed`) with it, held in the human's model `[0, max_speed]` (module
         // docs); the least value over that box.
-        let (ego_f_low, ego_f_high) = ego_at(t_f);
+        let (ego_f_low, ego_f_high) = ego_speed_at(ego_speed, t_e, t_f, pending, model.ego.min);
         let follower_low = math::max(ego_f_low - follower.rel_speed, 0.0);
         let follower_high = math::min(
             math::max(ego_f_high - follower.rel_speed, 0.0),
@@ -1009,17 +1014,87 @@ impl<'t> Controller<'t> {
             (follower_low, follower_high),
             (ego_f_low, ego_f_high),
         );
+        let front = self.enforce_front(&model, leader, t_m, ego_speed, t_e, now, pending, nominal);
+        let mode = if front.overridden {
+            Mode::Override
+        } else {
+            Mode::Nominal
+        };
+        // Outside the rear table's domain the front override (and the speed cap) still act:
+        // only the rear half is unknown (module docs).
+        let rear = match rear {
+            Ok(w) => w,
+            Err(fault) => {
+                return Command {
+                    acceleration: front.command,
+                    mode: Mode::Uncertified,
+                    fault: Some(fault),
+                    margin: None,
+                }
+            }
+        };
+        let margin = self
+            .certificate_of(front.value, rear, front.headroom, &model)
+            .margin();
+        // Diagnostics: the state itself is no longer certified (logged once per excursion).
+        let outside = margin.is_nan() || margin <= 0.0;
+        if outside && !self.margin_lost {
+            self.log(Event::MarginLost { at_us: now, margin });
+        }
+        self.margin_lost = outside;
+        Command {
+            acceleration: front.command,
+            mode,
+            fault: None,
+            margin: Some(margin),
+        }
+    }
+
+    /// An upper bound of the ego's acceleration since `t_0` until braking at beta takes full
+    /// effect: the largest command issued since `t_0`, less the dead time and five lag time
+    /// constants, plus what older commands can still add through the lag (at most e^-5 of the
+    /// band's width); the band's top before the first command.
+    fn pending(&self, t_0: u64, model: &Model) -> f32 {
+        let c = &self.config;
+        let tail = if c.actuator_lag_us > 0 {
+            LAG_TAIL * (model.ego.max - model.ego.min)
+        } else {
+            0.0
+        };
+        let span = u64::from(c.actuator_dead_time_us) + 5 * u64::from(c.actuator_lag_us);
+        self.issued.largest_since(t_0, span, model.ego.max) + tail
+    }
+
+    /// The front half applied to a `proposal` (module docs: the delays, the ego's speed): the
+    /// certified front value and speed headroom of the state, and the command, which is the
+    /// proposal under the speed cap if its look-ahead passes, else the gentlest braking that
+    /// passes, at most beta.
+    #[allow(clippy::too_many_arguments)]
+    fn enforce_front(
+        &self,
+        model: &Model,
+        leader: Track,
+        t_m: u64,
+        ego_speed: f32,
+        t_e: u64,
+        now: u64,
+        pending: f32,
+        proposal: f32,
+    ) -> FrontCheck {
+        let c = &self.config;
+        let h = seconds(u64::from(c.period_us));
+        let dead = seconds(u64::from(c.actuator_dead_time_us));
+        let lag = seconds(u64::from(c.actuator_lag_us));
         // The front at `t_m`: the highest speed for the ego's motion, the lowest for the
         // leader's speed (a faster ego and a slower leader are never better).
-        let (ego_low, ego_high) = ego_at(t_m);
+        let (ego_low, ego_high) = ego_speed_at(ego_speed, t_e, t_m, pending, model.ego.min);
         let leader_at_m = math::max(ego_low + leader.rel_speed, 0.0);
-        let age = seconds(now - t_m);
-        let dead = seconds(dead_us);
+        let age = seconds(now.saturating_sub(t_m));
         // The certified front value: braking at beta, commanded since the current run of such
         // commands began, or from now.
         let braking_from = self.braking_since_us.unwrap_or(now).min(now);
         let braking_age = seconds(braking_from.saturating_sub(t_m));
-        let front = front_value(
+        let value = front_value(
             leader.gap,
             leader_at_m,
             ego_high,
@@ -1045,7 +1120,7 @@ impl<'t> Controller<'t> {
         } else {
             model.ego.max
         };
-        let capped = math::min(nominal, speed_cap);
+        let capped = math::min(proposal, speed_cap);
         let margin_front = c.front_margin;
         let ahead = |u: f32| {
             front_value(
@@ -1056,51 +1131,22 @@ impl<'t> Controller<'t> {
             )
         };
         let at_capped = ahead(capped);
-        let (acceleration, mode) = if room >= 0.0 && at_capped > margin_front {
-            (
-                capped,
-                if capped < nominal {
-                    Mode::Override
-                } else {
-                    Mode::Nominal
-                },
-            )
-        } else if room < 0.0 {
-            (model.ego.min, Mode::Override)
+        let passes = room >= 0.0 && at_capped > margin_front;
+        let command = if room < 0.0 {
+            model.ego.min
+        } else if passes {
+            capped
         } else {
-            (
-                least_braking(capped, at_capped, model.ego.min, front, margin_front, |u| {
-                    ahead(u) > margin_front
-                }),
-                Mode::Override,
-            )
+            least_braking(capped, at_capped, model.ego.min, value, margin_front, |u| {
+                ahead(u) > margin_front
+            })
         };
-        let acceleration = math::clamp(acceleration, model.ego.min, model.ego.max);
-        // Outside the rear table's domain the front override (and the speed cap) still act:
-        // only the rear half is unknown (module docs).
-        let rear = match rear {
-            Ok(w) => w,
-            Err(fault) => {
-                return Command {
-                    acceleration,
-                    mode: Mode::Uncertified,
-                    fault: Some(fault),
-                    margin: None,
-                }
-            }
-        };
-        let margin = self.certificate_of(front, rear, headroom, &model).margin();
-        // Diagnostics: the state itself is no longer certified (logged once per excursion).
-        let outside = margin.is_nan() || margin <= 0.0;
-        if outside && !self.margin_lost {
-            self.log(Event::MarginLost { at_us: now, margin });
-        }
-        self.margin_lost = outside;
-        Command {
-            acceleration,
-            mode,
-            fault: None,
-            margin: Some(margin),
+        let command = math::clamp(command, model.ego.min, model.ego.max);
+        FrontCheck {
+            command,
+            overridden: !passes || capped < proposal,
+            value,
+            headroom,
         }
     }
 
@@ -1119,6 +1165,32 @@ impl<'t> Controller<'t> {
         let law = math::clamp(law, ISO_15622_LIMITS.0, ISO_15622_LIMITS.1);
         math::clamp(law, ego.min, ego.max)
     }
+}
+
+/// What the front half made of a proposed command ([`Controller::enforce_front`]).
+struct FrontCheck {
+    /// The command, at most the proposal.
+    command: f32,
+    /// The speed cap lowered the proposal, or its look-ahead failed.
+    overridden: bool,
+    /// The state's certified front value, m.
+    value: f32,
+    /// The state's speed headroom, m/s.
+    headroom: f32,
+}
+
+/// The ego's speed at time `t` from its measurement `ego_speed` at `t_e`, within the
+/// accelerations it can have had in between (at most `pending`, at least `band_min`):
+/// `(lowest, highest)`, both at or above zero.
+fn ego_speed_at(ego_speed: f32, t_e: u64, t: u64, pending: f32, band_min: f32) -> (f32, f32) {
+    let (low, high) = if t_e <= t {
+        let dt = seconds(t - t_e);
+        (ego_speed + band_min * dt, ego_speed + pending * dt)
+    } else {
+        let dt = seconds(t_e - t);
+        (ego_speed - pending * dt, ego_speed - band_min * dt)
+    };
+    (math::max(low, 0.0), math::max(high, 0.0))
 }
 
 /// Microseconds to seconds. The step's time differences are bounded by the stale limit and the

@@ -830,3 +830,32 @@ fn the_follower_speed_is_taken_at_the_follower_tracks_time() {
     let cmd = controller().step(&beyond);
     assert_eq!(cmd.fault, Some(Fault::OutsideDomain { axis: 1 }), "{cmd:?}");
 }
+
+/// The front half is enforced in the minimum-risk manoeuvre too, where its inputs are good: a
+/// stale follower track is a fault, yet the leader 0.05 m of front value above the margin and
+/// braking needs more than the manoeuvre's 2 m/s^2. Before, the manoeuvre braked at 2 m/s^2
+/// whatever the leader did.
+#[test]
+fn the_minimum_risk_manoeuvre_brakes_harder_when_the_front_needs_it() {
+    use table_format::front::{front_value, FrontModel};
+    let (beta, _, leader_braking) = band_and_leader();
+    let model = FrontModel {
+        leader_braking,
+        ego_braking: -beta,
+        response_time: 0.0,
+        response_acceleration: 0.0,
+        max_speed: 35.0,
+    };
+    let (ego, leader) = (25.0, 20.0);
+    let gap = 0.55 - front_value(0.0, leader, ego, &model);
+    let mut i = inputs((gap, leader - ego), (40.0, 0.0), ego);
+    i.follower.timestamp_us = NOW - 1_000_000;
+    let cmd = controller().step(&i);
+    assert_eq!(fault_of(cmd), Fault::FollowerStale);
+    assert!(cmd.acceleration < -2.5, "{cmd:?}");
+    // With room ahead it is the planned manoeuvre.
+    let mut i = inputs((200.0, 0.0), (40.0, 0.0), ego);
+    i.follower.timestamp_us = NOW - 1_000_000;
+    let cmd = controller().step(&i);
+    assert_eq!(cmd.acceleration, -2.0, "{cmd:?}");
+}
