@@ -196,6 +196,10 @@ fn the_search_finds_a_planted_hole() {
     setting.plant = ACTUATOR;
     let report = search(&setting, &Budget::scaled(400, 60.0), 3, &|_| {});
     let (collisions, losses) = report.failures();
+    eprintln!(
+        "planted hole: {collisions} collisions, {losses} losses in {} episodes",
+        report.episodes()
+    );
     assert!(collisions + losses > 0, "{:?}", report.methods);
     // And within the model the same budget finds nothing.
     let setting = Setting::within_model(
