@@ -5,9 +5,12 @@
 //! finds collisions inside each interval, not only at the samples; [`humans`] plays leaders and
 //! followers that keep to the game's model (bounded leader, IDM follower with its time gap in
 //! range, leaders that stop to standstill and go again) and a follower that does not (the
-//! paper's baseline); [`campaign`] samples starts over the whole certified set, standstill
-//! included, and reports collisions, certificate losses (the true state leaving the certified
-//! set), minimum gaps, time under override and jerk. The ego is `firmware::Controller` itself, on the same
+//! paper's baseline); [`world`] steps the loop one period at a time and judges the true state;
+//! [`campaign`] samples starts over the whole certified set, standstill included, and reports
+//! collisions, certificate losses (the true state leaving the certified set), minimum gaps,
+//! time under override and jerk; [`falsify`] *searches* for what sampling misses: starts on the
+//! certified boundary and at the domain's edges, humans chosen by cross-entropy, hill climbing
+//! and greedy rollouts within the model. The ego is `firmware::Controller` itself, on the same
 //! table bytes the target runs.
 #![warn(missing_docs)]
 
