@@ -99,6 +99,14 @@ class TableAgainstPurePython(unittest.TestCase):
             hjacc.Table(bytes(data))
         with self.assertRaisesRegex(ValueError, "magic"):
             hjacc.Table(b"\xff" * 4096)
+        # A cut file is truncated, not corrupt, in both readers.
+        with open(DEFAULT_TABLE, "rb") as f:
+            whole = f.read()
+        for cut in (300, len(whole) // 2, len(whole) - 1):
+            with self.assertRaisesRegex(ValueError, "truncated"):
+                hjacc.Table(whole[:cut])
+            with self.assertRaisesRegex(TableError, "truncated"):
+                PyTable(whole[:cut])
         native = hjacc.Table.open(DEFAULT_TABLE)
         with self.assertRaisesRegex(ValueError, "coordinates"):
             native.value_at([1.0, 2.0])

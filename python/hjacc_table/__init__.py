@@ -128,6 +128,21 @@ def _game(c):
     raise TableError("unknown game variant %d" % index)
 
 
+def _declared_length(data, header_len):
+    """The table's length as its header declares it (header not yet trusted), or None."""
+    probe = Table.__new__(Table)
+    try:
+        probe._decode_header(data, header_len)
+    except Exception:
+        return None
+    nodes = 1
+    for a in probe.axes:
+        nodes *= a["points"]
+    listed = sum(4 * a["points"] for a in probe.axes if a["spacing"] == "Listed")
+    policy_len = 0 if probe.policy_encoding == "None" else (nodes + 7) // 8
+    return _PREAMBLE + header_len + listed + nodes * (probe.bits // 8) + policy_len + _CRC
+
+
 class Table:
     """A parsed table: its header as dictionaries, and lookups that match the Rust reader."""
 
@@ -140,10 +155,55 @@ class Table:
         version, header_len = struct.unpack_from("<HH", data, 4)
         if version != FORMAT_VERSION:
             raise TableError("unsupported version %d (this reader reads %d)" % (version, FORMAT_VERSION))
+        if len(data) < _PREAMBLE + header_len + _CRC:
+            raise TableError(
+                "truncated: %d bytes, the preamble announces at least %d"
+                % (len(data), _PREAMBLE + header_len + _CRC)
+            )
         stored = struct.unpack_from("<I", data, len(data) - _CRC)[0]
         computed = zlib.crc32(data[:-_CRC]) & 0xFFFFFFFF
         if stored != computed:
+            # A file cut short fails its CRC too: say so when the (not yet trusted) header
+            # declares more bytes than there are, as the Rust reader does.
+            needed = _declared_length(data, header_len)
+            if needed is not None and needed > len(data):
+                raise TableError("truncated: %d bytes, the header declares %d" % (len(data), needed))
             raise TableError("checksum: stored %08x, computed %08x" % (stored, computed))
+        header_end = _PREAMBLE + header_len
+        self._decode_header(data, header_len)
+
+        # The payload: breakpoints, values, policy bits.
+        self.nodes = 1
+        for a in self.axes:
+            self.nodes *= a["points"]
+        at = header_end
+        for a in self.axes:
+            if a["spacing"] == "Listed":
+                n = a["points"]
+                a["breakpoints"] = list(struct.unpack_from("<%df" % n, data, at))
+                at += 4 * n
+                b = a["breakpoints"]
+                if b[0] != a["min"] or b[-1] != a["max"] or any(y <= x for x, y in zip(b, b[1:])):
+                    raise TableError("axis %s: breakpoints not increasing from min to max" % a["name"])
+        width = self.bits // 8
+        values_len = self.nodes * width
+        policy_len = 0 if self.policy_encoding == "None" else (self.nodes + 7) // 8
+        if len(data) != at + values_len + policy_len + _CRC:
+            raise TableError("payload size: expected %d bytes" % (at + values_len + policy_len + _CRC))
+        fmt = "<%d%s" % (self.nodes, "B" if width == 1 else "H")
+        self._stored = struct.unpack_from(fmt, data, at)
+        self._policy = data[at + values_len : at + values_len + policy_len]
+        # Per axis, as the Rust reader keeps them.
+        self._strides = [1] * len(self.axes)
+        for k in range(len(self.axes) - 2, -1, -1):
+            self._strides[k] = self._strides[k + 1] * self.axes[k + 1]["points"]
+        for a in self.axes:
+            spacing = _f32((a["max"] - a["min"]) / float(max(a["points"] - 1, 1)))
+            a["_inv_spacing"] = _f32(1.0 / spacing)
+            a["_last"] = float(a["points"] - 1)
+
+    def _decode_header(self, data, header_len):
+        """Decodes the postcard header into this object's fields (raises on a malformed one)."""
         header_end = _PREAMBLE + header_len
         c = _Cursor(data[_PREAMBLE:header_end])
         self.game = _game(c)
@@ -200,36 +260,6 @@ class Table:
             raise TableError("invalid header")
         if any(a["points"] < 2 for a in self.axes):
             raise TableError("an axis has fewer than 2 points")
-
-        # The payload: breakpoints, values, policy bits.
-        self.nodes = 1
-        for a in self.axes:
-            self.nodes *= a["points"]
-        at = header_end
-        for a in self.axes:
-            if a["spacing"] == "Listed":
-                n = a["points"]
-                a["breakpoints"] = list(struct.unpack_from("<%df" % n, data, at))
-                at += 4 * n
-                b = a["breakpoints"]
-                if b[0] != a["min"] or b[-1] != a["max"] or any(y <= x for x, y in zip(b, b[1:])):
-                    raise TableError("axis %s: breakpoints not increasing from min to max" % a["name"])
-        width = self.bits // 8
-        values_len = self.nodes * width
-        policy_len = 0 if self.policy_encoding == "None" else (self.nodes + 7) // 8
-        if len(data) != at + values_len + policy_len + _CRC:
-            raise TableError("payload size: expected %d bytes" % (at + values_len + policy_len + _CRC))
-        fmt = "<%d%s" % (self.nodes, "B" if width == 1 else "H")
-        self._stored = struct.unpack_from(fmt, data, at)
-        self._policy = data[at + values_len : at + values_len + policy_len]
-        # Per axis, as the Rust reader keeps them.
-        self._strides = [1] * len(self.axes)
-        for k in range(len(self.axes) - 2, -1, -1):
-            self._strides[k] = self._strides[k + 1] * self.axes[k + 1]["points"]
-        for a in self.axes:
-            spacing = _f32((a["max"] - a["min"]) / float(max(a["points"] - 1, 1)))
-            a["_inv_spacing"] = _f32(1.0 / spacing)
-            a["_last"] = float(a["points"] - 1)
 
     @classmethod
     def open(cls, path):

@@ -36,9 +36,10 @@ pub enum SolverError {
     /// The configuration is refused.
     #[error(transparent)]
     Config(#[from] ConfigError),
-    /// The table could not be encoded.
-    #[error("table encoding failed: {0}")]
-    Table(#[from] table_format::Error),
+    /// A table could not be read or written. The cause is in the message and is not also the
+    /// error's source, so that a chain of causes (`anyhow`'s `{:#}`) says it once.
+    #[error("{0}")]
+    Table(table_format::Error),
     /// Writing an output file failed.
     #[error("writing {path}: {source}")]
     Io {
@@ -64,4 +65,24 @@ pub enum SolverError {
         /// Backward time reached.
         time: f64,
     },
+}
+
+impl From<table_format::Error> for SolverError {
+    fn from(e: table_format::Error) -> Self {
+        SolverError::Table(e)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A table error is said once: in the message, with no source to repeat it.
+    #[test]
+    fn a_table_error_is_said_once() {
+        let e = SolverError::from(table_format::Error::BadMagic);
+        let text = e.to_string();
+        assert_eq!(text, "not a safety table (bad magic bytes)");
+        assert!(std::error::Error::source(&e).is_none());
+    }
 }

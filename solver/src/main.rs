@@ -22,14 +22,15 @@ struct Args {
     /// A TOML config (repeatable). Default: the built-in paper configs.
     #[arg(long = "config", value_name = "FILE")]
     configs: Vec<PathBuf>,
-    /// Output folder; each config writes `DIR/<name>/`.
-    #[arg(long, default_value = "out")]
+    /// Output folder; each config writes `DIR/<name>/`, `verify` writes `DIR/verify/<table>/`
+    /// (before or after the subcommand).
+    #[arg(long, default_value = "out", global = true)]
     out: PathBuf,
     /// A rear-game config (repeatable), solved by the sampled-data iteration.
     #[arg(long = "rear", value_name = "FILE")]
     rears: Vec<PathBuf>,
     /// No progress bars.
-    #[arg(long)]
+    #[arg(long, global = true)]
     quiet: bool,
     #[command(subcommand)]
     command: Option<Command>,

@@ -420,6 +420,24 @@ fn the_command_writes_its_report_and_fails_cleanly_on_unproven_cells() {
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(1));
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    // A cut table, with `--out` after the subcommand: one line that says truncated, once.
+    let cut = out.join("cut.bin");
+    let bytes = std::fs::read(table).expect("the table");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).expect("written");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_solver"))
+        .args([
+            "verify",
+            cut.to_str().expect("utf-8"),
+            "--out",
+            out.to_str().expect("utf-8"),
+        ])
+        .output()
+        .expect("the solver runs");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert_eq!(stderr.matches("truncated").count(), 1, "{stderr}");
+    assert!(!stderr.contains("encoding"), "{stderr}");
     std::fs::remove_dir_all(&out).ok();
 }
 

@@ -95,7 +95,8 @@ impl<'a> Table<'a> {
     ///
     /// The checks, in order: the preamble is there and starts with [`MAGIC`]; the version is
     /// [`FORMAT_VERSION`]; the buffer holds the header length it announces and a trailer; the
-    /// CRC-32 trailer matches; the header decodes, uses all its announced bytes and passes
+    /// CRC-32 trailer matches (when it does not, and the header declares a longer table than
+    /// the buffer, the error is [`Error::Truncated`]: a cut file, not a corrupt one); the header decodes, uses all its announced bytes and passes
     /// [`Header::validate`]; the payload has exactly the size the grid calls for.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, Error> {
         let minimum = PREAMBLE_LEN + CRC_LEN;
@@ -124,6 +125,16 @@ impl<'a> Table<'a> {
         let stored = le_u32(bytes, body_len).ok_or(Error::HeaderDecode)?;
         let computed = CRC32.checksum(bytes.get(..body_len).ok_or(Error::HeaderDecode)?);
         if stored != computed {
+            // A file cut short fails its CRC too; say what happened when the (not yet trusted)
+            // header declares more bytes than there are.
+            if let Ok(needed) = Self::declared_len(bytes) {
+                if needed > bytes.len() {
+                    return Err(Error::Truncated {
+                        needed,
+                        found: bytes.len(),
+                    });
+                }
+            }
             return Err(Error::Checksum { stored, computed });
         }
         let header_bytes = bytes

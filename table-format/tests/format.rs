@@ -304,6 +304,31 @@ fn truncated_or_extended_buffers_are_rejected() {
     assert!(Table::parse(&longer).is_err());
 }
 
+/// A file cut short is reported as truncated, with the length its header declares, not as a
+/// checksum mismatch (once the header itself is whole); a flipped byte is still a checksum.
+#[test]
+fn a_cut_file_is_truncated_not_corrupt() {
+    let bytes = small();
+    let header_end = 8 + usize::from(u16::from_le_bytes([bytes[6], bytes[7]]));
+    for len in [header_end + 4, bytes.len() / 2, bytes.len() - 1] {
+        assert_eq!(
+            Table::parse(&bytes[..len]).unwrap_err(),
+            Error::Truncated {
+                needed: bytes.len(),
+                found: len
+            },
+            "cut at {len}"
+        );
+    }
+    let mut flipped = bytes.clone();
+    let last = flipped.len() - 10;
+    flipped[last] ^= 1;
+    assert!(matches!(
+        Table::parse(&flipped).unwrap_err(),
+        Error::Checksum { .. }
+    ));
+}
+
 /// A table flashed into a slot of fixed size: the bytes after it are erased flash (`0xFF`), or
 /// whatever an earlier, longer table left there.
 #[test]
