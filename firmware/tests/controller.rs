@@ -755,21 +755,26 @@ fn a_checksummed_table_with_wild_ego_bounds_is_refused() {
     assert!(Controller::new(&bytes, ideal()).table().is_some());
 }
 
+/// The default table's front model for an ego braking at beta from now (no delays).
+fn braking_now() -> table_format::front::FrontModel {
+    let (beta, _, leader_braking) = band_and_leader();
+    table_format::front::FrontModel {
+        leader_braking,
+        ego_braking: -beta,
+        response_time: 0.0,
+        response_acceleration: 0.0,
+        max_speed: 35.0,
+    }
+}
+
 /// Issue 19 (B): above the speed domain the rear half is unknown, not the front. An ego at
 /// 35.2 m/s, 0.05 m of front value above the margin behind a leader at 33 m/s: the nominal law
 /// asks for about -1.6 m/s^2, which the look-ahead refuses. Before, the command was that
 /// nominal law, uncertified; now it is the override's braking, still reported uncertified.
 #[test]
 fn above_the_speed_domain_the_front_override_still_acts() {
-    use table_format::front::{front_value, FrontModel};
-    let (beta, _, leader_braking) = band_and_leader();
-    let model = FrontModel {
-        leader_braking,
-        ego_braking: -beta,
-        response_time: 0.0,
-        response_acceleration: 0.0,
-        max_speed: 35.0,
-    };
+    use table_format::front::front_value;
+    let model = braking_now();
     let ego = 35.2;
     let offset = front_value(0.0, 33.0, ego, &model);
     let gap = 0.55 - offset;
@@ -837,15 +842,8 @@ fn the_follower_speed_is_taken_at_the_follower_tracks_time() {
 /// whatever the leader did.
 #[test]
 fn the_minimum_risk_manoeuvre_brakes_harder_when_the_front_needs_it() {
-    use table_format::front::{front_value, FrontModel};
-    let (beta, _, leader_braking) = band_and_leader();
-    let model = FrontModel {
-        leader_braking,
-        ego_braking: -beta,
-        response_time: 0.0,
-        response_acceleration: 0.0,
-        max_speed: 35.0,
-    };
+    use table_format::front::front_value;
+    let model = braking_now();
     let (ego, leader) = (25.0, 20.0);
     let gap = 0.55 - front_value(0.0, leader, ego, &model);
     let mut i = inputs((gap, leader - ego), (40.0, 0.0), ego);
