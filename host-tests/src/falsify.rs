@@ -5,7 +5,7 @@
 //! draw. The campaign samples starts and humans; this module *searches*:
 //! - **Starts** ([`StartKind`]): on and near the certified boundary (either half's margin in
 //!   `[0, 0.2]` m, found by bisection on its gap), at the domain's edges (each speed near 0 and
-//!   near `max_speed`, a follower at exactly `max_speed`), engaged at any acceleration in the
+//!   near `max_speed`, a follower or a leader at exactly `max_speed`), engaged at any acceleration in the
 //!   band, and at standstill. Every start is certified at the true state, with the engaged
 //!   acceleration held through the actuator's dead time and lag.
 //! - **Humans** ([`Method`]), every input within the model (the leader's acceleration in its
@@ -73,18 +73,21 @@ pub enum StartKind {
     FastEgo,
     /// The follower at 34-35 m/s, half the time at exactly `max_speed`.
     FastFollower,
+    /// The leader at 34-35 m/s, half the time at exactly `max_speed`.
+    FastLeader,
     /// Every speed near zero.
     Slow,
     /// Everyone at standstill.
     Standstill,
 }
 
-const START_KINDS: [StartKind; 7] = [
+const START_KINDS: [StartKind; 8] = [
     StartKind::Anywhere,
     StartKind::FrontBoundary,
     StartKind::RearBoundary,
     StartKind::FastEgo,
     StartKind::FastFollower,
+    StartKind::FastLeader,
     StartKind::Slow,
     StartKind::Standstill,
 ];
@@ -322,6 +325,14 @@ impl<'t> Setting<'t> {
                         rng.random_range(34.0..=vmax)
                     };
                     gap_follower = rng.random_range(0.0..=60.0);
+                }
+                StartKind::FastLeader => {
+                    vl = if rng.random::<bool>() {
+                        vmax
+                    } else {
+                        rng.random_range(34.0..=vmax)
+                    };
+                    gap_leader = rng.random_range(0.0..=80.0);
                 }
                 StartKind::Slow => {
                     let mut slow = || rng.random_range(0.0..=1.0f32);
