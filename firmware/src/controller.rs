@@ -897,24 +897,18 @@ impl<'t> Controller<'t> {
                 // The front half still applies where its inputs are good (module docs): the
                 // manoeuvre brakes harder when the leader needs it, never more than beta.
                 let now = inputs.now_us;
-                let ego = inputs.ego_speed;
-                let ego_good = ego.valid
-                    && math::is_finite(ego.value)
-                    && ego.value >= 0.0
-                    && ego.value <= 100.0
-                    && self.is_fresh(&ego, now);
                 let leader = self.check_track(
                     &inputs.leader,
                     now,
                     Fault::LeaderInvalid,
                     Fault::LeaderStale,
                 );
-                match leader {
-                    Ok(track) if ego_good => {
+                match (leader, self.check_ego_speed(&inputs.ego_speed, now)) {
+                    (Ok(track), Ok(ego_speed)) => {
                         let t_m = inputs.leader.timestamp_us;
-                        let t_e = ego.timestamp_us;
+                        let t_e = inputs.ego_speed.timestamp_us;
                         let pending = self.pending(t_m.min(t_e), model);
-                        self.enforce_front(model, track, t_m, ego.value, t_e, now, pending, planned)
+                        self.enforce_front(model, track, t_m, ego_speed, t_e, now, pending, planned)
                             .command
                     }
                     _ => planned,
@@ -958,6 +952,18 @@ impl<'t> Controller<'t> {
         Ok(t)
     }
 
+    /// The ego's speed, if its measurement is valid, finite, in `[0, 100]` m/s and fresh.
+    fn check_ego_speed(&self, m: &Measurement<f32>, now_us: u64) -> Result<f32, Fault> {
+        let v = m.value;
+        if !(m.valid && math::is_finite(v) && (0.0..=100.0).contains(&v)) {
+            return Err(Fault::EgoSpeedInvalid);
+        }
+        if !self.is_fresh(m, now_us) {
+            return Err(Fault::EgoSpeedStale);
+        }
+        Ok(v)
+    }
+
     fn decide(&mut self, inputs: &Inputs) -> Command {
         let (table, model) = match &self.table {
             Ok((t, m)) => (t, *m),
@@ -983,13 +989,10 @@ impl<'t> Controller<'t> {
             Err(f) => return self.minimum_risk(inputs, f),
         };
         let ego = inputs.ego_speed;
-        if !(ego.valid && math::is_finite(ego.value) && ego.value >= 0.0 && ego.value <= 100.0) {
-            return self.minimum_risk(inputs, Fault::EgoSpeedInvalid);
-        }
-        if !self.is_fresh(&ego, now) {
-            return self.minimum_risk(inputs, Fault::EgoSpeedStale);
-        }
-        let ego_speed = ego.value;
+        let ego_speed = match self.check_ego_speed(&ego, now) {
+            Ok(v) => v,
+            Err(f) => return self.minimum_risk(inputs, f),
+        };
         let nominal = self.nominal(leader, ego_speed, model.ego);
         // The delays (module docs): the front is argued from the leader track's measurement
         // time `t_m`, the rear from the follower track's `t_f`; `pending` bounds the ego's
