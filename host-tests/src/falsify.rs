@@ -319,19 +319,11 @@ impl<'t> Setting<'t> {
                     a0 = rng.random_range(0.0..=band.1);
                 }
                 StartKind::FastFollower => {
-                    vf = if rng.random::<bool>() {
-                        vmax
-                    } else {
-                        rng.random_range(34.0..=vmax)
-                    };
+                    vf = near_top_speed(vmax, rng);
                     gap_follower = rng.random_range(0.0..=60.0);
                 }
                 StartKind::FastLeader => {
-                    vl = if rng.random::<bool>() {
-                        vmax
-                    } else {
-                        rng.random_range(34.0..=vmax)
-                    };
+                    vl = near_top_speed(vmax, rng);
                     gap_leader = rng.random_range(0.0..=80.0);
                 }
                 StartKind::Slow => {
@@ -452,6 +444,15 @@ impl<'t> Setting<'t> {
             seconds,
             seed: rng.random(),
         })
+    }
+}
+
+/// A human's speed at the domain's top: exactly `vmax` half the time, else in `[34, vmax]`.
+fn near_top_speed(vmax: f32, rng: &mut impl Rng) -> f32 {
+    if rng.random::<bool>() {
+        vmax
+    } else {
+        rng.random_range(34.0..=vmax)
     }
 }
 
@@ -852,31 +853,28 @@ pub fn search(
     };
     let kind_of = |i: usize| START_KINDS[i % START_KINDS.len()];
 
-    // Structured and random cases: drawn sequentially (deterministic), run in parallel.
+    // Structured and random cases: each drawn from its own seed (so the order of the parallel
+    // draws does not matter), run in parallel.
     for (method, count) in [
         (Method::Structured, budget.structured),
         (Method::Random, budget.random),
     ] {
         let cases: Vec<Case> = (0..count)
             .into_par_iter()
-            .map_init(
-                || (),
-                |_, i| {
-                    let mut r =
-                        StdRng::seed_from_u64(seed.wrapping_add((method as u64) << 40) ^ i as u64);
-                    let (schedule, rule) = if method == Method::Structured {
-                        structured_schedule(i, &mut r, seconds)
-                    } else {
-                        let segment_s = [0.5f32, 1.0, 2.0, 5.0][i % 4];
-                        (
-                            Schedule::random(segments_of(segment_s), segment_s, &mut r),
-                            FollowerRule::Schedule,
-                        )
-                    };
-                    setting.case(method, kind_of(i), schedule, rule, seconds, &mut r)
-                },
-            )
-            .flatten()
+            .filter_map(|i| {
+                let mut r =
+                    StdRng::seed_from_u64(seed.wrapping_add((method as u64) << 40) ^ i as u64);
+                let (schedule, rule) = if method == Method::Structured {
+                    structured_schedule(i, &mut r, seconds)
+                } else {
+                    let segment_s = [0.5f32, 1.0, 2.0, 5.0][i % 4];
+                    (
+                        Schedule::random(segments_of(segment_s), segment_s, &mut r),
+                        FollowerRule::Schedule,
+                    )
+                };
+                setting.case(method, kind_of(i), schedule, rule, seconds, &mut r)
+            })
             .collect();
         for chunk in cases.chunks(2_000) {
             let results = run_all(setting, chunk.to_vec());

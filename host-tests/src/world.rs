@@ -304,11 +304,6 @@ impl<'t> World<'t> {
         self.last
     }
 
-    /// The firmware's controller.
-    pub fn controller(&self) -> &Controller<'t> {
-        &self.controller
-    }
-
     /// The certificate at the true state now, with what the actuator has yet to do.
     pub fn certificate(&self) -> Option<Certificate> {
         let now_us = self.period * self.period_us;

@@ -9,7 +9,7 @@ use firmware::{Config, Controller, DEFAULT_TABLE};
 use host_tests::falsify::{Case, FollowerRule, Method, Schedule, Setting, StartKind};
 use host_tests::humans::HumanModel;
 use host_tests::sim::{ActuatorModel, Car, SensorModel};
-use host_tests::world::{Score, Start};
+use host_tests::world::{state_of, Score, Start};
 use table_format::Table;
 
 /// The delays the default configuration covers at their limits.
@@ -39,9 +39,8 @@ fn gap_for_front_margin(start: Start, margin: f32) -> f32 {
     let front = |gap: f32| {
         let mut cars = start.cars;
         cars[0].x = cars[1].x + gap;
-        let [l, e, f] = cars;
         c.certificate_with_response(
-            [l.x - e.x, l.v, e.x - f.x, f.v, e.v],
+            state_of(cars),
             ACTUATOR.dead_time + ACTUATOR.lag,
             start.engaged_acceleration,
         )
@@ -80,9 +79,8 @@ fn case(start: Start, leader: f32, sensors: SensorModel, seconds: f32) -> Case {
 
 fn certified(start: &Start) -> bool {
     let c = Controller::new(DEFAULT_TABLE, Config::default());
-    let [l, e, f] = start.cars;
     c.certificate_with_response(
-        [l.x - e.x, l.v, e.x - f.x, f.v, e.v],
+        state_of(start.cars),
         ACTUATOR.dead_time + ACTUATOR.lag,
         start.engaged_acceleration,
     )
