@@ -44,12 +44,13 @@ pub fn mailbox_words(id: u16, data: &[u8]) -> MailboxWords {
 
 /// The minimum-risk request at `deceleration` m/s^2 (positive), as the controller would send it.
 pub fn minimum_risk_command(deceleration: f32) -> Command {
-    Command {
-        acceleration: -deceleration,
-        mode: Mode::MinimumRisk,
-        fault: Some(firmware::Fault::RestartedAfterFault),
-        margin: None,
-    }
+    let mut command = Command::bare(
+        -deceleration,
+        Mode::MinimumRisk,
+        Some(firmware::Fault::RestartedAfterFault),
+    );
+    command.takeover = true;
+    command
 }
 
 /// The last frame's mailbox words: the minimum-risk request at `deceleration`, carrying
@@ -73,14 +74,16 @@ mod tests {
             1,
             "standard id, data frame, transmit requested"
         );
-        assert_eq!(w.tdtr, 5);
+        assert_eq!(w.tdtr, 6);
         let bytes = [w.tdlr.to_le_bytes(), w.tdhr.to_le_bytes()].concat();
-        // -2 m/s^2 in 0.001 m/s^2, mode 2 (minimum risk), the counter, then the CRC.
+        // -2 m/s^2 in 0.001 m/s^2, mode 2 (minimum risk), the status (not certified, takeover
+        // requested, both tracks missing), the counter, then the CRC.
         assert_eq!(i16::from_le_bytes([bytes[0], bytes[1]]), -2000);
         assert_eq!(bytes[2], 2);
-        assert_eq!(bytes[3], 41);
-        assert_eq!(bytes[4], frame_crc(ACCEL_REQUEST_ID, &bytes[..4]));
-        assert_eq!(&bytes[5..], &[0, 0, 0]);
+        assert_eq!(bytes[3], 0b100_100_10);
+        assert_eq!(bytes[4], 41);
+        assert_eq!(bytes[5], frame_crc(ACCEL_REQUEST_ID, &bytes[..5]));
+        assert_eq!(&bytes[6..], &[0, 0]);
     }
 
     #[test]

@@ -7,7 +7,7 @@
 //! | `0x120` | front track (leader) | 0-1 gap `u16` 0.01 m (`0xFFFF`: no vehicle), 2-3 relative speed `i16` 0.01 m/s (`v_leader - v_ego`), 4 flags (bit 0: valid), 5 age `u8` ms, 6 counter, 7 CRC |
 //! | `0x121` | rear track (follower) | as `0x120`, relative speed `v_ego - v_follower` |
 //! | `0x130` | ego speed | 0-1 speed `u16` 0.01 m/s, 2 flags (bit 0: valid), 3 age `u8` ms, 4 counter, 5 CRC |
-//! | `0x200` | acceleration request (sent) | 0-1 acceleration `i16` 0.001 m/s^2, 2 mode (0 nominal, 1 override, 2 minimum risk, 3 uncertified), 3 counter, 4 CRC |
+//! | `0x200` | acceleration request (sent) | 0-1 acceleration `i16` 0.001 m/s^2, 2 mode (0 nominal, 1 override, 2 minimum risk, 3 uncertified), 3 status ([`status_byte`]: certified, takeover request, the tracks' states), 4 counter, 5 CRC |
 //!
 //! # End-to-end protection (after AUTOSAR E2E profile 1)
 //! - **CRC**: CRC-8 SAE J1850 (polynomial 0x1D, initial value 0xFF, final XOR 0xFF, the
@@ -32,6 +32,7 @@ use embedded_can::{Frame, Id, StandardId};
 use crate::controller::{Command, Mode};
 use crate::inputs::{Actuator, Inputs, Measurement, Sensors, Track};
 use crate::math;
+use crate::sensing::TrackState;
 
 /// Identifier of the front (leader) track.
 pub const FRONT_TRACK_ID: u16 = 0x120;
@@ -185,8 +186,9 @@ pub fn encode_ego_speed(speed: f32, valid: bool, age_ms: u8, counter: u8) -> [u8
     ]
 }
 
-/// Encodes an acceleration request's payload.
-pub fn encode_command(command: &Command, counter: u8) -> [u8; 5] {
+/// Encodes an acceleration request's payload: the acceleration, the mode, the status byte
+/// ([`status_byte`]), the counter and the CRC.
+pub fn encode_command(command: &Command, counter: u8) -> [u8; 6] {
     let [a0, a1] = quantize_i16(command.acceleration * 1000.0).to_le_bytes();
     let mode = match command.mode {
         Mode::Nominal => 0,
@@ -194,8 +196,37 @@ pub fn encode_command(command: &Command, counter: u8) -> [u8; 5] {
         Mode::MinimumRisk => 2,
         Mode::Uncertified => 3,
     };
-    let body = [a0, a1, mode, counter];
-    [a0, a1, mode, counter, frame_crc(ACCEL_REQUEST_ID, &body)]
+    let status = status_byte(command);
+    let body = [a0, a1, mode, status, counter];
+    [
+        a0,
+        a1,
+        mode,
+        status,
+        counter,
+        frame_crc(ACCEL_REQUEST_ID, &body),
+    ]
+}
+
+/// The request's status byte, which says which case of the argument holds: bit 0 the state is
+/// certified (a positive margin: in a minimum-risk manoeuvre, the certified fallback), bit 1
+/// the driver's takeover request, bits 2-4 the leader track's state and bits 5-7 the
+/// follower's (0 fresh, 1 aging, 2 lost, 3 new vehicle, 4 missing).
+pub fn status_byte(command: &Command) -> u8 {
+    let track = |t: TrackState| -> u8 {
+        match t {
+            TrackState::Fresh => 0,
+            TrackState::Aging => 1,
+            TrackState::Lost => 2,
+            TrackState::New => 3,
+            TrackState::Missing => 4,
+        }
+    };
+    let certified = command.margin.is_some_and(|m| m > 0.0);
+    u8::from(certified)
+        | u8::from(command.takeover) << 1
+        | track(command.leader) << 2
+        | track(command.follower) << 5
 }
 
 /// What the end-to-end checks refused or noticed so far.

@@ -167,7 +167,7 @@ use table_format::{Bounds, Game, Table};
 use crate::fmt::{log_info, log_warn};
 use crate::inputs::{Inputs, Measurement, Track};
 use crate::math;
-use crate::rear;
+use crate::sensing::{SensorBounds, TrackState};
 
 /// Tuning of the controller. Units: SI.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -175,7 +175,8 @@ use crate::rear;
 pub struct Config {
     /// Control period, microseconds (default 20 ms).
     pub period_us: u32,
-    /// A measurement older than this many periods is stale.
+    /// An ego-speed measurement older than this many periods is stale (the radar tracks' age
+    /// is covered up to `sensors.max_track_age_us`).
     pub stale_periods: u32,
     /// Speed set-point, m/s.
     pub set_speed: f32,
@@ -208,6 +209,8 @@ pub struct Config {
     pub actuator_lag_us: u32,
     /// The vehicle's own limits, whatever the table says.
     pub envelope: Envelope,
+    /// The sensors' error bounds and timing the certificate covers ([`crate::sensing`]).
+    pub sensors: SensorBounds,
 }
 
 /// The vehicle's envelope: what the firmware may command and the speeds it may certify, set by
@@ -282,6 +285,7 @@ impl Config {
             && self.actuator_dead_time_us <= MAX_DEAD_TIME_US
             && self.actuator_lag_us <= MAX_ACTUATOR_LAG_US
             && self.envelope.is_valid()
+            && self.sensors.is_valid()
     }
 }
 
@@ -315,6 +319,7 @@ impl Default for Config {
             actuator_dead_time_us: MAX_DEAD_TIME_US,
             actuator_lag_us: MAX_ACTUATOR_LAG_US,
             envelope: Envelope::default(),
+            sensors: SensorBounds::default(),
         }
     }
 }
@@ -424,6 +429,29 @@ pub struct Command {
     /// less `front_margin` and the rear value less its error bound and `rear_margin`. The state
     /// is certified when it is positive. `None` when no certificate was evaluated.
     pub margin: Option<f32>,
+    /// The driver's takeover request: the front half is not certified (a cut-in, a leader
+    /// closer than the certificate allows), or the command is a minimum-risk manoeuvre.
+    pub takeover: bool,
+    /// What the controller made of the leader track ([`TrackState`]).
+    pub leader: TrackState,
+    /// What the controller made of the follower track.
+    pub follower: TrackState,
+}
+
+impl Command {
+    /// A command of `mode` with nothing else known: no certificate, no takeover request, both
+    /// tracks missing (the fields are filled in as the step learns them).
+    pub const fn bare(acceleration: f32, mode: Mode, fault: Option<Fault>) -> Self {
+        Command {
+            acceleration,
+            mode,
+            fault,
+            margin: None,
+            takeover: false,
+            leader: TrackState::Missing,
+            follower: TrackState::Missing,
+        }
+    }
 }
 
 /// The certificate at a state: its two halves, each as a margin over its level (m), and the
@@ -496,6 +524,13 @@ pub enum Event {
         /// The fault, for the minimum-risk manoeuvre.
         fault: Option<Fault>,
     },
+    /// A leader track that is not the vehicle of the last one (a cut-in, [`TrackState::New`]).
+    NewLeader {
+        /// Time, microseconds.
+        at_us: u64,
+        /// The new track's measured gap, m.
+        gap: f32,
+    },
     /// The state is no longer certified (its margin is zero or below): logged once per
     /// excursion.
     MarginLost {
@@ -554,6 +589,36 @@ pub struct Controller<'t> {
     /// When the current run of commands braking at beta began (`None`: the last command was
     /// not braking at beta): the braking is under way since then, not only from now.
     braking_since_us: Option<u64>,
+    /// The last plausible leader measurement, with the ego's speed interval at its time.
+    leader: Option<LeaderMemo>,
+    /// The last plausible follower measurement, with its rear value at its time.
+    rear: Option<RearMemo>,
+    /// The latest ego-speed measurements `(time, speed)`, oldest first: the one nearest a
+    /// track's time gives the ego's speed there.
+    ego_history: Deque<(u64, f32), EGO_HISTORY>,
+}
+
+/// Ego-speed measurements kept to find the one nearest a track's time: 16 periods, 320 ms at
+/// the default period, more than the radar's latency and cycle.
+const EGO_HISTORY: usize = 16;
+
+/// The last plausible leader measurement (module docs: aging and lost tracks).
+#[derive(Debug, Clone, Copy)]
+struct LeaderMemo {
+    /// When it was measured, microseconds.
+    at_us: u64,
+    track: Track,
+    /// The interval of the ego's speed at `at_us`, measurement error included, m/s.
+    ego: (f32, f32),
+}
+
+/// The last plausible follower measurement and its rear value at its time: it holds for ever
+/// while every command is in the band (module docs), so it is computed once per measurement.
+#[derive(Debug, Clone, Copy)]
+struct RearMemo {
+    at_us: u64,
+    track: Track,
+    value: Result<f32, Fault>,
 }
 
 /// One command the controller issued.
@@ -563,26 +628,32 @@ struct Issued {
     acceleration: f32,
 }
 
-/// The commands issued over the last `memory_us`, kept as a sliding-window maximum (each entry
-/// larger than every later one), so that the largest is the front entry: O(1) per step. Up to
-/// `MEMORY` entries: at the smallest period (10 ms) and the largest stale limit, dead time and
-/// lag, the memory is 10 x 100 + 100 + 5 x 300 = 2,600 ms, 260 commands.
+/// The commands issued since the oldest time a later query can ask about, kept as a
+/// sliding-window maximum (each entry larger than every later one), so that the largest is the
+/// front entry: O(1) per step. A track may be old (the certified fallback argues from its last
+/// measurement, whatever its age), so the window is bounded by its capacity, not by a time:
+/// when it is full, the two oldest entries merge into one at the later one's time with the
+/// earlier's (larger) value, which over-states the commands between them and so stays an upper
+/// bound.
 #[derive(Clone)]
 struct IssuedCommands {
     window: Deque<Issued, 272>,
-    /// The first command issued since boot (or since the window overflowed): before it, what
-    /// the actuator did is unknown.
+    /// Every command issued at or after this time is in the window (`None` before the first
+    /// command): before it, what the actuator did is unknown.
     first_at_us: Option<u64>,
 }
 
 impl IssuedCommands {
-    fn push(&mut self, at_us: u64, acceleration: f32, memory_us: u64) {
-        while self
-            .window
-            .front()
-            .is_some_and(|e| e.at_us.saturating_add(memory_us) < at_us)
-        {
+    /// Records `acceleration` issued at `at_us`; entries older than `keep_from_us` are no
+    /// longer asked about and go.
+    fn push(&mut self, at_us: u64, acceleration: f32, keep_from_us: u64) {
+        while let Some(e) = self.window.front().copied() {
+            if e.at_us >= keep_from_us {
+                break;
+            }
             self.window.pop_front();
+            // A query reaching back before this entry's time no longer finds it.
+            self.first_at_us = self.first_at_us.map(|t| t.max(e.at_us + 1));
         }
         while self
             .window
@@ -590,6 +661,15 @@ impl IssuedCommands {
             .is_some_and(|e| e.acceleration <= acceleration)
         {
             self.window.pop_back();
+        }
+        if self.window.is_full() {
+            if let (Some(oldest), Some(next)) = (self.window.pop_front(), self.window.pop_front()) {
+                let merged = Issued {
+                    at_us: next.at_us,
+                    acceleration: math::max(oldest.acceleration, next.acceleration),
+                };
+                let _ = self.window.push_front(merged);
+            }
         }
         if self
             .window
@@ -599,8 +679,8 @@ impl IssuedCommands {
             })
             .is_err()
         {
-            // Cannot happen within the validated limits; if it did, forget and start again
-            // (the largest acceleration is then assumed until the window refills).
+            // Cannot happen (a slot was freed above); if it did, forget and start again (the
+            // largest acceleration is then assumed until the window refills).
             self.window.clear();
             self.first_at_us = None;
         }
@@ -723,16 +803,39 @@ impl<'t> Controller<'t> {
                 first_at_us: None,
             },
             braking_since_us: None,
+            leader: None,
+            rear: None,
+            ego_history: Deque::new(),
         }
     }
 
-    /// How far back the issued commands matter: the stale limit, the dead time and five lag
-    /// time constants, microseconds.
-    fn memory_us(&self) -> u64 {
+    /// How far before a measurement's time the issued commands matter: the dead time and five
+    /// lag time constants, microseconds.
+    fn command_span_us(&self) -> u64 {
         let c = &self.config;
-        u64::from(c.period_us) * u64::from(c.stale_periods)
-            + u64::from(c.actuator_dead_time_us)
-            + 5 * u64::from(c.actuator_lag_us)
+        u64::from(c.actuator_dead_time_us) + 5 * u64::from(c.actuator_lag_us)
+    }
+
+    /// The oldest time a later step's `pending` can ask about: the kept measurements' times
+    /// (a new one is never older than the last of its channel), less the command span; with
+    /// none kept, the covered age and the stale limit before now.
+    fn keep_commands_from(&self, now: u64) -> u64 {
+        let c = &self.config;
+        let oldest = [
+            self.leader.map(|l| l.at_us),
+            self.rear.map(|r| r.at_us),
+            self.ego_history.front().map(|e| e.0),
+        ]
+        .into_iter()
+        .flatten()
+        .min()
+        .unwrap_or_else(|| {
+            now.saturating_sub(
+                u64::from(c.sensors.max_track_age_us)
+                    + u64::from(c.period_us) * u64::from(c.stale_periods),
+            )
+        });
+        oldest.saturating_sub(self.command_span_us())
     }
 
     /// Ends certified control for good: every later step is the minimum-risk manoeuvre, with
@@ -788,7 +891,7 @@ impl<'t> Controller<'t> {
         let rear = rear_value(
             table,
             model,
-            gap_follower,
+            (gap_follower, gap_follower),
             (follower_speed, follower_speed),
             (ego_speed, ego_speed),
         )
@@ -841,6 +944,10 @@ impl<'t> Controller<'t> {
         let command = if let Some(fault) = jump {
             self.issued.forget();
             self.braking_since_us = None;
+            // The kept measurements' times belong to the old time line.
+            self.leader = None;
+            self.rear = None;
+            self.ego_history.clear();
             self.clock_recovery = (CLOCK_RECOVERY_PERIODS, fault);
             self.minimum_risk(inputs, fault)
         } else if self.clock_recovery.0 > 0 {
@@ -863,8 +970,8 @@ impl<'t> Controller<'t> {
         }
         self.mode = command.mode;
         // Every command goes to the actuator: the look-ahead of later steps must know it.
-        let memory = self.memory_us();
-        self.issued.push(now, command.acceleration, memory);
+        let keep_from = self.keep_commands_from(now);
+        self.issued.push(now, command.acceleration, keep_from);
         let at_beta = self
             .table
             .as_ref()
@@ -878,162 +985,257 @@ impl<'t> Controller<'t> {
     }
 
     fn minimum_risk(&self, inputs: &Inputs, fault: Fault) -> Command {
+        let deceleration = self.mrm_deceleration(inputs);
+        let mut command = Command::bare(-deceleration, Mode::MinimumRisk, Some(fault));
+        command.takeover = true;
+        let Ok((_, model)) = &self.table else {
+            return command;
+        };
+        let planned = math::clamp(-deceleration, model.ego.min, model.ego.max);
+        command.acceleration = planned;
+        // The front half still applies where its inputs are good (module docs): the manoeuvre
+        // brakes harder when the leader needs it, never more than beta.
+        let now = inputs.now_us;
+        if let (Some(leader), Ok(ego_speed)) =
+            (self.leader, self.check_ego_speed(&inputs.ego_speed, now))
+        {
+            let t_e = inputs.ego_speed.timestamp_us;
+            let pending = self.pending(leader.at_us.min(t_e), model);
+            command.acceleration = self
+                .enforce_front(model, &leader, ego_speed, t_e, now, pending, planned)
+                .command;
+            command.leader = self.track_state(leader.at_us, now);
+        }
+        command
+    }
+
+    /// The minimum-risk deceleration: `mrm_deceleration`, softened to
+    /// `mrm_gentle_deceleration` when the follower is known, close and closing (by this
+    /// period's plausible track, or the last one kept).
+    fn mrm_deceleration(&self, inputs: &Inputs) -> f32 {
         let c = &self.config;
-        let follower = &inputs.follower;
-        let follower_close_and_closing = follower.valid
-            && self.is_fresh(follower, inputs.now_us)
-            && math::is_finite(follower.value.gap)
-            && math::is_finite(follower.value.rel_speed)
-            && follower.value.gap < c.follower_close_gap
-            && follower.value.rel_speed < 0.0;
-        let deceleration = if follower_close_and_closing {
+        let follower = if self.is_plausible(&inputs.follower, inputs.now_us) {
+            Some(inputs.follower.value)
+        } else {
+            self.rear.map(|r| r.track)
+        };
+        let close_and_closing = follower.is_some_and(|t| {
+            math::is_finite(t.gap) && t.gap < c.follower_close_gap && t.rel_speed < 0.0
+        });
+        if close_and_closing {
             c.mrm_gentle_deceleration
         } else {
             c.mrm_deceleration
-        };
-        let acceleration = match &self.table {
-            Ok((_, model)) => {
-                let planned = math::clamp(-deceleration, model.ego.min, model.ego.max);
-                // The front half still applies where its inputs are good (module docs): the
-                // manoeuvre brakes harder when the leader needs it, never more than beta.
-                let now = inputs.now_us;
-                let leader = self.check_track(
-                    &inputs.leader,
-                    now,
-                    Fault::LeaderInvalid,
-                    Fault::LeaderStale,
-                );
-                match (leader, self.check_ego_speed(&inputs.ego_speed, now)) {
-                    (Ok(track), Ok(ego_speed)) => {
-                        let t_m = inputs.leader.timestamp_us;
-                        let t_e = inputs.ego_speed.timestamp_us;
-                        let pending = self.pending(t_m.min(t_e), model);
-                        self.enforce_front(model, track, t_m, ego_speed, t_e, now, pending, planned)
-                            .command
-                    }
-                    _ => planned,
-                }
-            }
-            Err(_) => -deceleration,
-        };
-        Command {
-            acceleration,
-            mode: Mode::MinimumRisk,
-            fault: Some(fault),
-            margin: None,
         }
     }
 
-    fn is_fresh<T>(&self, m: &Measurement<T>, now_us: u64) -> bool {
-        let limit = u64::from(self.config.period_us) * u64::from(self.config.stale_periods);
-        m.timestamp_us <= now_us && now_us - m.timestamp_us <= limit
-    }
-
-    fn check_track(
-        &self,
-        m: &Measurement<Track>,
-        now_us: u64,
-        invalid: Fault,
-        stale: Fault,
-    ) -> Result<Track, Fault> {
+    /// A track measurement the controller can use: flagged valid by the sensor, a gap that is
+    /// not NaN and not negative (`+inf`: no vehicle), a finite relative speed within 100 m/s,
+    /// taken no later than now.
+    fn is_plausible(&self, m: &Measurement<Track>, now_us: u64) -> bool {
         let t = m.value;
-        // A gap may be +inf ("no vehicle"); NaN, -inf and negative gaps are not measurements.
-        let plausible = m.valid
+        m.valid
             && !t.gap.is_nan()
             && t.gap >= 0.0
             && math::is_finite(t.rel_speed)
-            && math::abs(t.rel_speed) <= 100.0;
-        if !plausible {
-            return Err(invalid);
-        }
-        if !self.is_fresh(m, now_us) {
-            return Err(stale);
-        }
-        Ok(t)
+            && math::abs(t.rel_speed) <= 100.0
+            && m.timestamp_us <= now_us
     }
 
-    /// The ego's speed, if its measurement is valid, finite, in `[0, 100]` m/s and fresh.
+    /// The state of a track kept from `at_us`, at `now`.
+    fn track_state(&self, at_us: u64, now: u64) -> TrackState {
+        self.config.sensors.track_state(now.saturating_sub(at_us))
+    }
+
+    /// The ego's speed, if its measurement is valid, finite, in `[0, 100]` m/s and no older than
+    /// `stale_periods` periods.
     fn check_ego_speed(&self, m: &Measurement<f32>, now_us: u64) -> Result<f32, Fault> {
         let v = m.value;
         if !(m.valid && math::is_finite(v) && (0.0..=100.0).contains(&v)) {
             return Err(Fault::EgoSpeedInvalid);
         }
-        if !self.is_fresh(m, now_us) {
+        let limit = u64::from(self.config.period_us) * u64::from(self.config.stale_periods);
+        if !(m.timestamp_us <= now_us && now_us - m.timestamp_us <= limit) {
             return Err(Fault::EgoSpeedStale);
         }
         Ok(v)
     }
 
+    /// Keeps the ego's speed measurement at `t_e` (a newer one than the last kept).
+    fn remember_ego_speed(&mut self, t_e: u64, v: f32) {
+        if self.ego_history.back().is_some_and(|e| e.0 >= t_e) {
+            return;
+        }
+        if self.ego_history.is_full() {
+            self.ego_history.pop_front();
+        }
+        let _ = self.ego_history.push_back((t_e, v));
+    }
+
+    /// The interval of the ego's speed at time `t` (m/s, error included): from the kept
+    /// measurement nearest `t`, moved to `t` within the accelerations possible in between (at
+    /// most `pending`, at least the band's lowest).
+    fn ego_speed_interval_at(&self, t: u64, model: &Model) -> (f32, f32) {
+        let distance = |e: &(u64, f32)| e.0.abs_diff(t);
+        let Some(&(t_e, v)) = self
+            .ego_history
+            .iter()
+            .min_by(|a, b| distance(a).cmp(&distance(b)))
+        else {
+            return (0.0, model.max_ego_speed.max(0.0) + 100.0);
+        };
+        let pending = self.pending(t.min(t_e), model);
+        ego_speed_at(
+            self.config.sensors.ego_speed(v),
+            t_e,
+            t,
+            pending,
+            model.ego.min,
+        )
+    }
+
+    /// Takes this period's leader measurement if it is plausible and newer than the one kept,
+    /// and says what the controller makes of the track.
+    fn observe_leader(&mut self, m: &Measurement<Track>, now: u64, model: &Model) -> TrackState {
+        let newer = self.is_plausible(m, now)
+            && self.leader.is_none_or(|l| {
+                m.timestamp_us > l.at_us || (m.timestamp_us == l.at_us && m.value != l.track)
+            });
+        if !newer {
+            return self
+                .leader
+                .map_or(TrackState::Missing, |l| self.track_state(l.at_us, now));
+        }
+        let new_vehicle = self
+            .leader
+            .is_some_and(|old| self.is_another_vehicle(&old, m, model));
+        let ego = self.ego_speed_interval_at(m.timestamp_us, model);
+        self.leader = Some(LeaderMemo {
+            at_us: m.timestamp_us,
+            track: m.value,
+            ego,
+        });
+        if new_vehicle {
+            self.log(Event::NewLeader {
+                at_us: now,
+                gap: m.value.gap,
+            });
+            TrackState::New
+        } else {
+            self.track_state(m.timestamp_us, now)
+        }
+    }
+
+    /// Whether a new leader measurement cannot be the vehicle of the last one: its range is
+    /// below the least the old vehicle can have closed to (the old range's lowest, closing at
+    /// the old range rate's lowest, the relative speed falling at most at the leader's hardest
+    /// braking plus the ego's largest acceleration), or a vehicle appears where there was none.
+    fn is_another_vehicle(
+        &self,
+        old: &LeaderMemo,
+        new: &Measurement<Track>,
+        model: &Model,
+    ) -> bool {
+        let sensors = &self.config.sensors;
+        if !math::is_finite(old.track.gap) {
+            return math::is_finite(new.value.gap);
+        }
+        let dt = seconds(new.timestamp_us.saturating_sub(old.at_us));
+        let closing = model.leader_braking + model.ego.max;
+        let least = sensors.range(old.track.gap).0 + sensors.range_rate(old.track.rel_speed).0 * dt
+            - 0.5 * closing * dt * dt;
+        sensors.range(new.value.gap).1 < least
+    }
+
+    /// Takes this period's follower measurement if it is plausible and newer than the one
+    /// kept, computing its rear value at its time, and says what the controller makes of it.
+    fn observe_follower(&mut self, m: &Measurement<Track>, now: u64, model: &Model) -> TrackState {
+        let newer = self.is_plausible(m, now)
+            && self.rear.is_none_or(|r| {
+                m.timestamp_us > r.at_us || (m.timestamp_us == r.at_us && m.value != r.track)
+            });
+        if let (true, Ok((table, _))) = (newer, &self.table) {
+            let sensors = &self.config.sensors;
+            let (ego_low, ego_high) = self.ego_speed_interval_at(m.timestamp_us, model);
+            let gap = sensors.range(m.value.gap);
+            let (rate_low, rate_high) = sensors.range_rate(m.value.rel_speed);
+            // The follower's speed is `ego - rel_speed`, held in the human's `[0, max_speed]`.
+            let follower_low = math::max(ego_low - rate_high, 0.0);
+            let follower_high = math::min(math::max(ego_high - rate_low, 0.0), model.max_speed);
+            let value = rear_value(
+                table,
+                model,
+                gap,
+                (follower_low, follower_high),
+                (ego_low, ego_high),
+            );
+            self.rear = Some(RearMemo {
+                at_us: m.timestamp_us,
+                track: m.value,
+                value,
+            });
+        }
+        self.rear
+            .map_or(TrackState::Missing, |r| self.track_state(r.at_us, now))
+    }
+
     fn decide(&mut self, inputs: &Inputs) -> Command {
-        let (table, model) = match &self.table {
-            Ok((t, m)) => (t, *m),
+        let model = match &self.table {
+            Ok((_, m)) => *m,
             Err(f) => return self.minimum_risk(inputs, *f),
         };
         let now = inputs.now_us;
-        let leader = match self.check_track(
-            &inputs.leader,
-            now,
-            Fault::LeaderInvalid,
-            Fault::LeaderStale,
-        ) {
-            Ok(t) => t,
-            Err(f) => return self.minimum_risk(inputs, f),
-        };
-        let follower = match self.check_track(
-            &inputs.follower,
-            now,
-            Fault::FollowerInvalid,
-            Fault::FollowerStale,
-        ) {
-            Ok(t) => t,
-            Err(f) => return self.minimum_risk(inputs, f),
-        };
         let ego = inputs.ego_speed;
         let ego_speed = match self.check_ego_speed(&ego, now) {
             Ok(v) => v,
             Err(f) => return self.minimum_risk(inputs, f),
         };
-        let nominal = self.nominal(leader, ego_speed, model.ego);
-        // The delays (module docs): the front is argued from the leader track's measurement
-        // time `t_m`, the rear from the follower track's `t_f`; `pending` bounds the ego's
-        // acceleration since the oldest of them.
-        let t_m = inputs.leader.timestamp_us;
-        let t_f = inputs.follower.timestamp_us;
         let t_e = ego.timestamp_us;
-        let pending = self.pending(t_m.min(t_f).min(t_e), &model);
-        // The rear state at `t_f`: the ego's speed in its interval there, the follower's
-        // (`ego - rel_speed`) with it, held in the human's model `[0, max_speed]` (module
-        // docs); the least value over that box.
-        let (ego_f_low, ego_f_high) = ego_speed_at(ego_speed, t_e, t_f, pending, model.ego.min);
-        let follower_low = math::max(ego_f_low - follower.rel_speed, 0.0);
-        let follower_high = math::min(
-            math::max(ego_f_high - follower.rel_speed, 0.0),
-            model.max_speed,
-        );
-        let rear = rear_value(
-            table,
-            &model,
-            follower.gap,
-            (follower_low, follower_high),
-            (ego_f_low, ego_f_high),
-        );
-        let front = self.enforce_front(&model, leader, t_m, ego_speed, t_e, now, pending, nominal);
-        let mode = if front.overridden {
-            Mode::Override
-        } else {
-            Mode::Nominal
+        self.remember_ego_speed(t_e, ego_speed);
+        let leader_state = self.observe_leader(&inputs.leader, now, &model);
+        let follower_state = self.observe_follower(&inputs.follower, now, &model);
+        let with_tracks = |mut c: Command| {
+            c.leader = leader_state;
+            c.follower = follower_state;
+            c
         };
+        let Some(leader) = self.leader else {
+            return with_tracks(self.minimum_risk(inputs, Fault::LeaderInvalid));
+        };
+        let Some(rear) = self.rear else {
+            return with_tracks(self.minimum_risk(inputs, Fault::FollowerInvalid));
+        };
+        // Beyond the covered age: the certified fallback (module docs), the minimum-risk
+        // deceleration under the front half of the last good leader measurement.
+        let lost = match (leader_state, follower_state) {
+            (TrackState::Lost, _) => Some(Fault::LeaderStale),
+            (_, TrackState::Lost) => Some(Fault::FollowerStale),
+            _ => None,
+        };
+        let proposal = match lost {
+            Some(_) => math::clamp(-self.mrm_deceleration(inputs), model.ego.min, model.ego.max),
+            None => self.nominal(leader.track, ego_speed, model.ego),
+        };
+        let pending = self.pending(leader.at_us.min(t_e), &model);
+        let front = self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, proposal);
+        let mode = match (lost, front.overridden) {
+            (Some(_), _) => Mode::MinimumRisk,
+            (None, true) => Mode::Override,
+            (None, false) => Mode::Nominal,
+        };
+        let front_certified = front.value > self.config.front_margin;
+        let mut command = with_tracks(Command::bare(front.command, mode, lost));
+        command.takeover = lost.is_some() || !front_certified;
         // Outside the rear table's domain the front override (and the speed cap) still act:
         // only the rear half is unknown (module docs).
-        let rear = match rear {
+        let rear = match rear.value {
             Ok(w) => w,
             Err(fault) => {
-                return Command {
-                    acceleration: front.command,
-                    mode: Mode::Uncertified,
-                    fault: Some(fault),
-                    margin: None,
+                if lost.is_none() {
+                    command.mode = Mode::Uncertified;
+                    command.fault = Some(fault);
                 }
+                return command;
             }
         };
         let margin = self
@@ -1045,12 +1247,8 @@ impl<'t> Controller<'t> {
             self.log(Event::MarginLost { at_us: now, margin });
         }
         self.margin_lost = outside;
-        Command {
-            acceleration: front.command,
-            mode,
-            fault: None,
-            margin: Some(margin),
-        }
+        command.margin = Some(margin);
+        command
     }
 
     /// An upper bound of the ego's acceleration since `t_0` until braking at beta takes full
@@ -1064,20 +1262,20 @@ impl<'t> Controller<'t> {
         } else {
             0.0
         };
-        let span = u64::from(c.actuator_dead_time_us) + 5 * u64::from(c.actuator_lag_us);
-        self.issued.largest_since(t_0, span, model.ego.max) + tail
+        self.issued
+            .largest_since(t_0, self.command_span_us(), model.ego.max)
+            + tail
     }
 
-    /// The front half applied to a `proposal` (module docs: the delays, the ego's speed): the
-    /// certified front value and speed headroom of the state, and the command, which is the
-    /// proposal under the speed cap if its look-ahead passes, else the gentlest braking that
-    /// passes, at most beta.
+    /// The front half applied to a `proposal` (module docs: the delays, the measurement error,
+    /// the ego's speed): the certified front value and speed headroom of the state, and the
+    /// command, which is the proposal under the speed cap if its look-ahead passes, else the
+    /// gentlest braking that passes, at most beta.
     #[allow(clippy::too_many_arguments)]
     fn enforce_front(
         &self,
         model: &Model,
-        leader: Track,
-        t_m: u64,
+        leader: &LeaderMemo,
         ego_speed: f32,
         t_e: u64,
         now: u64,
@@ -1088,36 +1286,41 @@ impl<'t> Controller<'t> {
         let h = seconds(u64::from(c.period_us));
         let dead = seconds(u64::from(c.actuator_dead_time_us));
         let lag = seconds(u64::from(c.actuator_lag_us));
-        // The front at `t_m`: the highest speed for the ego's motion, the lowest for the
-        // leader's speed (a faster ego and a slower leader are never better).
-        let (ego_low, ego_high) = ego_speed_at(ego_speed, t_e, t_m, pending, model.ego.min);
-        let leader_at_m = math::max(ego_low + leader.rel_speed, 0.0);
+        let t_m = leader.at_us;
+        // The worst point of the error box (module docs): the least gap, the slowest leader
+        // (the ego's lowest speed at `t_m` plus the least range rate), the fastest ego; the
+        // front value is non-decreasing in the first two and non-increasing in the third.
+        let sensors = &c.sensors;
+        let gap = sensors.range(leader.track.gap).0;
+        let (ego_low, ego_high) = leader.ego;
+        let leader_at_m = math::max(ego_low + sensors.range_rate(leader.track.rel_speed).0, 0.0);
         let age = seconds(now.saturating_sub(t_m));
         // The certified front value: braking at beta, commanded since the current run of such
         // commands began, or from now.
         let braking_from = self.braking_since_us.unwrap_or(now).min(now);
         let braking_age = seconds(braking_from.saturating_sub(t_m));
         let value = front_value(
-            leader.gap,
+            gap,
             leader_at_m,
             ego_high,
             &model.front(braking_age + dead + lag, pending),
         );
         // The speed headroom (module docs): until the braking takes full effect the ego's
-        // speed grows at most at `pending` from its measurement.
+        // speed grows at most at `pending` from its measurement's highest.
+        let ego_now = sensors.ego_speed(ego_speed).1;
         let since_e = |t: u64| seconds(t.saturating_sub(t_e));
         let headroom = model.max_ego_speed
-            - (ego_speed + math::max(pending, 0.0) * (since_e(braking_from) + dead + lag));
+            - (ego_now + math::max(pending, 0.0) * (since_e(braking_from) + dead + lag));
         // The look-ahead (module docs): `u` held for one period before the braking at beta.
         // First the speed: the largest command whose response keeps the ego in the domain.
         let response_end = since_e(now) + h + dead + lag;
-        let room = model.max_ego_speed - (ego_speed + math::max(pending, 0.0) * response_end);
+        let room = model.max_ego_speed - (ego_now + math::max(pending, 0.0) * response_end);
         let speed_cap = if room < 0.0 {
             // Nothing passes: brake at beta (which keeps a certified headroom, module docs).
             model.ego.min
         } else if response_end > 0.0 {
             math::max(
-                (model.max_ego_speed - ego_speed) / response_end,
+                (model.max_ego_speed - ego_now) / response_end,
                 model.ego.min,
             )
         } else {
@@ -1127,7 +1330,7 @@ impl<'t> Controller<'t> {
         let margin_front = c.front_margin;
         let ahead = |u: f32| {
             front_value(
-                leader.gap,
+                gap,
                 leader_at_m,
                 ego_high,
                 &model.front(age + h + dead + lag, math::max(pending, u)),
@@ -1182,21 +1385,27 @@ struct FrontCheck {
     headroom: f32,
 }
 
-/// The ego's speed at time `t` from its measurement `ego_speed` at `t_e`, within the
-/// accelerations it can have had in between (at most `pending`, at least `band_min`):
+/// The ego's speed at time `t` from its measurement's interval `(low, high)` at `t_e`, within
+/// the accelerations it can have had in between (at most `pending`, at least `band_min`):
 /// `(lowest, highest)`, both at or above zero.
-fn ego_speed_at(ego_speed: f32, t_e: u64, t: u64, pending: f32, band_min: f32) -> (f32, f32) {
+fn ego_speed_at(
+    (low, high): (f32, f32),
+    t_e: u64,
+    t: u64,
+    pending: f32,
+    band_min: f32,
+) -> (f32, f32) {
     let (low, high) = if t_e <= t {
         let dt = seconds(t - t_e);
-        (ego_speed + band_min * dt, ego_speed + pending * dt)
+        (low + band_min * dt, high + pending * dt)
     } else {
         let dt = seconds(t_e - t);
-        (ego_speed - pending * dt, ego_speed - band_min * dt)
+        (low - pending * dt, high - band_min * dt)
     };
     (math::max(low, 0.0), math::max(high, 0.0))
 }
 
-/// Microseconds to seconds. The step's time differences are bounded by the stale limit and the
+/// Microseconds to seconds. The step's time differences are bounded by the covered age and the
 /// delays (seconds at most), so they go through `u32`, which the Cortex-M4F converts in one
 /// instruction (`u64` takes a library routine); a difference beyond `u32` (71 minutes) is
 /// taken at `u32::MAX`.
@@ -1204,19 +1413,20 @@ fn seconds(us: u64) -> f32 {
     u32::try_from(us).unwrap_or(u32::MAX) as f32 * 1e-6
 }
 
-/// The rear value over a box of rear states: `gap_follower` and the intervals of the
-/// follower's and the ego's speeds (`(lowest, highest)`). The table's least value over the box
-/// inside the grid ([`rear::least_over_box`]), the last gap face's smallest value beyond it
-/// (module docs), and [`Fault::OutsideDomain`] below the grid or above the speed range;
-/// [`Fault::RearBoxTooWide`] for a box the step does not evaluate.
+/// The rear value over a box of rear states: the intervals of `gap_follower`, the follower's
+/// speed and the ego's speed (`(lowest, highest)`). The table's least value over the box
+/// inside the grid ([`Table::least_over_box`]: exact for the multilinear interpolation, one
+/// lookup for a point), the last gap face's smallest value beyond it (module docs), and
+/// [`Fault::OutsideDomain`] below the grid or above the speed range; [`Fault::RearBoxTooWide`]
+/// for a box the step does not evaluate.
 fn rear_value(
     table: &Table<'_>,
     model: &Model,
-    gap_follower: f32,
+    (gap_low, gap_high): (f32, f32),
     follower_speed: (f32, f32),
     ego_speed: (f32, f32),
 ) -> Result<f32, Fault> {
-    if gap_follower.is_nan() || gap_follower < model.gap_min {
+    if gap_low.is_nan() || gap_high.is_nan() || gap_low < model.gap_min {
         return Err(Fault::OutsideDomain { axis: 0 });
     }
     let within = |(low, high): (f32, f32), max: f32| low >= 0.0 && high <= max && low <= high;
@@ -1226,23 +1436,33 @@ fn rear_value(
     if !within(ego_speed, model.max_ego_speed) {
         return Err(Fault::OutsideDomain { axis: 2 });
     }
-    if gap_follower > model.gap_max {
+    if gap_low > model.gap_max {
         return Ok(model.beyond_grid);
     }
-    // Measurements of one time leave a point: one lookup, no candidates to build.
-    if follower_speed.0 == follower_speed.1 && ego_speed.0 == ego_speed.1 {
-        return table
-            .value_at(&[gap_follower, follower_speed.0, ego_speed.0])
-            .map_err(|_| Fault::OutsideDomain { axis: 0 });
-    }
-    rear::least_over_box(
-        table,
-        [gap_follower, follower_speed.0, ego_speed.0],
-        [gap_follower, follower_speed.1, ego_speed.1],
-    )
-    .map_err(|e| match e {
-        rear::BoxError::TooWide(axis) => Fault::RearBoxTooWide { axis },
-        rear::BoxError::Outside(axis) => Fault::OutsideDomain { axis },
+    // Beyond the grid's last gap the value is at least the last face's smallest.
+    let beyond = if gap_high > model.gap_max {
+        model.beyond_grid
+    } else {
+        f32::INFINITY
+    };
+    let gap_high = math::min(gap_high, model.gap_max);
+    let lo = [gap_low, follower_speed.0, ego_speed.0];
+    let hi = [gap_high, follower_speed.1, ego_speed.1];
+    // Measurements of one time and exact sensors leave a point: one lookup.
+    let inside = if lo == hi {
+        table.value_at(&lo)
+    } else {
+        table.least_over_box(&lo, &hi)
+    };
+    inside.map(|w| math::min(w, beyond)).map_err(|e| match e {
+        table_format::Error::BoxTooWide { axis } => Fault::RearBoxTooWide {
+            axis: u8::try_from(axis).unwrap_or(u8::MAX),
+        },
+        table_format::Error::OutOfDomain { axis }
+        | table_format::Error::NonFiniteState { axis } => Fault::OutsideDomain {
+            axis: u8::try_from(axis).unwrap_or(u8::MAX),
+        },
+        _ => Fault::OutsideDomain { axis: 0 },
     })
 }
 

@@ -38,13 +38,14 @@ pub mod can;
 pub mod controller;
 pub mod inputs;
 pub mod math;
-pub mod rear;
+pub mod sensing;
 
 pub use controller::{
     Certificate, Command, Config, Controller, Event, Fault, Mode, CERTIFICATE_TOLERANCE,
     REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
 };
 pub use inputs::{Actuator, Clock, Inputs, Measurement, Sensors, Track, Watchdog};
+pub use sensing::{SensorBounds, TrackState};
 pub use table_format;
 
 /// The default table: the split three-car certificate at the ego's braking level 3.5 m/s^2,

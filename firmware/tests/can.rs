@@ -190,14 +190,16 @@ fn every_single_bit_flip_and_a_wrong_identifier_fail_the_crc() {
         Err(can::FrameError::Checksum)
     );
     // The request frame's CRC, as the receiver will check it.
-    let cmd = firmware::Command {
-        acceleration: -1.25,
-        mode: Mode::Override,
-        fault: None,
-        margin: None,
-    };
+    let mut cmd = firmware::Command::bare(-1.25, Mode::Override, None);
+    cmd.margin = Some(0.3);
+    cmd.takeover = true;
+    cmd.leader = firmware::TrackState::New;
+    cmd.follower = firmware::TrackState::Aging;
     let sent = can::encode_command(&cmd, 5);
-    assert_eq!(sent[4], can::frame_crc(can::ACCEL_REQUEST_ID, &sent[..4]));
+    assert_eq!(sent[5], can::frame_crc(can::ACCEL_REQUEST_ID, &sent[..5]));
+    // Certified, takeover, leader new (3), follower aging (1).
+    assert_eq!(sent[3], 0b001_011_11);
+    assert_eq!(sent[4], 5);
 }
 
 #[test]
@@ -238,17 +240,15 @@ fn repeated_lost_corrupted_and_out_of_sequence_frames_are_counted_and_not_used()
     );
     assert!((inputs.leader.value.gap - 58.0).abs() < 0.01, "{inputs:?}");
     // Only repeats from here on (`push_all` starts a fresh driver: the first of the 20 frames is
-    // accepted, the 19 others repeat it): the track ages and goes stale, a fault with the
-    // minimum-risk manoeuvre.
-    let mut controller = Controller::new(DEFAULT_TABLE, Config::default());
+    // accepted, the 19 others repeat it): the track is not refreshed, and it ages.
     let mut bus = push_all(&mut bus, vec![front(58.0, 0, 41); 20]);
+    let first = bus.read(5_020).unwrap().leader.timestamp_us;
     let mut last = None;
     for k in 1..=10u64 {
-        let inputs = bus.read(5_000 + k * 20_000).unwrap();
-        last = Some(controller.step(&inputs));
+        last = Some(bus.read(5_000 + k * 20_000).unwrap());
     }
     assert_eq!(bus.e2e().repeated, 19);
-    assert_eq!(last.unwrap().fault, Some(Fault::LeaderStale));
+    assert_eq!(last.unwrap().leader.timestamp_us, first);
 }
 
 struct TestClock(u64);
@@ -286,7 +286,8 @@ fn a_period_over_can_and_then_silence() {
     );
     assert_eq!(sent.data, can::encode_command(&cmd, 0).to_vec());
 
-    // No new frames for 200 ms: everything goes stale and the minimum-risk manoeuvre follows.
+    // No new frames for 200 ms: the ego's speed is past its stale limit (100 ms) and the
+    // minimum-risk manoeuvre follows (the radar tracks would be covered for a second).
     let mut bus = CanBus::new(raw);
     let mut clock = TestClock(20_000);
     let mut silent = CanBus::new(MockBus::default());
@@ -305,7 +306,8 @@ fn a_period_over_can_and_then_silence() {
     )
     .unwrap();
     assert_eq!(cmd.mode, Mode::MinimumRisk);
-    assert_eq!(cmd.fault, Some(Fault::LeaderStale));
+    assert_eq!(cmd.fault, Some(Fault::EgoSpeedStale));
+    assert!(cmd.takeover);
     assert_eq!(dog.0, 1);
 }
 

@@ -2,7 +2,8 @@
 
 use firmware::table_format::{self, Game, Table};
 use firmware::{
-    Command, Config, Controller, Fault, Inputs, Measurement, Mode, Track, DEFAULT_TABLE,
+    Command, Config, Controller, Fault, Inputs, Measurement, Mode, SensorBounds, Track,
+    DEFAULT_TABLE,
 };
 use proptest::prelude::*;
 
@@ -35,6 +36,7 @@ fn ideal() -> Config {
     Config {
         actuator_dead_time_us: 0,
         actuator_lag_us: 0,
+        sensors: SensorBounds::EXACT,
         ..Config::default()
     }
 }
@@ -162,13 +164,27 @@ fn every_bad_input_has_its_fault() {
     bad.leader.valid = false;
     assert_eq!(fault_of(controller().step(&bad)), Fault::LeaderInvalid);
 
+    // Past the covered age (1 s): the certified fallback, reported as the minimum-risk
+    // manoeuvre with its margin.
     let mut bad = good;
-    bad.leader.timestamp_us = NOW - 200_000;
-    assert_eq!(fault_of(controller().step(&bad)), Fault::LeaderStale);
+    bad.leader.timestamp_us = NOW - 1_100_000;
+    let cmd = controller().step(&bad);
+    assert_eq!(fault_of(cmd), Fault::LeaderStale);
+    assert!(
+        cmd.takeover && cmd.leader == firmware::TrackState::Lost,
+        "{cmd:?}"
+    );
+    // Aged within it: the nominal law, the track reported aging.
+    let mut aged = good;
+    aged.leader.timestamp_us = NOW - 500_000;
+    let cmd = controller().step(&aged);
+    assert_eq!(cmd.leader, firmware::TrackState::Aging, "{cmd:?}");
+    assert_ne!(cmd.mode, Mode::MinimumRisk, "{cmd:?}");
 
+    // A measurement from the future is not plausible.
     let mut bad = good;
     bad.leader.timestamp_us = NOW + 1;
-    assert_eq!(fault_of(controller().step(&bad)), Fault::LeaderStale);
+    assert_eq!(fault_of(controller().step(&bad)), Fault::LeaderInvalid);
 
     let mut bad = good;
     bad.follower.value.rel_speed = f32::INFINITY;
@@ -362,7 +378,7 @@ fn minimum_risk_minds_the_follower_and_its_limits() {
 fn mode_changes_are_logged() {
     let mut c = controller();
     c.step(&inputs((50.0, 0.0), (40.0, 0.0), 25.0));
-    c.step(&inputs((f32::NAN, 0.0), (40.0, 0.0), 25.0));
+    c.step(&inputs((50.0, 0.0), (40.0, 0.0), f32::NAN));
     let events: Vec<_> = c.events().collect();
     assert!(events.len() >= 2, "{events:?}");
 }
@@ -456,7 +472,11 @@ fn actuator_delays_make_the_look_ahead_cautious_until_the_commands_are_known() {
     // With the default dead time (100 ms) and lag (0.3 s), a controller that has issued no
     // command yet must assume the actuator may still be accelerating at a_max for half a
     // second: at 25 m/s that costs about 20 m of front value, and it brakes.
-    let mut c = Controller::new(DEFAULT_TABLE, Config::default());
+    let exact = Config {
+        sensors: SensorBounds::EXACT,
+        ..Config::default()
+    };
+    let mut c = Controller::new(DEFAULT_TABLE, exact);
     let first = c.step(&state);
     assert_eq!(first.mode, Mode::Override, "{first:?}");
     // Once its own commands cover the dead time, five lag time constants and the stale limit
@@ -798,6 +818,7 @@ fn no_command_may_take_the_ego_past_the_speed_domain() {
     };
     let config = Config {
         set_speed: 40.0,
+        sensors: SensorBounds::EXACT,
         ..Config::default()
     };
     let cmd = Controller::new(DEFAULT_TABLE, config).step(&clear(34.5));
@@ -847,13 +868,254 @@ fn the_minimum_risk_manoeuvre_brakes_harder_when_the_front_needs_it() {
     let (ego, leader) = (25.0, 20.0);
     let gap = 0.55 - front_value(0.0, leader, ego, &model);
     let mut i = inputs((gap, leader - ego), (40.0, 0.0), ego);
-    i.follower.timestamp_us = NOW - 1_000_000;
+    i.follower.timestamp_us = NOW - 1_100_000;
     let cmd = controller().step(&i);
     assert_eq!(fault_of(cmd), Fault::FollowerStale);
     assert!(cmd.acceleration < -2.5, "{cmd:?}");
     // With room ahead it is the planned manoeuvre.
     let mut i = inputs((200.0, 0.0), (40.0, 0.0), ego);
-    i.follower.timestamp_us = NOW - 1_000_000;
+    i.follower.timestamp_us = NOW - 1_100_000;
     let cmd = controller().step(&i);
     assert_eq!(cmd.acceleration, -2.0, "{cmd:?}");
+}
+
+// Issue 20: real sensors inside the argument.
+
+/// The default configuration's sensors on the ideal plant.
+fn datasheet() -> Config {
+    Config {
+        sensors: SensorBounds::default(),
+        ..ideal()
+    }
+}
+
+/// A measurement `error` (each in `[-1, 1]`, a share of its bound) away from the true values.
+fn measured(
+    sensors: &SensorBounds,
+    [gap_leader, leader_speed, gap_follower, follower_speed, ego_speed]: [f32; 5],
+    error: [f32; 5],
+) -> Inputs {
+    let range = |g: f32, e: f32| {
+        if g.is_finite() {
+            g + e * (sensors.range_error + sensors.range_error_relative * g)
+        } else {
+            g
+        }
+    };
+    let ego_measured = ego_speed
+        + error[4] * (sensors.ego_speed_error + sensors.ego_speed_error_relative * ego_speed);
+    let mut i = inputs(
+        (
+            range(gap_leader, error[0]),
+            leader_speed - ego_speed + error[1] * sensors.range_rate_error,
+        ),
+        (
+            range(gap_follower, error[2]),
+            ego_speed - follower_speed + error[3] * sensors.range_rate_error,
+        ),
+        ego_measured.max(0.0),
+    );
+    // One time for every measurement: the error alone is under test.
+    i.leader.timestamp_us = NOW;
+    i.follower.timestamp_us = NOW;
+    i.ego_speed.timestamp_us = NOW;
+    i
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+    /// Issue 20 (2): a measurement that passes the firmware's test (a positive margin) certifies
+    /// every true state its declared error allows. The true state's certificate is evaluated
+    /// exactly; the measurement is anywhere in the error box, corners included. Each half is
+    /// put under test on its own boundary: the front with no follower (the rear then far above
+    /// its level) and a leader within 3 m of the front's level, the rear with no leader.
+    #[test]
+    fn a_measurement_that_passes_certifies_every_state_its_error_allows(
+        front_half in any::<bool>(), near in 0.0f32..3.0,
+        vl in 0.0f32..35.0, gf in 0.0f32..120.0, vf in 0.0f32..35.0, ve in 0.0f32..35.0,
+        error in proptest::array::uniform5(prop_oneof![Just(-1.0f32), Just(1.0f32), -1.0f32..1.0]),
+    ) {
+        use table_format::front::front_value;
+        let config = datasheet();
+        let state = if front_half {
+            // The front value is `gap - c` here: `near` metres above the margin.
+            let c = -front_value(0.0, vl, ve, &braking_now());
+            [config.front_margin + near + c.max(0.0), vl, f32::INFINITY, 0.0, ve]
+        } else {
+            [f32::INFINITY, vl, gf, vf, ve]
+        };
+        let cmd = Controller::new(DEFAULT_TABLE, config).step(&measured(&config.sensors, state, error));
+        let truth = controller().certificate(state);
+        if let (Some(m), Some(t)) = (cmd.margin, truth) {
+            if m > 0.0 {
+                let half = if front_half { t.front } else { t.rear };
+                prop_assert!(half >= m - 1e-3,
+                    "measured margin {} but the true state has {:?} ({:?}, error {:?})", m, t, state, error);
+            }
+        }
+    }
+}
+
+/// The test above is not vacuous: over a sweep of true states, most that are certified with a
+/// metre to spare are certified from their measurements too, and the error costs margin.
+#[test]
+fn the_declared_error_costs_margin_not_the_certificate() {
+    let config = datasheet();
+    let (mut both, mut exact_only) = (0, 0);
+    for gl in [30.0f32, 60.0, 90.0, 120.0] {
+        for ve in [5.0f32, 15.0, 25.0] {
+            for gf in [20.0f32, 50.0, 80.0] {
+                let state = [gl, ve, gf, ve, ve];
+                let truth = controller().certificate(state).unwrap();
+                if truth.margin() < 1.0 {
+                    continue;
+                }
+                let worst = Controller::new(DEFAULT_TABLE, config).step(&measured(
+                    &config.sensors,
+                    state,
+                    [1.0, 1.0, 1.0, -1.0, -1.0],
+                ));
+                let m = worst.margin.unwrap();
+                assert!(
+                    m <= truth.margin() + 1e-4,
+                    "{m} against {:?} at {state:?}",
+                    truth
+                );
+                if m > 0.0 {
+                    both += 1;
+                } else {
+                    exact_only += 1;
+                }
+            }
+        }
+    }
+    assert!(both > 10 * exact_only.max(1) / 2, "{both} {exact_only}");
+}
+
+/// Issue 20 (3): the look-ahead grows with the track's age, so an aging track slows the car
+/// smoothly: the command never rises as the same measurement ages, the track is reported
+/// aging, and no minimum-risk manoeuvre runs within the covered age.
+#[test]
+fn an_aging_track_slows_the_car_smoothly_within_the_covered_age() {
+    let mut previous = f32::INFINITY;
+    let mut previous_margin = f32::INFINITY;
+    for age_ms in (0..=1_000u64).step_by(50) {
+        let mut i = inputs((45.0, 0.0), (40.0, 0.0), 25.0);
+        i.leader.timestamp_us = NOW - age_ms * 1_000;
+        i.ego_speed.timestamp_us = NOW;
+        let cmd = Controller::new(DEFAULT_TABLE, datasheet()).step(&i);
+        assert_ne!(cmd.mode, Mode::MinimumRisk, "{age_ms} ms: {cmd:?}");
+        assert!(
+            cmd.acceleration <= previous + 1e-6,
+            "{age_ms} ms: {cmd:?} after {previous}"
+        );
+        let margin = cmd.margin.unwrap();
+        assert!(margin <= previous_margin + 1e-4, "{age_ms} ms: {margin}");
+        previous = cmd.acceleration;
+        previous_margin = margin;
+        if age_ms > 130 {
+            assert_eq!(cmd.leader, firmware::TrackState::Aging);
+        }
+    }
+    assert!(previous < 0.0, "a second-old track brakes: {previous}");
+}
+
+/// Issue 20 (3): beyond the covered age the fallback is certified: the minimum-risk
+/// deceleration under the front half of the last good measurement, with its margin, for as
+/// long as the track stays lost; a track that comes back is checked, then the nominal law
+/// resumes.
+#[test]
+fn a_lost_track_runs_a_certified_fallback_and_a_track_that_returns_is_checked() {
+    let mut c = Controller::new(DEFAULT_TABLE, datasheet());
+    let state = inputs((80.0, 0.0), (40.0, 0.0), 25.0);
+    let mut last_good = at(state, NOW).leader;
+    let mut cmd = c.step(&at(state, NOW));
+    assert_eq!(cmd.mode, Mode::Nominal, "{cmd:?}");
+    // The leader's detections stop (flagged invalid); the ego and follower go on.
+    for k in 1..=150u64 {
+        let mut i = at(state, NOW + k * 20_000);
+        i.leader = last_good;
+        if k % 2 == 0 {
+            i.leader.valid = false;
+        }
+        cmd = c.step(&i);
+        if k * 20_000 > 1_000_000 {
+            assert_eq!(cmd.mode, Mode::MinimumRisk, "{k}: {cmd:?}");
+            assert_eq!(cmd.fault, Some(Fault::LeaderStale));
+            assert!(cmd.margin.unwrap() > 0.0, "{k}: {cmd:?}");
+            assert!(cmd.acceleration <= -2.0 && cmd.takeover, "{k}: {cmd:?}");
+        } else {
+            assert_ne!(cmd.mode, Mode::MinimumRisk, "{k}: {cmd:?}");
+        }
+    }
+    // It comes back, far ahead: checked, and the nominal law resumes at once.
+    last_good = at(state, NOW + 151 * 20_000).leader;
+    last_good.value.gap = 120.0;
+    let mut i = at(state, NOW + 151 * 20_000);
+    i.leader = last_good;
+    cmd = c.step(&i);
+    assert_eq!(cmd.leader, firmware::TrackState::Fresh);
+    assert_ne!(cmd.mode, Mode::MinimumRisk, "{cmd:?}");
+    assert!(cmd.margin.unwrap() > 0.0);
+}
+
+/// Issue 20 (4): a cut-in. A new vehicle 12 m ahead where the last track was 70 m: the
+/// firmware takes it as a new vehicle at once, brakes at beta in the same period (nothing
+/// gentler restores the front), and raises the takeover request.
+#[test]
+fn a_cut_in_is_answered_in_the_period_it_is_seen() {
+    let (beta, _, _) = band_and_leader();
+    let mut c = Controller::new(DEFAULT_TABLE, datasheet());
+    let state = inputs((70.0, 0.0), (40.0, 0.0), 25.0);
+    for k in 0..20u64 {
+        let cmd = c.step(&at(state, NOW + k * 20_000));
+        assert!(!cmd.takeover, "{cmd:?}");
+    }
+    let mut cut_in = at(state, NOW + 20 * 20_000);
+    cut_in.leader.value = Track {
+        gap: 12.0,
+        rel_speed: -2.0,
+    };
+    let cmd = c.step(&cut_in);
+    assert_eq!(cmd.leader, firmware::TrackState::New, "{cmd:?}");
+    assert_eq!(cmd.acceleration, beta, "{cmd:?}");
+    assert!(cmd.takeover && cmd.margin.unwrap() < 0.0, "{cmd:?}");
+    assert!(
+        c.events()
+            .any(|e| matches!(e, firmware::Event::NewLeader { gap, .. } if *gap == 12.0)),
+        "{:?}",
+        c.events().collect::<Vec<_>>()
+    );
+    // A leader that merely closes at its own pace is the same vehicle.
+    let mut closing = at(state, NOW + 21 * 20_000);
+    closing.leader.value = Track {
+        gap: 11.96,
+        rel_speed: -2.0,
+    };
+    assert_ne!(c.step(&closing).leader, firmware::TrackState::New);
+}
+
+/// Issue 20 (3): the rear value holds for ever from its measurement's time while every command
+/// is in the band, so a follower track that is not refreshed keeps it: no uncertified period,
+/// the same rear value, however the ego's speed moves meanwhile.
+#[test]
+fn a_follower_track_that_ages_keeps_its_rear_value() {
+    let mut c = Controller::new(DEFAULT_TABLE, datasheet());
+    let state = inputs((f32::INFINITY, 0.0), (30.0, -1.0), 20.0);
+    let first = c.step(&at(state, NOW));
+    let follower = at(state, NOW).follower;
+    for k in 1..=45u64 {
+        let mut i = at(state, NOW + k * 20_000);
+        i.follower = follower;
+        i.ego_speed.value = 20.0 + 0.04 * k as f32;
+        let cmd = c.step(&i);
+        assert_eq!(cmd.mode, Mode::Nominal, "{k}: {cmd:?}");
+        let expected = if k * 20_000 <= 130_000 {
+            firmware::TrackState::Fresh
+        } else {
+            firmware::TrackState::Aging
+        };
+        assert_eq!(cmd.follower, expected, "{k}");
+        assert_eq!(cmd.margin, first.margin, "{k}: {cmd:?}");
+    }
 }

@@ -71,6 +71,12 @@ pub enum Error {
     },
     /// A policy lookup on a table that stores no policy bits.
     NoPolicy,
+    /// A box given to [`crate::Table::least_over_box`] holds more than
+    /// [`crate::BOX_INTERIOR`] breakpoints on this axis; its least value is not computed.
+    BoxTooWide {
+        /// The axis (in state order).
+        axis: usize,
+    },
 }
 
 impl fmt::Display for Error {
@@ -112,6 +118,11 @@ impl fmt::Display for Error {
                 "table contents have {found} entries, the grid has {expected} nodes"
             ),
             Error::NoPolicy => f.write_str("the table stores no policy bits"),
+            Error::BoxTooWide { axis } => write!(
+                f,
+                "the box holds more than {} breakpoints on axis {axis}",
+                crate::BOX_INTERIOR
+            ),
         }
     }
 }

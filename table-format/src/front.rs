@@ -279,6 +279,23 @@ mod tests {
             prop_assert!(bound <= least + 0.01, "closed form {} above the real {}", bound, least);
         }
 
+        /// Why the firmware evaluates the front at one corner of a measurement's error box:
+        /// the value is non-decreasing in the gap and the leader's speed and non-increasing in
+        /// the ego's speed, so the corner (least gap, slowest leader, fastest ego) is never
+        /// above the value at any point of the box.
+        #[test]
+        fn the_error_boxs_worst_corner_is_its_least_value(
+            gap in -5.0f32..150.0, vl in 0.0f32..35.0, ve in 0.0f32..35.0,
+            dg in 0.0f32..3.0, dl in 0.0f32..1.0, de in 0.0f32..1.0,
+            sg in 0.0f32..1.0, sl in 0.0f32..1.0, se in 0.0f32..1.0,
+            rho in 0.0f32..1.5, ar in -3.5f32..2.0,
+        ) {
+            let m = model(6.0, 3.5, rho, ar);
+            let corner = front_value(gap, vl, ve + de, &m);
+            let inside = front_value(gap + sg * dg, vl + sl * dl, ve + se * de, &m);
+            prop_assert!(corner <= inside + 1e-3 * (1.0 + inside.abs()), "{} above {}", corner, inside);
+        }
+
         /// The property a safety filter rests on: braking at beta (no response time), the
         /// value never decreases, whatever the leader does within its bounds.
         #[test]

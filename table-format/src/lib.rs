@@ -58,7 +58,7 @@ pub use header::{
     Axis, Bounds, ErrorBound, FollowerSpeed, Game, GameKind, Header, Horizon, HorizonStatus,
     IdmParameters, PolicyEncoding, Quantization, Spacing, Verification, MAX_DIMS,
 };
-pub use table::{EgoAction, Lookup, Table};
+pub use table::{EgoAction, Lookup, Table, BOX_INTERIOR};
 #[cfg(feature = "std")]
 pub use writer::{encode, with_verification, TableContents, ValueBits};
 

@@ -7,6 +7,13 @@
 use crate::header::{Header, PolicyEncoding, Spacing, MAX_DIMS};
 use crate::{Error, CRC32, CRC_LEN, FORMAT_VERSION, MAGIC, PREAMBLE_LEN};
 
+/// Breakpoints strictly inside a box that [`Table::least_over_box`] takes per axis, at most.
+/// With the firmware's default sensor bounds a rear box holds at most three of the deployed
+/// table's gap breakpoints (0.1 m + 1.5% of the range against 0.25-3 m spacing) and four of its
+/// speed breakpoints (0.5 m/s apart): `8^3 = 512` points at most, each one pass over a cell's
+/// eight corners.
+pub const BOX_INTERIOR: usize = 6;
+
 /// The ego's bang-bang input, as stored in the policy bits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -369,24 +376,137 @@ impl<'a> Table<'a> {
             if x < g.min || x > g.max {
                 return Err(Error::OutOfDomain { axis: k });
             }
-            let i = if g.breakpoints.is_empty() {
-                // `s` is finite and in [0, last] up to rounding: clamp, then truncation is
-                // floor and fits in u32.
-                // (Not `f32::clamp`: it asserts its bounds are ordered, a panic path.)
-                let s = (x - g.min) * g.inv_spacing;
-                let s = if s > 0.0 { s } else { 0.0 };
-                let s = if s < g.last { s } else { g.last };
-                let i = (s as u32).min(g.last_cell);
-                *f = s - i as f32;
-                i
-            } else {
-                let (i, t) = locate_listed(g.breakpoints, g.last_cell, x);
-                *f = t;
-                i
-            };
+            let (i, t) = locate(g, x);
+            *f = t;
             cell.base += i as usize * g.stride;
         }
         Ok(cell)
+    }
+
+    /// The table's least interpolated value over the box `[lo, hi]` (both corners in the grid,
+    /// `lo <= hi` on every axis), exactly, up to `f32` rounding of the interpolation.
+    ///
+    /// Why it is exact: the value is multilinear on each cell. The grid's breakpoints cut the
+    /// box into sub-boxes that each lie in one cell, where the value is linear in each
+    /// coordinate separately, so its least value on a sub-box is at one of that sub-box's
+    /// corners. Every such corner has, on each axis, an end of the box or a breakpoint strictly
+    /// inside it, so the least value over those candidate points is the least over the box.
+    /// Each candidate is located once per axis (no search per point), and each point costs one
+    /// pass over its cell's `2^dims` corners.
+    ///
+    /// [`Error::BoxTooWide`] when an axis holds more than [`BOX_INTERIOR`] breakpoints strictly
+    /// inside the box (the cost is bounded: at most `(BOX_INTERIOR + 2)^dims` points);
+    /// [`Error::OutOfDomain`] or [`Error::NonFiniteState`] for a corner outside the grid or not
+    /// finite, or `lo > hi`.
+    pub fn least_over_box(&self, lo: &[f32], hi: &[f32]) -> Result<f32, Error> {
+        if lo.len() != self.dims || hi.len() != self.dims {
+            return Err(Error::DimensionMismatch {
+                expected: self.dims,
+                found: lo.len().min(hi.len()),
+            });
+        }
+        // Per axis: the candidates' cell index and position in the cell.
+        let mut cells = [[(0u32, 0f32); BOX_INTERIOR + 2]; MAX_DIMS];
+        let mut counts = [0usize; MAX_DIMS];
+        for (k, (((&l, &h), g), (out, count))) in lo
+            .iter()
+            .zip(hi.iter())
+            .zip(self.geometry.iter())
+            .zip(cells.iter_mut().zip(counts.iter_mut()))
+            .enumerate()
+        {
+            if !(l.is_finite() && h.is_finite()) {
+                return Err(Error::NonFiniteState { axis: k });
+            }
+            if l < g.min || h > g.max || l > h {
+                return Err(Error::OutOfDomain { axis: k });
+            }
+            *count = self.axis_candidates(k, g, l, h, out)?;
+        }
+        // Every combination of the axes' candidates (an odometer over the axes).
+        let mut digit = [0usize; MAX_DIMS];
+        let mut least = f32::INFINITY;
+        loop {
+            let mut cell = Cell {
+                base: 0,
+                frac: [0.0; MAX_DIMS],
+            };
+            for (((&d, axis), g), f) in digit
+                .iter()
+                .zip(cells.iter())
+                .zip(self.geometry.iter())
+                .zip(cell.frac.iter_mut())
+                .take(self.dims)
+            {
+                let (i, t) = axis.get(d).copied().unwrap_or((0, 0.0));
+                cell.base += i as usize * g.stride;
+                *f = t;
+            }
+            let mut sum = 0.0f32;
+            self.for_each_corner(&cell, |node, w| sum += w * self.stored(node));
+            if sum < least {
+                least = sum;
+            }
+            // Next combination: the first axis that is not at its last candidate moves on.
+            let mut carried = true;
+            for (d, &n) in digit.iter_mut().zip(counts.iter()).take(self.dims) {
+                *d += 1;
+                if *d < n {
+                    carried = false;
+                    break;
+                }
+                *d = 0;
+            }
+            if carried {
+                break;
+            }
+        }
+        let q = &self.header.quantization;
+        Ok(q.offset + q.scale * least)
+    }
+
+    /// The candidates of one axis for [`Table::least_over_box`]: `lo`, the breakpoints strictly
+    /// inside `(lo, hi)`, and `hi` (one candidate when `lo == hi`), each as (cell, position).
+    /// Returns how many were written.
+    fn axis_candidates(
+        &self,
+        axis: usize,
+        g: &AxisGeometry<'_>,
+        lo: f32,
+        hi: f32,
+        out: &mut [(u32, f32); BOX_INTERIOR + 2],
+    ) -> Result<usize, Error> {
+        let (first_cell, first_t) = locate(g, lo);
+        let mut n = 0usize;
+        let mut put = |c: (u32, f32), n: &mut usize| -> Result<(), Error> {
+            let slot = out.get_mut(*n).ok_or(Error::BoxTooWide { axis })?;
+            *slot = c;
+            *n += 1;
+            Ok(())
+        };
+        put((first_cell, first_t), &mut n)?;
+        if hi <= lo {
+            return Ok(n);
+        }
+        // The breakpoints after `lo`'s cell's lower node, while strictly below `hi`.
+        let mut index = first_cell as usize + 1;
+        while let Some(b) = self.breakpoint(axis, index) {
+            if b >= hi {
+                break;
+            }
+            if b > lo {
+                if n > BOX_INTERIOR {
+                    return Err(Error::BoxTooWide { axis });
+                }
+                // A breakpoint inside the grid's last cell range is the lower node of its cell.
+                let cell = u32::try_from(index).unwrap_or(u32::MAX).min(g.last_cell);
+                let t = if cell as usize == index { 0.0 } else { 1.0 };
+                put((cell, t), &mut n)?;
+            }
+            index += 1;
+        }
+        put(locate(g, hi), &mut n)?;
+        Ok(n)
     }
 
     /// Visits the `2^dims` corners of a cell in corner order (corner `c` is offset by
@@ -520,6 +640,24 @@ fn check_breakpoints(list: &[u8], min: f32, max: f32) -> Result<(), Error> {
         previous = x;
     }
     Ok(())
+}
+
+/// The cell of `x` (finite, within `[min, max]`) on one axis and the position in it:
+/// `i` in `[0, last_cell]` and `t` in `[0, 1]`. The cast of a uniform axis' scaled coordinate to
+/// an index happens only after it is clamped into `[0, last]`.
+#[inline(always)]
+fn locate(g: &AxisGeometry<'_>, x: f32) -> (u32, f32) {
+    if g.breakpoints.is_empty() {
+        // `s` is finite and in [0, last] up to rounding: clamp, then truncation is floor and
+        // fits in u32. (Not `f32::clamp`: it asserts its bounds are ordered, a panic path.)
+        let s = (x - g.min) * g.inv_spacing;
+        let s = if s > 0.0 { s } else { 0.0 };
+        let s = if s < g.last { s } else { g.last };
+        let i = (s as u32).min(g.last_cell);
+        (i, s - i as f32)
+    } else {
+        locate_listed(g.breakpoints, g.last_cell, x)
+    }
 }
 
 /// The cell of `x` (within `[min, max]`) on a listed axis and the position in it, by binary

@@ -705,3 +705,79 @@ fn a_verification_record_changes_the_header_only() {
     };
     assert!(table_format::with_verification(&plain, bad).is_err());
 }
+
+/// A rough function of the nodes: its minimum over a box is at interior breakpoints as often as
+/// at the box's ends, so a box minimum that skipped either would be caught.
+fn rough(x: f32, v: f32, w: f32) -> f32 {
+    let h = (x * 12.9898 + v * 78.233 + w * 37.719).sin() * 43_758.547;
+    h - h.floor()
+}
+
+proptest! {
+    /// `least_over_box` is never above the value anywhere in the box (sampled densely, the
+    /// box's corners and the breakpoints inside included by chance only), and a dense sample
+    /// comes within the interpolant's variation over one sample spacing of it.
+    #[test]
+    fn the_box_minimum_is_sound_and_attained(
+        x in -1.0f32..140.0, dx in 0.0f32..6.0,
+        v in 0.0f32..30.0, dv in 0.0f32..4.5,
+        w in 0.0f32..30.0, dw in 0.0f32..2.0,
+    ) {
+        let (bytes, _) = listed_table(rough, ValueBits::Sixteen);
+        let table = Table::parse(&bytes).unwrap();
+        let (lo, hi) = ([x, v, w], [x + dx, v + dv, w + dw]);
+        let least = match table.least_over_box(&lo, &hi) {
+            Ok(l) => l,
+            Err(Error::BoxTooWide { .. }) => return Ok(()),
+            Err(e) => panic!("{e}"),
+        };
+        let n = 24;
+        let mut dense = f32::INFINITY;
+        for i in 0..=n {
+            for j in 0..=n {
+                for k in 0..=n {
+                    let p = [
+                        x + dx * i as f32 / n as f32,
+                        v + dv * j as f32 / n as f32,
+                        w + dw * k as f32 / n as f32,
+                    ];
+                    let value = table.value_at(&p).unwrap();
+                    prop_assert!(least <= value + 1e-5, "{least} above {value} at {p:?}");
+                    dense = dense.min(value);
+                }
+            }
+        }
+        // Node values are in [0, 1); over a sample spacing the interpolant moves at most by the
+        // steepest cell's slope times the spacing: generous, but it fails for a minimum taken
+        // over the wrong cells.
+        prop_assert!(dense - least < 0.5, "dense {dense} against {least}");
+    }
+}
+
+#[test]
+fn the_box_minimum_finds_an_interior_breakpoint_and_refuses_what_it_cannot_bound() {
+    // A valley at the gap breakpoint 1.25 m, between box ends at 1.1 and 1.4.
+    let f = |x: f32, _: f32, _: f32| (x - 1.25).abs();
+    let (bytes, _) = listed_table(f, ValueBits::Sixteen);
+    let table = Table::parse(&bytes).unwrap();
+    let least = table
+        .least_over_box(&[1.1, 3.0, 3.0], &[1.4, 3.5, 3.2])
+        .unwrap();
+    assert!(least.abs() < 1e-3, "{least}");
+    // A point box is one lookup.
+    let point = table.least_over_box(&[1.1, 3.0, 3.0], &[1.1, 3.0, 3.0]);
+    assert_eq!(point, table.value_at(&[1.1, 3.0, 3.0]));
+    // Eight uniform breakpoints inside the follower-speed range: too wide.
+    assert_eq!(
+        table.least_over_box(&[1.0, 0.5, 1.0], &[1.0, 8.5, 1.0]),
+        Err(Error::BoxTooWide { axis: 1 })
+    );
+    assert_eq!(
+        table.least_over_box(&[1.0, 2.0, 1.0], &[1.0, 1.0, 1.0]),
+        Err(Error::OutOfDomain { axis: 1 })
+    );
+    assert_eq!(
+        table.least_over_box(&[1.0, 2.0, f32::NAN], &[1.0, 2.0, 1.0]),
+        Err(Error::NonFiniteState { axis: 2 })
+    );
+}
