@@ -17,9 +17,20 @@ use serde::Serialize;
 use table_format::Table;
 
 use crate::humans::{Follower, HumanModel, Humans, Leader};
-use crate::sim::{ActuatorModel, Car, SensorModel};
-pub use crate::world::{state_of, Half, ModeName, Trace, TracePoint};
+use crate::sim::{ActuatorModel, Car, ErrorBounds, SensorModel};
+pub use crate::world::{state_of, CutInKind, CutInScore, Half, ModeName, Trace, TracePoint};
 use crate::world::{Start, Tolerances, World};
+
+/// The sensors of an episode.
+#[derive(Debug, Clone, Copy, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Sensing {
+    /// The same sensors in every episode.
+    Fixed(SensorModel),
+    /// The datasheets' radars ([`SensorModel::datasheet`]) at the firmware's declared error
+    /// bounds, drawn per episode, with bursts of losses up to the covered track age.
+    Datasheet,
+}
 
 /// One episode's setting.
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -31,7 +42,11 @@ pub struct Episode {
     /// Simulated seconds.
     pub seconds: f32,
     /// Sensors.
-    pub sensors: SensorModel,
+    pub sensors: Sensing,
+    /// A vehicle that cuts in during the episode (outside the model): a new leader 8-30 m
+    /// ahead at -5..0 m/s relative, or a new follower 3-10 m behind closing at 0..5 m/s, at a
+    /// random time in the first 30 s.
+    pub cut_in: Option<CutInKind>,
     /// The ego's actuator.
     pub actuator: ActuatorModel,
     /// The firmware's configuration.
@@ -77,6 +92,19 @@ pub struct Outcome {
     pub initial: [f32; 5],
     /// The certificate margin at the start, m.
     pub initial_margin: f32,
+    /// Periods of the minimum-risk manoeuvre without a certificate.
+    pub uncertified_minimum_risk: u64,
+    /// Periods of the certified fallback (a track beyond its covered age).
+    pub fallback_periods: u64,
+    /// The largest track ages the firmware read, s (leader, follower).
+    pub max_track_age: [f32; 2],
+    /// The cut-in, if any, and how it was answered.
+    pub cut_in: Option<CutInScore>,
+    /// After a cut-in that ended in a collision: whether braking at beta from the period the
+    /// radar first delivered the new vehicle's track (the earliest any controller reading it can
+    /// know; the same commands before it, the same actuator, the same humans) collides too, so
+    /// that the humans alone had made it unavoidable.
+    pub cut_in_unavoidable: Option<bool>,
 }
 
 impl Outcome {
@@ -101,6 +129,11 @@ impl Outcome {
             leader_stops: s.leader_stops,
             initial,
             initial_margin,
+            uncertified_minimum_risk: s.uncertified_minimum_risk,
+            fallback_periods: s.fallback_periods,
+            max_track_age: s.max_track_age,
+            cut_in: s.cut_in,
+            cut_in_unavoidable: None,
         }
     }
 }
@@ -170,26 +203,85 @@ pub fn run_episode(
         cars,
         engaged_acceleration: 0.0,
     };
+    let sensors = match episode.sensors {
+        Sensing::Fixed(m) => m,
+        Sensing::Datasheet => SensorModel::datasheet(
+            ErrorBounds::from(&config.sensors),
+            config.sensors.max_track_age_us,
+            &mut rng,
+        ),
+    };
     let mut world = World::new(
         bytes,
         config,
         model,
         start,
-        episode.sensors,
+        sensors,
         episode.actuator,
         Tolerances::default(),
         rng.random(),
     );
     let h = world.period_seconds();
     let steps = (episode.seconds / h).round() as u64;
+    let cut_in_at = episode
+        .cut_in
+        .map(|kind| (kind, (rng.random_range(1.0..30.0f32) / h) as u64));
+    // The world at the cut-in and the humans' accelerations from then on, for the
+    // counterfactual.
+    let mut snapshot: Option<(World<'_>, Vec<(f32, f32, f32)>)> = None;
     let mut trace = trace;
-    for _ in 0..steps {
+    for k in 0..steps {
+        if let Some((kind, at)) = cut_in_at {
+            if k >= at && snapshot.is_none() {
+                let [leader, ego, follower] = world.cars();
+                let (gap, rel) = match kind {
+                    CutInKind::Leader => (
+                        rng.random_range(8.0..30.0f32),
+                        rng.random_range(-5.0..0.0f32),
+                    ),
+                    CutInKind::Follower => (
+                        rng.random_range(3.0..10.0f32),
+                        rng.random_range(-5.0..0.0f32),
+                    ),
+                };
+                // Only between the ego and the vehicle it replaces, with room to spare.
+                let room = match kind {
+                    CutInKind::Leader => leader.x - ego.x,
+                    CutInKind::Follower => ego.x - follower.x,
+                };
+                if gap + 3.0 < room {
+                    world.cut_in(kind, gap, rel);
+                    snapshot = Some((world.clone(), Vec::new()));
+                }
+            }
+        }
         let (a_leader, a_follower) = humans.accelerations(world.time(), h, world.cars(), &mut rng);
-        if !world.step(a_leader, a_follower, trace.as_deref_mut()) {
+        let running = world.step(a_leader, a_follower, trace.as_deref_mut());
+        if let (Some((_, record)), Some((command, _))) = (snapshot.as_mut(), world.last()) {
+            record.push((a_leader, a_follower, command.acceleration));
+        }
+        if !running {
             break;
         }
     }
-    Some(Outcome::of(&world, initial, initial_margin))
+    let mut outcome = Outcome::of(&world, initial, initial_margin);
+    if let (true, Some((mut counterfactual, record))) = (outcome.collided, snapshot) {
+        let beta = model.band_min;
+        let delivered = outcome
+            .cut_in
+            .and_then(|c| c.delivered_after)
+            .map_or(0, |s| (s / h).round() as usize);
+        let mut collided = false;
+        for (k, (a_leader, a_follower, command)) in record.into_iter().enumerate() {
+            let command = if k < delivered { command } else { beta };
+            if !counterfactual.step_with(a_leader, a_follower, Some(command), None) {
+                collided = true;
+                break;
+            }
+        }
+        outcome.cut_in_unavoidable = Some(collided);
+    }
+    Some(outcome)
 }
 
 /// Certificate losses by the firmware's mode at the moment of loss.
@@ -220,7 +312,7 @@ pub struct GroupSummary {
     pub leader: Leader,
     /// Follower behaviour.
     pub follower: Follower,
-    /// Whether the humans keep to the table's model.
+    /// Whether the humans keep to the table's model (no cut-in, a follower within the IDM).
     pub in_model: bool,
     /// Episodes run.
     pub episodes: usize,
@@ -258,6 +350,41 @@ pub struct GroupSummary {
     pub standstill_starts: usize,
     /// Seed of the episode with the smallest margin (to replay it).
     pub worst_seed: u64,
+    /// Periods of the minimum-risk manoeuvre without a certificate, over the group.
+    pub uncertified_minimum_risk_periods: u64,
+    /// Periods of the certified fallback over the group, and the episodes that ran it.
+    pub fallback_periods: u64,
+    /// See `fallback_periods`.
+    pub fallback_episodes: usize,
+    /// The largest track age the firmware read, s (leader, follower).
+    pub max_track_age: [f32; 2],
+    /// Cut-ins, if the group has them.
+    pub cut_ins: Option<CutInSummary>,
+}
+
+/// How a group's cut-ins were answered.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct CutInSummary {
+    /// Episodes with a cut-in.
+    pub episodes: usize,
+    /// The mean and largest time from the cut-in to the first track of the new vehicle, s
+    /// (the radar's cycle and latency).
+    pub delivered_after_mean: f32,
+    /// See `delivered_after_mean`.
+    pub delivered_after_max: f32,
+    /// Cut-ins the firmware reported as a new vehicle in the period of the first track.
+    pub recognised_at_once: usize,
+    /// Cut-ins whose front was not certified at the first track.
+    pub front_uncertified: usize,
+    /// Of those, the ones braked at beta within one period of the first track.
+    pub beta_within_one_period: usize,
+    /// The mean hardest command in the 5 s after a cut-in, m/s^2.
+    pub mean_hardest_command: f32,
+    /// Collisions after a cut-in.
+    pub collisions: usize,
+    /// Of those, the ones that braking at beta from the cut-in on would not have avoided
+    /// either: the humans alone had made them unavoidable.
+    pub unavoidable: usize,
 }
 
 /// Runs `episodes` episodes of one group in parallel, seeds `seed..seed + episodes`.
@@ -314,7 +441,7 @@ pub fn run_group(
     let summary = GroupSummary {
         leader: template.leader,
         follower: template.follower,
-        in_model: template.follower.in_model(),
+        in_model: template.follower.in_model() && template.cut_in.is_none(),
         episodes: outcomes.len(),
         collisions: count(&|o| o.collided),
         collisions_unavoidable: count(&|o| o.collided && o.unavoidable_from.is_some()),
@@ -333,6 +460,56 @@ pub fn run_group(
         mean_leader_stops: mean(&|o| o.leader_stops as f32),
         standstill_starts: count(&|o| o.initial[4] == 0.0),
         worst_seed: worst,
+        uncertified_minimum_risk_periods: outcomes
+            .iter()
+            .map(|(_, o)| o.uncertified_minimum_risk)
+            .sum(),
+        fallback_periods: outcomes.iter().map(|(_, o)| o.fallback_periods).sum(),
+        fallback_episodes: count(&|o| o.fallback_periods > 0),
+        max_track_age: [0, 1].map(|i| {
+            outcomes
+                .iter()
+                .map(|(_, o)| o.max_track_age[i])
+                .fold(0.0, f32::max)
+        }),
+        cut_ins: template.cut_in.map(|_| cut_in_summary(&outcomes)),
     };
     (summary, outcomes)
+}
+
+/// The cut-ins of a group's outcomes.
+fn cut_in_summary(outcomes: &[(u64, Outcome)]) -> CutInSummary {
+    let cuts: Vec<(&Outcome, &CutInScore)> = outcomes
+        .iter()
+        .filter_map(|(_, o)| o.cut_in.as_ref().map(|c| (o, c)))
+        .collect();
+    let n = cuts.len().max(1) as f32;
+    let delivered: Vec<f32> = cuts.iter().filter_map(|(_, c)| c.delivered_after).collect();
+    CutInSummary {
+        episodes: cuts.len(),
+        delivered_after_mean: delivered.iter().sum::<f32>() / delivered.len().max(1) as f32,
+        delivered_after_max: delivered.iter().copied().fold(0.0, f32::max),
+        recognised_at_once: cuts
+            .iter()
+            .filter(|(_, c)| c.recognised_periods == Some(0))
+            .count(),
+        front_uncertified: cuts
+            .iter()
+            .filter(|(_, c)| c.front_certified_at_delivery == Some(false))
+            .count(),
+        beta_within_one_period: cuts
+            .iter()
+            .filter(|(_, c)| c.beta_periods.is_some_and(|p| p <= 1))
+            .count(),
+        mean_hardest_command: cuts
+            .iter()
+            .map(|(_, c)| c.hardest_command.min(2.0))
+            .sum::<f32>()
+            / n,
+        collisions: cuts.iter().filter(|(o, _)| o.collided).count(),
+        unavoidable: cuts
+            .iter()
+            .filter(|(o, _)| o.cut_in_unavoidable == Some(true))
+            .count(),
+    }
 }

@@ -29,7 +29,7 @@ use serde::{Deserialize, Serialize};
 use table_format::Table;
 
 use crate::humans::{follower_speed_gradient, idm, HumanModel};
-use crate::sim::{ActuatorModel, Car, SensorModel};
+use crate::sim::{ActuatorModel, Car, ErrorBounds, SensorModel};
 use crate::world::{state_of, Half, ModeName, Score, Start, Tolerances, Trace, World};
 
 /// How the humans' inputs were chosen.
@@ -396,19 +396,25 @@ impl<'t> Setting<'t> {
         None
     }
 
-    /// A fresh case's sensors and actuator: exact measurements aged 0-5 periods per channel,
-    /// the dead time at 0, half or all of the plant's limit and the lag anywhere up to it (half
-    /// the time at it).
+    /// A fresh case's sensors and actuator: three times in four the datasheets' radars
+    /// ([`SensorModel::datasheet`], the firmware's declared error bounds, bursts of losses up to
+    /// the covered track age), else exact measurements aged 0-5 periods per channel; the dead
+    /// time at 0, half or all of the plant's limit and the lag anywhere up to it (half the time
+    /// at it).
     fn draw_delays(&self, rng: &mut impl Rng) -> (SensorModel, ActuatorModel) {
         let c = &self.config;
-        let stale = c.stale_periods;
-        let sensors = SensorModel {
-            latency_periods: [
-                rng.random_range(0..=stale),
-                rng.random_range(0..=stale),
-                rng.random_range(0..=stale),
-            ],
-            ..SensorModel::IDEAL
+        let sensors = if rng.random::<f32>() < 0.75 {
+            SensorModel::datasheet(
+                ErrorBounds::from(&c.sensors),
+                c.sensors.max_track_age_us,
+                rng,
+            )
+        } else {
+            SensorModel::exact_with_latencies([
+                rng.random_range(0..=5),
+                rng.random_range(0..=5),
+                rng.random_range(0..=5),
+            ])
         };
         let actuator = ActuatorModel {
             dead_time: self.plant.dead_time * [0.0, 0.5, 1.0, 1.0][rng.random_range(0..4)],

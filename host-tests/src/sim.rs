@@ -207,45 +207,233 @@ impl Actuator {
     }
 }
 
-/// Sensor imperfections.
+/// How a measurement's error is drawn inside its declared bound.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Noise {
+    /// Exact measurements.
+    None,
+    /// Uniform in the box, drawn anew for every measurement.
+    Uniform,
+    /// The box's worst corner for the front on every measurement: gaps read long, range rates
+    /// read opening, the ego's speed reads low.
+    WorstCorner,
+}
+
+/// The error bounds the noise is drawn within (the firmware's declared
+/// [`firmware::SensorBounds`], or a share of them).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ErrorBounds {
+    /// Range error, absolute part, m.
+    pub range: f32,
+    /// Range error, relative part.
+    pub range_relative: f32,
+    /// Range-rate error, m/s.
+    pub range_rate: f32,
+    /// Ego-speed error, absolute part, m/s.
+    pub ego_speed: f32,
+    /// Ego-speed error, relative part.
+    pub ego_speed_relative: f32,
+}
+
+impl From<&firmware::SensorBounds> for ErrorBounds {
+    fn from(b: &firmware::SensorBounds) -> Self {
+        ErrorBounds {
+            range: b.range_error,
+            range_relative: b.range_error_relative,
+            range_rate: b.range_rate_error,
+            ego_speed: b.ego_speed_error,
+            ego_speed_relative: b.ego_speed_error_relative,
+        }
+    }
+}
+
+/// One sensor channel's timing and losses.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Channel {
+    /// The sensor's cycle, microseconds (0: a measurement every control period). A sample is
+    /// taken at the first control period at or after its time, and stamped with that time.
+    pub cycle_us: u32,
+    /// Latency from the measurement to its delivery, microseconds.
+    pub latency_us: u32,
+    /// Extra latency, uniform in `[0, jitter_us]`, per measurement.
+    pub jitter_us: u32,
+    /// Probability that a cycle's measurement is lost.
+    pub dropout: f32,
+    /// Rate of bursts of lost measurements, per second.
+    pub bursts_per_second: f32,
+    /// A burst lasts uniformly up to this long, microseconds.
+    pub burst_max_us: u32,
+}
+
+impl Channel {
+    /// A measurement every period, delivered at once, never lost.
+    pub const IDEAL: Channel = Channel {
+        cycle_us: 0,
+        latency_us: 0,
+        jitter_us: 0,
+        dropout: 0.0,
+        bursts_per_second: 0.0,
+        burst_max_us: 0,
+    };
+}
+
+/// Sensor imperfections: the error inside its bounds, and per channel (leader track, follower
+/// track, ego speed) the cycle, latency and losses.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SensorModel {
-    /// Standard deviation of the gap noise, m (uniform noise of that standard deviation).
-    pub gap_noise: f32,
-    /// Standard deviation of the relative-speed and ego-speed noise, m/s.
-    pub speed_noise: f32,
-    /// Measurement latency per channel (leader track, follower track, ego speed), control
-    /// periods: the value the firmware sees on that channel is that old, stamped with its time.
-    pub latency_periods: [u32; 3],
-    /// Probability that a measurement is not refreshed in a period (it keeps its old stamp).
-    pub dropout: f32,
+    /// How the error is drawn.
+    pub noise: Noise,
+    /// The bounds it is drawn within.
+    pub bounds: ErrorBounds,
+    /// Leader track, follower track, ego speed.
+    pub channels: [Channel; 3],
 }
 
 impl SensorModel {
     /// Perfect sensors.
     pub const IDEAL: SensorModel = SensorModel {
-        gap_noise: 0.0,
-        speed_noise: 0.0,
-        latency_periods: [0; 3],
-        dropout: 0.0,
+        noise: Noise::None,
+        bounds: ErrorBounds {
+            range: 0.0,
+            range_relative: 0.0,
+            range_rate: 0.0,
+            ego_speed: 0.0,
+            ego_speed_relative: 0.0,
+        },
+        channels: [Channel::IDEAL; 3],
     };
 
-    /// Exact measurements, every channel `periods` old.
+    /// Exact measurements, every channel `periods` control periods of 20 ms old.
     pub fn exact_with_latency(periods: u32) -> Self {
-        SensorModel {
-            latency_periods: [periods; 3],
-            ..SensorModel::IDEAL
+        SensorModel::exact_with_latencies([periods; 3])
+    }
+
+    /// Exact measurements, each channel its own number of 20 ms periods old.
+    pub fn exact_with_latencies(periods: [u32; 3]) -> Self {
+        let mut m = SensorModel::IDEAL;
+        for (c, p) in m.channels.iter_mut().zip(periods) {
+            c.latency_us = p * 20_000;
         }
+        m
+    }
+
+    /// The radars of the datasheets (ANCHORS.md), drawn for one episode: the error inside
+    /// `bounds` (uniform, or the worst corner a third of the time), radar cycles of 50-80 ms,
+    /// latencies of 40-100 ms with up to 30 ms of jitter per channel, 10% of the refreshes lost
+    /// at random and bursts of losses (one every 20 s on average) up to `burst_max_us`; the
+    /// ego's speed every 20 ms, 0-20 ms old, never lost.
+    pub fn datasheet(bounds: ErrorBounds, burst_max_us: u32, rng: &mut impl Rng) -> Self {
+        let noise = if rng.random::<f32>() < 1.0 / 3.0 {
+            Noise::WorstCorner
+        } else {
+            Noise::Uniform
+        };
+        let mut radar = || Channel {
+            cycle_us: rng.random_range(50_000..=80_000),
+            latency_us: rng.random_range(40_000..=100_000),
+            jitter_us: rng.random_range(0..=30_000),
+            dropout: 0.1,
+            bursts_per_second: 0.05,
+            burst_max_us,
+        };
+        let (leader, follower) = (radar(), radar());
+        let ego = Channel {
+            cycle_us: 20_000,
+            latency_us: rng.random_range(0..=20_000),
+            ..Channel::IDEAL
+        };
+        SensorModel {
+            noise,
+            bounds,
+            channels: [leader, follower, ego],
+        }
+    }
+
+    /// The longest a measurement that is not lost can be old when the firmware reads it:
+    /// latency, jitter and one cycle, per channel, microseconds.
+    pub fn delivered_age_us(&self) -> [u64; 3] {
+        self.channels
+            .map(|c| u64::from(c.latency_us) + u64::from(c.jitter_us) + u64::from(c.cycle_us))
     }
 }
 
-/// The world the firmware sees through its sensors: keeps a short history for latency and the
-/// last delivered measurements for dropouts.
+/// One channel's state: when its next sample is due, the measurements on their way, the last
+/// delivered, and the end of a burst of losses.
+#[derive(Debug, Clone)]
+struct ChannelState<T> {
+    next_sample_us: u64,
+    in_flight: std::collections::VecDeque<(u64, Measurement<T>)>,
+    delivered: Option<Measurement<T>>,
+    burst_until_us: u64,
+}
+
+impl<T: Copy> ChannelState<T> {
+    fn new() -> Self {
+        ChannelState {
+            next_sample_us: 0,
+            in_flight: std::collections::VecDeque::new(),
+            delivered: None,
+            burst_until_us: 0,
+        }
+    }
+
+    /// Samples (`value` at `now_us`) if due and not lost, delivers what has arrived, and returns
+    /// the last delivered measurement (`value` at once on the first period: the sensor has
+    /// been tracking before the episode).
+    fn step(&mut self, c: &Channel, now_us: u64, value: T, rng: &mut impl Rng) -> Measurement<T> {
+        if now_us >= self.next_sample_us {
+            self.next_sample_us = if c.cycle_us == 0 {
+                now_us + 1
+            } else {
+                self.next_sample_us
+                    .max(now_us.saturating_sub(u64::from(c.cycle_us)))
+                    + u64::from(c.cycle_us)
+            };
+            let cycle_s = c.cycle_us.max(20_000) as f32 * 1e-6;
+            if c.bursts_per_second > 0.0 && rng.random::<f32>() < c.bursts_per_second * cycle_s {
+                self.burst_until_us = now_us + rng.random_range(0..=u64::from(c.burst_max_us));
+            }
+            let lost = now_us < self.burst_until_us || rng.random::<f32>() < c.dropout;
+            if !lost || self.delivered.is_none() {
+                let jitter = if c.jitter_us > 0 {
+                    rng.random_range(0..=u64::from(c.jitter_us))
+                } else {
+                    0
+                };
+                let at = if self.delivered.is_none() {
+                    now_us
+                } else {
+                    now_us + u64::from(c.latency_us) + jitter
+                };
+                self.in_flight
+                    .push_back((at, Measurement::new(value, now_us)));
+            }
+        }
+        while let Some(&(at, m)) = self.in_flight.front() {
+            if at > now_us {
+                break;
+            }
+            self.in_flight.pop_front();
+            // A measurement overtaken by a newer one (jitter) is not used.
+            if self
+                .delivered
+                .is_none_or(|d| d.timestamp_us < m.timestamp_us)
+            {
+                self.delivered = Some(m);
+            }
+        }
+        self.delivered.unwrap_or(Measurement::new(value, now_us))
+    }
+}
+
+/// The world the firmware sees through its sensors (module docs of [`SensorModel`]).
 #[derive(Debug, Clone)]
 pub struct Sensors {
     model: SensorModel,
-    history: std::collections::VecDeque<(u64, [Car; 3])>,
-    last: Option<Inputs>,
+    leader: ChannelState<Track>,
+    follower: ChannelState<Track>,
+    ego: ChannelState<f32>,
 }
 
 impl Sensors {
@@ -253,76 +441,43 @@ impl Sensors {
     pub fn new(model: SensorModel) -> Self {
         Sensors {
             model,
-            history: std::collections::VecDeque::new(),
-            last: None,
+            leader: ChannelState::new(),
+            follower: ChannelState::new(),
+            ego: ChannelState::new(),
         }
+    }
+
+    /// The model.
+    pub fn model(&self) -> &SensorModel {
+        &self.model
     }
 
     /// The firmware's inputs at `now_us` for the true state `cars` (leader, ego, follower).
     pub fn measure(&mut self, now_us: u64, cars: [Car; 3], rng: &mut impl Rng) -> Inputs {
-        self.history.push_back((now_us, cars));
-        let deepest = self
-            .model
-            .latency_periods
-            .iter()
-            .copied()
-            .max()
-            .unwrap_or(0) as usize;
-        while self.history.len() > deepest + 1 {
-            self.history.pop_front();
-        }
-        // Each channel's state and stamp, `latency` periods back (the oldest kept, early on).
-        let back = |latency: u32| {
-            let n = self.history.len();
-            self.history[n - 1 - (latency as usize).min(n - 1)]
+        let [leader, ego, follower] = cars;
+        let b = self.model.bounds;
+        let error: [f32; 5] = match self.model.noise {
+            Noise::None => [0.0; 5],
+            Noise::Uniform => std::array::from_fn(|_| rng.random::<f32>() * 2.0 - 1.0),
+            Noise::WorstCorner => [1.0, 1.0, 1.0, 1.0, -1.0],
         };
-        let [l_lat, f_lat, e_lat] = self.model.latency_periods;
-        let (leader_stamp, [leader, ego_l, _]) = back(l_lat);
-        let (follower_stamp, [_, ego_f, follower]) = back(f_lat);
-        let (ego_stamp, [_, ego, _]) = back(e_lat);
-        let mut noise = |sd: f32| {
-            if sd > 0.0 {
-                // Uniform on [-sqrt(3) sd, sqrt(3) sd]: standard deviation sd.
-                (rng.random::<f32>() * 2.0 - 1.0) * 1.732_050_8 * sd
-            } else {
-                0.0
-            }
+        let range = |g: f32, e: f32| g + e * (b.range + b.range_relative * g.max(0.0));
+        let leader_track = Track {
+            gap: range(leader.x - ego.x, error[0]),
+            rel_speed: leader.v - ego.v + error[1] * b.range_rate,
         };
-        let fresh = Inputs {
-            leader: Measurement::new(
-                Track {
-                    gap: leader.x - ego_l.x + noise(self.model.gap_noise),
-                    rel_speed: leader.v - ego_l.v + noise(self.model.speed_noise),
-                },
-                leader_stamp,
-            ),
-            follower: Measurement::new(
-                Track {
-                    gap: ego_f.x - follower.x + noise(self.model.gap_noise),
-                    rel_speed: ego_f.v - follower.v + noise(self.model.speed_noise),
-                },
-                follower_stamp,
-            ),
-            ego_speed: Measurement::new(
-                (ego.v + noise(self.model.speed_noise)).max(0.0),
-                ego_stamp,
-            ),
+        let follower_track = Track {
+            gap: range(ego.x - follower.x, error[2]),
+            rel_speed: ego.v - follower.v + error[3] * b.range_rate,
+        };
+        let ego_speed = (ego.v + error[4] * (b.ego_speed + b.ego_speed_relative * ego.v)).max(0.0);
+        let [cl, cf, ce] = self.model.channels;
+        Inputs {
+            leader: self.leader.step(&cl, now_us, leader_track, rng),
+            follower: self.follower.step(&cf, now_us, follower_track, rng),
+            ego_speed: self.ego.step(&ce, now_us, ego_speed, rng),
             now_us,
-        };
-        let mut inputs = fresh;
-        if let Some(last) = self.last {
-            if rng.random::<f32>() < self.model.dropout {
-                inputs.leader = last.leader;
-            }
-            if rng.random::<f32>() < self.model.dropout {
-                inputs.follower = last.follower;
-            }
-            if rng.random::<f32>() < self.model.dropout {
-                inputs.ego_speed = last.ego_speed;
-            }
         }
-        self.last = Some(inputs);
-        inputs
     }
 }
 

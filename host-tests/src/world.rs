@@ -152,6 +152,52 @@ pub struct Score {
     pub leader_stops: u32,
     /// The largest ego speed, m/s.
     pub max_ego_speed: f32,
+    /// Periods of the minimum-risk manoeuvre without a certificate (a fault the argument does
+    /// not cover: the ego's speed signal lost, a clock jump).
+    pub uncertified_minimum_risk: u64,
+    /// Periods of the certified fallback: a track beyond its covered age, the minimum-risk
+    /// deceleration under the front half of its last measurement.
+    pub fallback_periods: u64,
+    /// The largest age of a track the firmware read, s (leader, follower).
+    pub max_track_age: [f32; 2],
+    /// What became of a cut-in, if the episode had one.
+    pub cut_in: Option<CutInScore>,
+}
+
+/// A vehicle that cuts in: a new leader ahead of the ego, or a new follower behind it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CutInKind {
+    /// A new leader between the ego and its leader.
+    Leader,
+    /// A new follower between the ego and its follower.
+    Follower,
+}
+
+/// How the firmware answered a cut-in.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct CutInScore {
+    /// Which vehicle cut in.
+    pub kind: CutInKind,
+    /// When, s.
+    pub at: f32,
+    /// The new vehicle's gap and relative speed then (m, m/s; the relative speed in the
+    /// track's convention).
+    pub gap: f32,
+    /// See `gap`.
+    pub rel_speed: f32,
+    /// How long after the cut-in the firmware first read a track of the new vehicle, s.
+    pub delivered_after: Option<f32>,
+    /// How many periods after that delivery the firmware reported the track as a new
+    /// vehicle (0: in the same period).
+    pub recognised_periods: Option<u64>,
+    /// How many periods after that delivery the first command was braking at beta (when the
+    /// front was not certified at the delivery).
+    pub beta_periods: Option<u64>,
+    /// Whether the firmware's front half was certified at the delivery.
+    pub front_certified_at_delivery: Option<bool>,
+    /// The hardest command in the 5 s after the cut-in, m/s^2.
+    pub hardest_command: f32,
 }
 
 impl Score {
@@ -170,6 +216,10 @@ impl Score {
             max_jerk: 0.0,
             leader_stops: 0,
             max_ego_speed: 0.0,
+            uncertified_minimum_risk: 0,
+            fallback_periods: 0,
+            max_track_age: [0.0; 2],
+            cut_in: None,
         }
     }
 
@@ -247,6 +297,8 @@ pub struct World<'t> {
     last_command: Option<f32>,
     last: Option<(Command, Option<Certificate>)>,
     score: Score,
+    /// A cut-in under way: its period and the period its track was first delivered.
+    cut_in: Option<(u64, Option<u64>)>,
 }
 
 impl<'t> World<'t> {
@@ -276,6 +328,81 @@ impl<'t> World<'t> {
             last_command: None,
             last: None,
             score: Score::new(),
+            cut_in: None,
+        }
+    }
+
+    /// A vehicle cuts in now, `gap` metres ahead of (or behind) the ego with relative speed
+    /// `rel_speed` in the track's convention (ahead: `v_new - v_ego`; behind: `v_ego - v_new`).
+    /// It replaces the leader (or the follower) from here on; the humans' accelerations then
+    /// drive it.
+    pub fn cut_in(&mut self, kind: CutInKind, gap: f32, rel_speed: f32) {
+        let ego = self.cars[1];
+        match kind {
+            CutInKind::Leader => {
+                self.cars[0] = Car {
+                    x: ego.x + gap,
+                    v: (ego.v + rel_speed).clamp(0.0, self.model.max_speed),
+                }
+            }
+            CutInKind::Follower => {
+                self.cars[2] = Car {
+                    x: ego.x - gap,
+                    v: (ego.v - rel_speed).clamp(0.0, self.model.max_speed),
+                }
+            }
+        }
+        self.cut_in = Some((self.period, None));
+        self.score.cut_in = Some(CutInScore {
+            kind,
+            at: self.time(),
+            gap,
+            rel_speed,
+            delivered_after: None,
+            recognised_periods: None,
+            beta_periods: None,
+            front_certified_at_delivery: None,
+            hardest_command: f32::INFINITY,
+        });
+    }
+
+    /// The cut-in's bookkeeping for this period's inputs and command.
+    fn score_cut_in(&mut self, inputs: &firmware::Inputs, command: &Command) {
+        let (Some((at_period, delivered)), Some(score)) = (self.cut_in, self.score.cut_in.as_mut())
+        else {
+            return;
+        };
+        let cut_at_us = at_period * self.period_us;
+        let h = self.period_us as f32 * 1e-6;
+        if self.period <= at_period + (5.0 / h) as u64 {
+            score.hardest_command = score.hardest_command.min(command.acceleration);
+        }
+        let (track, state) = match score.kind {
+            CutInKind::Leader => (&inputs.leader, command.leader),
+            CutInKind::Follower => (&inputs.follower, command.follower),
+        };
+        let delivered = match delivered {
+            Some(d) => d,
+            None if track.timestamp_us >= cut_at_us => {
+                score.delivered_after = Some((self.period - at_period) as f32 * h);
+                // The front's answer is the leader's business; a new follower changes the rear
+                // value only, which the band keeps whatever the command.
+                score.front_certified_at_delivery =
+                    (score.kind == CutInKind::Leader).then_some(!command.takeover);
+                self.cut_in = Some((at_period, Some(self.period)));
+                self.period
+            }
+            None => return,
+        };
+        let since = self.period - delivered;
+        if score.recognised_periods.is_none() && state == firmware::TrackState::New {
+            score.recognised_periods = Some(since);
+        }
+        if score.beta_periods.is_none()
+            && score.front_certified_at_delivery == Some(false)
+            && command.acceleration <= self.model.band_min
+        {
+            score.beta_periods = Some(since);
         }
     }
 
@@ -316,6 +443,18 @@ impl<'t> World<'t> {
     /// `a_follower` (m/s^2, the caller keeps them within the model) over the period. Returns
     /// false once the episode has ended in a collision (nothing moves after it).
     pub fn step(&mut self, a_leader: f32, a_follower: f32, trace: Option<&mut Trace>) -> bool {
+        self.step_with(a_leader, a_follower, None, trace)
+    }
+
+    /// [`World::step`], with the firmware's command replaced by `command` when given (for
+    /// counterfactuals: what braking at beta from a moment on would have done).
+    pub fn step_with(
+        &mut self,
+        a_leader: f32,
+        a_follower: f32,
+        command_override: Option<f32>,
+        trace: Option<&mut Trace>,
+    ) -> bool {
         if self.score.collision_time.is_some() {
             return false;
         }
@@ -334,7 +473,11 @@ impl<'t> World<'t> {
             self.score.unavoidable_from = Some(t);
         }
         let inputs = self.sensors.measure(now_us, self.cars, &mut self.rng);
-        let command = self.controller.step(&inputs);
+        let mut command = self.controller.step(&inputs);
+        if let Some(a) = command_override {
+            command.acceleration = a;
+        }
+        self.score_cut_in(&inputs, &command);
         let certificate = self.certificate();
         let s = &mut self.score;
         if let Some(c) = certificate {
@@ -355,6 +498,16 @@ impl<'t> World<'t> {
         };
         s.periods_by_mode[mode_index] += 1;
         s.periods += 1;
+        if command.mode == Mode::MinimumRisk {
+            if command.margin.is_some() {
+                s.fallback_periods += 1;
+            } else {
+                s.uncertified_minimum_risk += 1;
+            }
+        }
+        let age = |t: u64| now_us.saturating_sub(t) as f32 * 1e-6;
+        s.max_track_age[0] = s.max_track_age[0].max(age(inputs.leader.timestamp_us));
+        s.max_track_age[1] = s.max_track_age[1].max(age(inputs.follower.timestamp_us));
         let h = self.period_us as f32 * 1e-6;
         if let Some(prev) = self.last_command {
             s.max_jerk = s.max_jerk.max((command.acceleration - prev).abs() / h);

@@ -164,10 +164,7 @@ fn c_measurements_of_different_ages_are_moved_to_one_time() {
     };
     start.cars[0].x = gap_for_front_margin(start, 0.05);
     assert!(certified(&start));
-    let sensors = SensorModel {
-        latency_periods: [0, 3, 0],
-        ..SensorModel::IDEAL
-    };
+    let sensors = SensorModel::exact_with_latencies([0, 3, 0]);
     let s = run(&table, &case(start, -1.0, sensors, 30.0));
     assert_eq!(s.periods_by_mode[3], 0, "uncertified periods: {s:?}");
     assert!(!s.failed(), "{s:?}");
