@@ -80,7 +80,7 @@ mod tests {
         // requested, both tracks missing), the counter, then the CRC.
         assert_eq!(i16::from_le_bytes([bytes[0], bytes[1]]), -2000);
         assert_eq!(bytes[2], 2);
-        assert_eq!(bytes[3], 0b100_100_10);
+        assert_eq!(bytes[3], 0b1001_0010);
         assert_eq!(bytes[4], 41);
         assert_eq!(bytes[5], frame_crc(ACCEL_REQUEST_ID, &bytes[..5]));
         assert_eq!(&bytes[6..], &[0, 0]);

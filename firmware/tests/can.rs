@@ -198,7 +198,7 @@ fn every_single_bit_flip_and_a_wrong_identifier_fail_the_crc() {
     let sent = can::encode_command(&cmd, 5);
     assert_eq!(sent[5], can::frame_crc(can::ACCEL_REQUEST_ID, &sent[..5]));
     // Certified, takeover, leader new (3), follower aging (1).
-    assert_eq!(sent[3], 0b001_011_11);
+    assert_eq!(sent[3], 0b0010_1111);
     assert_eq!(sent[4], 5);
 }
 

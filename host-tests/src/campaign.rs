@@ -181,6 +181,10 @@ pub fn sample_start(
     None
 }
 
+/// One period after a cut-in: the leader's and follower's accelerations and the firmware's
+/// command.
+type Period = (f32, f32, f32);
+
 /// Runs one episode on `bytes` (a split table); with `trace`, records the trajectory. `None`
 /// if the table is not a split table or no certified start was found.
 pub fn run_episode(
@@ -228,7 +232,7 @@ pub fn run_episode(
         .map(|kind| (kind, (rng.random_range(1.0..30.0f32) / h) as u64));
     // The world at the cut-in and the humans' accelerations from then on, for the
     // counterfactual.
-    let mut snapshot: Option<(World<'_>, Vec<(f32, f32, f32)>)> = None;
+    let mut snapshot: Option<(World<'_>, Vec<Period>)> = None;
     let mut trace = trace;
     for k in 0..steps {
         if let Some((kind, at)) = cut_in_at {

@@ -18,6 +18,7 @@ pub mod grid;
 pub mod hji;
 pub mod output;
 pub mod rear;
+pub mod robust;
 pub mod run;
 pub mod scheme;
 pub mod semi_lagrangian;

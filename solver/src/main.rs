@@ -61,6 +61,21 @@ struct VerifyArgs {
     /// refuses a split table without a complete one).
     #[arg(long, value_name = "FILE")]
     write: Option<PathBuf>,
+    /// The declared range error's absolute part, m (the firmware's `SensorBounds`).
+    #[arg(long, default_value_t = 0.1)]
+    range_error: f32,
+    /// The declared range error's relative part.
+    #[arg(long, default_value_t = 0.015)]
+    range_error_relative: f32,
+    /// The declared range-rate error, m/s.
+    #[arg(long, default_value_t = 0.14)]
+    range_rate_error: f32,
+    /// The declared ego-speed error's absolute part, m/s.
+    #[arg(long, default_value_t = 0.1)]
+    ego_speed_error: f32,
+    /// The declared ego-speed error's relative part.
+    #[arg(long, default_value_t = 0.005)]
+    ego_speed_error_relative: f32,
 }
 
 /// Fails at once, naming the folder, if `out` cannot be written: a solve takes minutes, and
@@ -285,6 +300,52 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path) -> Result<()> {
         report.dip,
         report.seconds
     );
+    // The measurement space (solver::robust): exact sensors against the declared error.
+    let error = solver::robust::MeasurementError {
+        range: v.range_error,
+        range_relative: v.range_error_relative,
+        range_rate: v.range_rate_error,
+        ego_speed: v.ego_speed_error,
+        ego_speed_relative: v.ego_speed_error_relative,
+        ..solver::robust::MeasurementError::default()
+    };
+    for (name, x) in [
+        ("--range-error", v.range_error),
+        ("--range-error-relative", v.range_error_relative),
+        ("--range-rate-error", v.range_rate_error),
+        ("--ego-speed-error", v.ego_speed_error),
+        ("--ego-speed-error-relative", v.ego_speed_error_relative),
+    ] {
+        if !(x.is_finite() && (0.0..1.0).contains(&x)) {
+            anyhow::bail!("{name}: an error bound must be a finite number in [0, 1) (got {x})");
+        }
+    }
+    let table = table_format::Table::parse(&bytes)?;
+    let axes = [rear.axis(0), rear.axis(1), rear.axis(2)];
+    let exact = solver::robust::robustness(
+        &table,
+        &report,
+        axes,
+        &solver::robust::MeasurementError::EXACT,
+    );
+    let declared = solver::robust::robustness(&table, &report, axes, &error);
+    solver::output::write_json(
+        &dir.join("robustness.json"),
+        &serde_json::json!({ "exact": exact, "declared": declared }),
+    )?;
+    solver::robust::plot(&table, &report, axes, &[&exact, &declared], &dir, 20.0)?;
+    for r in [&exact, &declared] {
+        println!(
+            "  measurement error {:?}: {} of {} measured rear states pass the firmware's test ({:.2}%), \
+             {} of them with a box touching an unproven cell, {} too wide to evaluate",
+            r.error,
+            r.passing,
+            r.measurements,
+            100.0 * r.passing_share,
+            r.unproven,
+            r.too_wide
+        );
+    }
     println!("  wrote {}", dir.display());
     if let Some(path) = &v.write {
         std::fs::write(path, &recorded).with_context(|| format!("writing {}", path.display()))?;
@@ -295,6 +356,13 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path) -> Result<()> {
             "{} certified cells are not proven (see {})",
             report.certified - report.proven,
             dir.join("report.json").display()
+        );
+    }
+    if declared.unproven > 0 || exact.unproven > 0 {
+        anyhow::bail!(
+            "{} passing measurements have a box that touches an unproven cell (see {})",
+            declared.unproven + exact.unproven,
+            dir.join("robustness.json").display()
         );
     }
     Ok(())
