@@ -17,16 +17,17 @@ fn refused(args: &[&str], names: &str) {
 }
 
 #[test]
-fn the_campaign_refuses_durations_counts_probabilities_and_noise_that_mean_nothing() {
+fn the_campaign_refuses_durations_counts_latencies_and_sensors_that_mean_nothing() {
     for (args, name) in [
         (&["campaign", "--seconds=-5"][..], "--seconds"),
         (&["campaign", "--seconds", "0"], "--seconds"),
         (&["campaign", "--seconds", "nan"], "--seconds"),
         (&["campaign", "--seconds", "inf"], "--seconds"),
         (&["campaign", "--episodes", "0"], "--episodes"),
-        (&["campaign", "--dropout", "2"], "--dropout"),
-        (&["campaign", "--dropout", "nan"], "--dropout"),
-        (&["campaign", "--noise=-1"], "--noise"),
+        (&["campaign", "--latency", "51", "--sensors", "exact"], "--latency"),
+        (&["campaign", "--latency", "3"], "--latency"),
+        (&["campaign", "--sensors", "perfect"], "--sensors"),
+        (&["campaign", "--cut-in", "sideways"], "--cut-in"),
         (&["campaign", "--lag", "nan"], "--lag"),
         (&["campaign", "--dead-time-ms=-1"], "--dead-time-ms"),
     ] {
