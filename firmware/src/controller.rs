@@ -1551,3 +1551,48 @@ fn least_braking(
         beta_command
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The command window never under-states: after far more strictly falling commands than
+    /// it holds (each push merges its two oldest entries), and with entries dropped before a
+    /// horizon, `largest_since` is at least the true largest command since any time, and the
+    /// band's top where the window no longer knows.
+    #[test]
+    fn the_command_window_merges_and_forgets_without_under_stating() {
+        let mut w = IssuedCommands {
+            window: Deque::new(),
+            first_at_us: None,
+        };
+        let commands: Vec<(u64, f32)> = (0..1_000u64)
+            .map(|k| (k * 10_000, 2.0 - 0.005 * k as f32))
+            .collect();
+        for &(t, a) in &commands {
+            w.push(t, a, 0);
+        }
+        assert!(w.window.len() <= 272);
+        for &(t0, _) in commands.iter().step_by(7) {
+            let truth = commands
+                .iter()
+                .filter(|(t, _)| *t >= t0)
+                .map(|(_, a)| *a)
+                .fold(f32::NEG_INFINITY, f32::max);
+            let got = w.largest_since(t0, 0, 9.0);
+            assert!(got >= truth, "since {t0}: {got} below {truth}");
+        }
+        // Dropped before a horizon: asked about, the window answers with the band's top.
+        let mut w = IssuedCommands {
+            window: Deque::new(),
+            first_at_us: None,
+        };
+        for k in 0..10u64 {
+            w.push(k * 10_000, 1.0 - 0.1 * k as f32, 0);
+        }
+        assert_eq!(w.largest_since(0, 0, 9.0), 1.0);
+        w.push(200_000, -3.0, 55_000);
+        assert_eq!(w.largest_since(20_000, 0, 9.0), 9.0);
+        assert_eq!(w.largest_since(60_000, 0, 9.0), 1.0 - 0.1 * 6.0);
+    }
+}

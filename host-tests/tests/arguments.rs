@@ -24,7 +24,10 @@ fn the_campaign_refuses_durations_counts_latencies_and_sensors_that_mean_nothing
         (&["campaign", "--seconds", "nan"], "--seconds"),
         (&["campaign", "--seconds", "inf"], "--seconds"),
         (&["campaign", "--episodes", "0"], "--episodes"),
-        (&["campaign", "--latency", "51", "--sensors", "exact"], "--latency"),
+        (
+            &["campaign", "--latency", "51", "--sensors", "exact"],
+            "--latency",
+        ),
         (&["campaign", "--latency", "3"], "--latency"),
         (&["campaign", "--sensors", "perfect"], "--sensors"),
         (&["campaign", "--cut-in", "sideways"], "--cut-in"),
