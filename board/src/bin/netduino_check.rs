@@ -297,7 +297,7 @@ fn drive(controller: &mut Controller<'_>, steps: u32) -> Run {
         // The actuator reads the request off the bus.
         if let Some(f) = bus.bus_mut().tx.pop_front() {
             if f.id.as_raw() == ACCEL_REQUEST_ID {
-                let [a0, a1, _, counter, ..] = f.data;
+                let [a0, a1, _, _, counter, ..] = f.data;
                 ego_a = f32::from(i16::from_le_bytes([a0, a1])) * 1e-3;
                 run.first_counter = run.first_counter.or(Some(counter));
             }
