@@ -1,12 +1,13 @@
 //! The driver's takeover request: a lamp (or chime) on an `embedded-hal` 1.0 output pin, lit
-//! whenever the controller is not certifying its command.
+//! whenever the controller asks for it ([`firmware::Command::takeover`]).
 //!
-//! An ACC that brakes to a stop on its own (the minimum-risk manoeuvre) or drives without its
-//! certificate (outside the table's domain) must tell the driver to take over. The request is on
-//! in [`Mode::MinimumRisk`] and [`Mode::Uncertified`], off in [`Mode::Nominal`] and
-//! [`Mode::Override`] (the certified law braking harder than the nominal one is the controller
-//! doing its job). The pin is written on every change of the request, and re-written every
-//! [`REFRESH_PERIODS`] periods, so a pin disturbed by anything else is put right within that.
+//! An ACC that brakes to a stop on its own (the minimum-risk manoeuvre), drives without its
+//! certificate (outside the table's domain) or cannot certify the front (a vehicle cutting in
+//! closer than the certificate allows) must tell the driver to take over. The request is off
+//! when the certified law brakes harder than the nominal one within its certificate: that is
+//! the controller doing its job. The pin is written on every change of the request, and
+//! re-written every [`REFRESH_PERIODS`] periods, so a pin disturbed by anything else is put
+//! right within that.
 
 use embedded_hal::digital::OutputPin;
 use firmware::Mode;
@@ -31,9 +32,10 @@ pub struct TakeoverRequest<P> {
     since_write: u32,
 }
 
-/// Whether the controller's mode calls for the driver to take over.
-pub fn requested(mode: Mode) -> bool {
-    matches!(mode, Mode::MinimumRisk | Mode::Uncertified)
+/// Whether a command of `mode` with the takeover flag `takeover` calls for the driver: the
+/// flag, and always in the minimum-risk manoeuvre and without a certificate.
+pub fn requested(mode: Mode, takeover: bool) -> bool {
+    takeover || matches!(mode, Mode::MinimumRisk | Mode::Uncertified)
 }
 
 impl<P: OutputPin> TakeoverRequest<P> {
@@ -46,10 +48,10 @@ impl<P: OutputPin> TakeoverRequest<P> {
         }
     }
 
-    /// Shows the request the controller's `mode` calls for (`Controller::mode`, the mode of
-    /// its last command). A failed write is retried at the next call.
-    pub fn show(&mut self, mode: Mode) -> Result<(), Error<P::Error>> {
-        let on = requested(mode);
+    /// Shows the request of the controller's last command (`Controller::mode` and
+    /// `Controller::takeover_requested`). A failed write is retried at the next call.
+    pub fn show(&mut self, mode: Mode, takeover: bool) -> Result<(), Error<P::Error>> {
+        let on = requested(mode, takeover);
         self.since_write = self.since_write.saturating_add(1);
         if self.shown == Some(on) && self.since_write < REFRESH_PERIODS {
             return Ok(());
@@ -85,18 +87,22 @@ mod tests {
             Transaction::set(State::High), // MinimumRisk
             Transaction::set(State::Low),  // Override
             Transaction::set(State::High), // Uncertified
+            Transaction::set(State::Low),  // Nominal
+            Transaction::set(State::High), // Override asking for it (a cut-in)
         ];
         let mut lamp = TakeoverRequest::new(Mock::new(&expected));
-        for mode in [
-            Mode::Nominal,
-            Mode::Nominal,
-            Mode::MinimumRisk,
-            Mode::MinimumRisk,
-            Mode::Override,
-            Mode::Nominal,
-            Mode::Uncertified,
+        for (mode, takeover) in [
+            (Mode::Nominal, false),
+            (Mode::Nominal, false),
+            (Mode::MinimumRisk, true),
+            (Mode::MinimumRisk, false),
+            (Mode::Override, false),
+            (Mode::Nominal, false),
+            (Mode::Uncertified, false),
+            (Mode::Nominal, false),
+            (Mode::Override, true),
         ] {
-            lamp.show(mode).unwrap();
+            lamp.show(mode, takeover).unwrap();
         }
         lamp.release().done();
     }
@@ -109,7 +115,7 @@ mod tests {
             .collect();
         let mut lamp = TakeoverRequest::new(Mock::new(&expected));
         for _ in 0..=(refreshes * REFRESH_PERIODS) {
-            lamp.show(Mode::MinimumRisk).unwrap();
+            lamp.show(Mode::MinimumRisk, true).unwrap();
         }
         lamp.release().done();
     }
@@ -122,10 +128,10 @@ mod tests {
         ];
         let mut lamp = TakeoverRequest::new(Mock::new(&expected));
         assert_eq!(
-            lamp.show(Mode::MinimumRisk),
+            lamp.show(Mode::MinimumRisk, true),
             Err(Error::Pin(MockError::Io(ErrorKind::BrokenPipe)))
         );
-        lamp.show(Mode::MinimumRisk).unwrap();
+        lamp.show(Mode::MinimumRisk, true).unwrap();
         lamp.release().done();
     }
 }

@@ -478,7 +478,8 @@ pub struct Command {
     /// is certified when it is positive. `None` when no certificate was evaluated.
     pub margin: Option<f32>,
     /// The driver's takeover request: the front half is not certified (a cut-in, a leader
-    /// closer than the certificate allows), or the command is a minimum-risk manoeuvre.
+    /// closer than the certificate allows), the rear half is unknown ([`Mode::Uncertified`]),
+    /// or the command is a minimum-risk manoeuvre.
     pub takeover: bool,
     /// What the controller made of the leader track ([`TrackState`]).
     pub leader: TrackState,
@@ -627,6 +628,8 @@ pub struct Controller<'t> {
     table: Result<(Table<'t>, Model), Fault>,
     config: Config,
     mode: Mode,
+    /// The last command's takeover request.
+    takeover: bool,
     /// The time of the last step (`None` before the first).
     last_now_us: Option<u64>,
     /// Periods of the minimum-risk manoeuvre left after a clock jump, and its fault.
@@ -842,6 +845,7 @@ impl<'t> Controller<'t> {
             table,
             config,
             mode: Mode::MinimumRisk,
+            takeover: true,
             last_now_us: None,
             clock_recovery: (0, Fault::ClockJumped),
             margin_lost: false,
@@ -910,6 +914,12 @@ impl<'t> Controller<'t> {
     /// The mode of the last command.
     pub fn mode(&self) -> Mode {
         self.mode
+    }
+
+    /// The last command's takeover request ([`Command::takeover`]; true before the first
+    /// command).
+    pub fn takeover_requested(&self) -> bool {
+        self.takeover
     }
 
     /// Recent events (the last 32), oldest first.
@@ -1017,6 +1027,7 @@ impl<'t> Controller<'t> {
             log_info!("mode {} (fault {})", command.mode, command.fault);
         }
         self.mode = command.mode;
+        self.takeover = command.takeover;
         // Every command goes to the actuator: the look-ahead of later steps must know it.
         let keep_from = self.keep_commands_from(now);
         self.issued.push(now, command.acceleration, keep_from);
@@ -1283,6 +1294,7 @@ impl<'t> Controller<'t> {
                     command.mode = Mode::Uncertified;
                     command.fault = Some(fault);
                 }
+                command.takeover = true;
                 return command;
             }
         };

@@ -209,6 +209,7 @@ fn every_bad_input_has_its_fault() {
     let cmd = controller().step(&fast);
     assert_eq!(cmd.mode, Mode::Uncertified);
     assert_eq!(cmd.fault, Some(Fault::OutsideDomain { axis: 2 }));
+    assert!(cmd.takeover, "without its rear half the driver is asked to take over");
     let mut fast_follower = good;
     fast_follower.follower.value.rel_speed = -11.0; // 36 m/s behind an ego at 25
     let cmd = controller().step(&fast_follower);

@@ -62,19 +62,19 @@ struct VerifyArgs {
     #[arg(long, value_name = "FILE")]
     write: Option<PathBuf>,
     /// The declared range error's absolute part, m (the firmware's `SensorBounds`).
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = solver::robust::MeasurementError::default().range)]
     range_error: f32,
     /// The declared range error's relative part.
-    #[arg(long, default_value_t = 0.015)]
+    #[arg(long, default_value_t = solver::robust::MeasurementError::default().range_relative)]
     range_error_relative: f32,
     /// The declared range-rate error, m/s.
-    #[arg(long, default_value_t = 0.14)]
+    #[arg(long, default_value_t = solver::robust::MeasurementError::default().range_rate)]
     range_rate_error: f32,
     /// The declared ego-speed error's absolute part, m/s.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = solver::robust::MeasurementError::default().ego_speed)]
     ego_speed_error: f32,
     /// The declared ego-speed error's relative part.
-    #[arg(long, default_value_t = 0.005)]
+    #[arg(long, default_value_t = solver::robust::MeasurementError::default().ego_speed_relative)]
     ego_speed_error_relative: f32,
 }
 

@@ -46,3 +46,29 @@ fn the_committed_firmware_table_is_the_deployment_configs() {
     };
     assert!(residual <= tolerance && tolerance <= config.solve.tolerance as f32);
 }
+
+/// `solver verify`'s declared measurement error is the firmware's default sensor bounds, so
+/// that the proof under error is about the error the firmware assumes.
+#[test]
+fn the_declared_measurement_error_is_the_firmwares() {
+    let s = firmware::SensorBounds::default();
+    let e = solver::robust::MeasurementError::default();
+    assert_eq!(
+        [
+            e.range,
+            e.range_relative,
+            e.range_rate,
+            e.ego_speed,
+            e.ego_speed_relative
+        ],
+        [
+            s.range_error,
+            s.range_error_relative,
+            s.range_rate_error,
+            s.ego_speed_error,
+            s.ego_speed_error_relative
+        ]
+    );
+    // The ego measurement nearest a track is at most half the ego speed's 20 ms cycle away.
+    assert!(e.ego_age >= 0.01);
+}

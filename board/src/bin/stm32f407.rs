@@ -208,7 +208,10 @@ fn main() -> ! {
             defmt::warn!("acceleration request not sent: {=str}", why);
         }
         // Shown whether or not the request went out: the driver sees the controller's state.
-        if takeover.show(controller.mode()).is_err() {
+        if takeover
+            .show(controller.mode(), controller.takeover_requested())
+            .is_err()
+        {
             defmt::warn!("takeover request not shown");
         }
     }
