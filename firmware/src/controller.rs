@@ -642,6 +642,10 @@ pub struct Controller<'t> {
     braking_since_us: Option<u64>,
     /// The last plausible leader measurement, with the ego's speed interval at its time.
     leader: Option<LeaderMemo>,
+    /// Since when (the ego measurement's time of the first of an unbroken run of steps) every
+    /// step's speed headroom was zero or more: from then on the ego's true speed has stayed
+    /// within the domain.
+    speed_kept_from_us: Option<u64>,
     /// The last plausible follower measurement, with its rear value at its time.
     rear: Option<RearMemo>,
     /// The latest ego-speed measurements `(time, speed)`, oldest first: the one nearest a
@@ -856,6 +860,7 @@ impl<'t> Controller<'t> {
             },
             braking_since_us: None,
             leader: None,
+            speed_kept_from_us: None,
             rear: None,
             ego_history: Deque::new(),
         }
@@ -1004,6 +1009,7 @@ impl<'t> Controller<'t> {
             self.braking_since_us = None;
             // The kept measurements' times belong to the old time line.
             self.leader = None;
+            self.speed_kept_from_us = None;
             self.rear = None;
             self.ego_history.clear();
             self.clock_recovery = (CLOCK_RECOVERY_PERIODS, fault);
@@ -1216,6 +1222,14 @@ impl<'t> Controller<'t> {
         if let (true, Ok((table, _))) = (newer, &self.table) {
             let sensors = &self.config.sensors;
             let (ego_low, ego_high) = self.ego_speed_interval_at(m.timestamp_us, model);
+            // Where every step since before the track's time kept a speed headroom of zero or
+            // more, the ego's true speed has stayed within the domain (module docs: the ego's
+            // speed), and its interval is held there too.
+            let ego_high = if self.speed_kept_from_us.is_some_and(|t| t <= m.timestamp_us) {
+                math::min(ego_high, model.max_ego_speed)
+            } else {
+                ego_high
+            };
             let gap = sensors.range(m.value.gap);
             let (rate_low, rate_high) = sensors.range_rate(m.value.rel_speed);
             // The follower's speed is `ego - rel_speed`, held in the human's `[0, max_speed]`.
@@ -1277,6 +1291,11 @@ impl<'t> Controller<'t> {
         };
         let pending = self.pending(leader.at_us.min(t_e), &model);
         let front = self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, proposal);
+        self.speed_kept_from_us = if front.headroom >= 0.0 {
+            self.speed_kept_from_us.or(Some(t_e))
+        } else {
+            None
+        };
         let mode = match (lost, front.overridden) {
             (Some(_), _) => Mode::MinimumRisk,
             (None, true) => Mode::Override,
@@ -1316,15 +1335,19 @@ impl<'t> Controller<'t> {
     /// constants, plus what older commands can still add through the lag (at most e^-5 of the
     /// band's width); the band's top before the first command.
     fn pending(&self, t_0: u64, model: &Model) -> f32 {
-        let c = &self.config;
-        let tail = if c.actuator_lag_us > 0 {
+        self.issued
+            .largest_since(t_0, self.command_span_us(), model.ego.max)
+            + self.lag_tail(model)
+    }
+
+    /// What commands older than five lag time constants can still add through the lag, at
+    /// most: e^-5 of the band's width (none without a lag).
+    fn lag_tail(&self, model: &Model) -> f32 {
+        if self.config.actuator_lag_us > 0 {
             LAG_TAIL * (model.ego.max - model.ego.min)
         } else {
             0.0
-        };
-        self.issued
-            .largest_since(t_0, self.command_span_us(), model.ego.max)
-            + tail
+        }
     }
 
     /// The front half applied to a `proposal` (module docs: the delays, the measurement error,
@@ -1372,6 +1395,12 @@ impl<'t> Controller<'t> {
         let headroom = model.max_ego_speed
             - (ego_now + math::max(pending, 0.0) * (since_e(braking_from) + dead + lag));
         // The look-ahead (module docs): `u` held for one period before the braking at beta.
+        // Its response acceleration is `max(pending, u + tail)`: the lag averages every command
+        // ever issued, and the window's older ones (up to the band's top) still pass `tail` on
+        // top of `u` (found in review for issue 20: with `max(pending, u)` the next step's
+        // `pending`, `u + tail`, could exceed what the look-ahead had assumed).
+        let tail = self.lag_tail(model);
+        let response = |u: f32| math::max(pending, u + tail);
         // First the speed: the largest command whose response keeps the ego in the domain.
         let response_end = since_e(now) + h + dead + lag;
         let room = model.max_ego_speed - (ego_now + math::max(pending, 0.0) * response_end);
@@ -1380,7 +1409,7 @@ impl<'t> Controller<'t> {
             model.ego.min
         } else if response_end > 0.0 {
             math::max(
-                (model.max_ego_speed - ego_now) / response_end,
+                (model.max_ego_speed - ego_now) / response_end - tail,
                 model.ego.min,
             )
         } else {
@@ -1393,7 +1422,7 @@ impl<'t> Controller<'t> {
                 gap,
                 leader_at_m,
                 ego_high,
-                &model.front(age + h + dead + lag, math::max(pending, u)),
+                &model.front(age + h + dead + lag, response(u)),
             )
         };
         let at_capped = ahead(capped);
