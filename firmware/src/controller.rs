@@ -49,7 +49,10 @@
 //! by `tau` (see `table_format::front`). So the **certified front value** is
 //! `front_value` at the state of `t_m` with a response of `pending` until `t_b + D + tau`,
 //! where `t_b` is when the current run of commands at beta began, or now. The **look-ahead**
-//! of a command `u` uses a response of `max(pending, u)` until `now + h + D + tau`. Why it is
+//! of a command `u` uses a response of `max(pending, u + tail)` until `now + h + D + tau`, with
+//! `tail` the lag's `e^-5` of the band's width: the next step's `pending` is `u + tail` when `u`
+//! is the largest command (before issue 20's review the look-ahead took `max(pending, u)`,
+//! which under-stated it by up to the tail, 0.037 m/s^2). Why it is
 //! invariant: at the next step the certified value's response ends at the same instant (either
 //! the braking run goes on from the same `t_b`, or `u` was held and the run starts at
 //! `now + h`), with a `pending` no larger, from a later state that one of the behaviours the
@@ -63,8 +66,9 @@
 //! measurement at `t_e`, `ego_speed + max(pending, 0) (t_b + D + tau - t_e)` (the response's
 //! end as in the front value; a first-order lag's speed never exceeds the step's). A certified
 //! state has a headroom of zero or more ([`Certificate::is_certified`]). The look-ahead of a
-//! command `u` caps it so that `ego_speed + max(pending, u, 0) (now + h + D + tau - t_e)` stays
-//! within `max_ego_speed`: the cap is `(max_ego_speed - ego_speed) / (now + h + D + tau - t_e)`,
+//! command `u` caps it so that `ego_speed + max(pending, u + tail, 0) (now + h + D + tau - t_e)`
+//! stays within `max_ego_speed` (`ego_speed` at its measurement's highest):
+//! the cap is `(max_ego_speed - ego_speed) / (now + h + D + tau - t_e) - tail`,
 //! and when even `pending` alone breaks it, nothing passes and the command is beta. Why it is
 //! invariant: braking at beta keeps the response's end where it was and `pending` no larger, as
 //! for the front value, and a capped command ends its response at `now + h + D + tau`, which the
@@ -124,7 +128,7 @@
 //!   computed once per follower measurement (below). Measured on the deployed table
 //!   (`solver verify`, `solver::robust`): 74.8% of the measured rear states pass with the
 //!   default error against 77.1% with exact sensors; every passing measurement's box lies in
-//!   cells the proof covers. Cost: the worst control step on the Cortex-M4F is 12,921
+//!   cells the proof covers. Cost: the worst control step on the Cortex-M4F is 12,916
 //!   instructions (QEMU, README), against a budget of 20,000 (0.12 ms at one instruction per
 //!   cycle, 0.71 ms at six: 3.6% of the 20 ms period at 168 MHz).
 //! - **Aging**: a measurement is argued from its own time, so its age is inside the argument.
