@@ -24,8 +24,9 @@
 //!
 //! A frame that is malformed (wrong length), corrupted, repeated or out of sequence is counted
 //! ([`CanBus::e2e`]) and not used: the measurement it would have refreshed keeps its old time
-//! stamp and ages until the controller's stale limit makes it a fault (the minimum-risk
-//! manoeuvre).
+//! stamp and ages: the controller's look-ahead covers it up to the covered track age, its
+//! certified fallback beyond (`controller`'s module docs); an ego speed that ages past its stale
+//! limit is a fault (the minimum-risk manoeuvre).
 
 use embedded_can::{Frame, Id, StandardId};
 

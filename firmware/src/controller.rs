@@ -33,14 +33,16 @@
 //! # Delays: the measurements' age, the actuator's dead time and lag
 //! The configuration declares the actuator's dead time `D` (a command acts `D` after it is
 //! issued, at most 100 ms) and the time constant `tau` of its first-order lag (at most 0.3 s);
-//! measurements are accepted up to `stale_periods` periods old. The front is argued from the
+//! a track of any age is argued from its time (below: aging and lost tracks), the ego's speed
+//! up to `stale_periods` periods old. The front is argued from the
 //! leader track's measurement time `t_m`, not from now: the front value is a minimum over
 //! every leader behaviour from `t_m` on, so what the leader did since is covered. The ego's
 //! speed at `t_m` comes from its own measurement, moved to `t_m` within the accelerations the
 //! ego can have had in between (the highest speed for the ego, the lowest for the leader).
 //!
 //! The ego's acceleration is bounded through the commands the controller has issued, which it
-//! keeps (a sliding-window maximum over the stale limit, `D` and `5 tau`). Until braking at
+//! keeps (a sliding-window maximum back to the oldest kept measurement, less `D` and `5 tau`).
+//! Until braking at
 //! beta takes full effect, the acceleration is at most `pending`: the largest command issued
 //! since `t_m - D - 5 tau`, plus what older commands can still pass through the lag (at most
 //! `e^-5` of the band's width); before the controller's first command it is the band's
@@ -418,11 +420,13 @@ pub enum Fault {
     WrongGame,
     /// The leader track is flagged invalid, non-finite or impossible.
     LeaderInvalid,
-    /// The leader track is older than `stale_periods` periods.
+    /// The leader track is older than the covered age (`sensors.max_track_age_us`): the
+    /// certified fallback on its last good measurement.
     LeaderStale,
     /// The follower track is flagged invalid, non-finite or impossible.
     FollowerInvalid,
-    /// The follower track is older than `stale_periods` periods.
+    /// The follower track is older than the covered age: the certified fallback, the rear kept
+    /// by the band from its last good measurement.
     FollowerStale,
     /// The ego speed is flagged invalid, non-finite, negative or above 100 m/s.
     EgoSpeedInvalid,
