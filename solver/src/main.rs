@@ -130,7 +130,14 @@ fn real_main() -> Result<()> {
         run_configs(&args)?;
     }
     for (source, text) in &rears {
-        let config = RearConfig::from_toml(text).with_context(|| format!("in {source}"))?;
+        let config = RearConfig::from_toml(text).map_err(|e| {
+            let hint = if Config::from_toml(text).is_ok() {
+                ": it is a level-set game config; give it with --config"
+            } else {
+                ""
+            };
+            anyhow::anyhow!("in {source}{hint}: {e}")
+        })?;
         eprintln!("== {} ({source})", config.name);
         let s = run_rear(&config, &args.out)?;
         println!(
@@ -194,8 +201,14 @@ fn run_configs(args: &Args) -> Result<()> {
             .map(|path| {
                 let text = std::fs::read_to_string(path)
                     .with_context(|| format!("reading {}", path.display()))?;
-                let config =
-                    Config::from_toml(&text).with_context(|| format!("in {}", path.display()))?;
+                let config = Config::from_toml(&text).map_err(|e| {
+                    let hint = if RearConfig::from_toml(&text).is_ok() {
+                        ": it is a rear-game config; give it with --rear"
+                    } else {
+                        ""
+                    };
+                    anyhow::anyhow!("in {}{hint}: {e}", path.display())
+                })?;
                 Ok((path.display().to_string(), config))
             })
             .collect::<Result<_>>()?
@@ -283,7 +296,8 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path) -> Result<()> {
     let dir = out.join("verify").join(stem);
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     solver::output::write_json(&dir.join("report.json"), &report)?;
-    solver::verify::plot(&rear, &report, &dir, &[0.1, 5.0, 15.0, 30.0], 60.0)?;
+    // Over the table's whole extent of gaps (issue 22: the plots stopped at 60 m).
+    solver::verify::plot(&rear, &report, &dir, &[0.1, 5.0, 15.0, 30.0], f64::INFINITY)?;
     println!(
         "{}: periods {:?} ms, level {:.4} m: {} of {} certified cells proven ({:.3}%; {} with the standstill lemma); \
          unproven: {} tangency, {} resolution, {} collision; deficit at most {:.4} m; {:.1} s",

@@ -1009,9 +1009,34 @@ pub fn plot(
         )?;
         written.push(path);
     }
-    let title = "verify: the worst verdict over every ego speed".to_string();
+    // Over every ego speed: an unproven cell at any ego speed shows its reason; otherwise the
+    // column says whether it is certified (and proven) at every ego speed, at some, or at none
+    // (issue 22: a "worst" map that left the uncertified cells out looked all proven).
+    let title = "verify: (gap, follower speed) columns over every ego speed".to_string();
     let path = dir.join("verdicts-worst.png");
-    let cell = |i: usize, j: usize| (0..nk).map(|k| at(i, j, k)).max();
+    let over_speeds: [(&str, RGBColor); 6] = [
+        ("certified at no ego speed", RGBColor(225, 225, 225)),
+        (
+            "proven at some ego speeds, not certified at the others",
+            RGBColor(160, 205, 160),
+        ),
+        ("proven at every ego speed", RGBColor(40, 120, 40)),
+        legend[2],
+        legend[3],
+        legend[4],
+    ];
+    let cell = |i: usize, j: usize| {
+        let worst = (0..nk).map(|k| at(i, j, k)).max().unwrap_or(0);
+        if worst >= 2 {
+            return Some(worst + 1);
+        }
+        let proven = (0..nk).filter(|&k| at(i, j, k) == 1).count();
+        Some(match proven {
+            0 => 0,
+            p if p == nk => 2,
+            _ => 1,
+        })
+    };
     draw_cell_map(
         &path,
         &CellMap {
@@ -1019,7 +1044,7 @@ pub fn plot(
             x,
             y,
             cell: &cell,
-            legend: &legend,
+            legend: &over_speeds,
             curves: &[],
             frame: None,
         },

@@ -8,8 +8,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::Error;
 
-/// The largest number of state axes a table may have (format version 2: six; the solver's
-/// games have two to five).
+/// The largest number of state axes a table may have (six; the solver's games have two to
+/// five).
 pub const MAX_DIMS: usize = 6;
 
 /// A closed interval `[min, max]`: an input's bounds, or one axis of a box.
@@ -202,7 +202,7 @@ pub enum Game {
         /// The largest speed of any vehicle, m/s.
         max_speed: f32,
     },
-    /// The split three-car certificate (format version 2): three-car safety from a rear table
+    /// The split three-car certificate (since format version 2): three-car safety from a rear table
     /// and a front closed form, for one braking level `beta = -ego.min`.
     ///
     /// The table holds the rear value `W_beta` on three axes in absolute speeds: `gap_follower`
