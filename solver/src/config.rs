@@ -358,7 +358,15 @@ pub struct Config {
 /// byte span, which says nothing to a person editing the file.
 pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, ConfigError> {
     toml::from_str(text).map_err(|e| {
-        let message = e.message().trim().to_string();
+        // Rust's type names say nothing to a person editing the file (issue 22).
+        let message = e
+            .message()
+            .trim()
+            .replace("expected usize", "expected a whole number of at least 0")
+            .replace("expected u32", "expected a whole number of at least 0")
+            .replace("expected u64", "expected a whole number of at least 0")
+            .replace("expected f64", "expected a number")
+            .replace("expected f32", "expected a number");
         let Some(span) = e.span() else {
             return ConfigError::new("document", message);
         };

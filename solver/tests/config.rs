@@ -171,8 +171,27 @@ fn unknown_keys_and_syntax_errors_are_refused_with_a_location() {
         err.reason.contains(&format!("(line {line}, column ")),
         "{err}"
     );
+    // The expected type in words, not Rust's names (issue 22).
+    assert!(
+        err.reason.contains("expected a number") && !err.reason.contains("f64"),
+        "{err}"
+    );
+    let negative = with_negative_points(&base);
+    let err = Config::from_toml(&negative).unwrap_err();
+    assert!(
+        err.reason.contains("expected a whole number of at least 0")
+            && !err.reason.contains("usize"),
+        "{err}"
+    );
     let missing = base.replace("time_gap = { min = 1.0, max = 2.0 }\n", "");
     assert_eq!(refused_field(&missing), "game.time_gap");
+}
+
+/// `base` with its first grid axis' point count made negative.
+fn with_negative_points(base: &str) -> String {
+    let at = base.find("points = ").expect("a grid axis") + "points = ".len();
+    let end = at + base[at..].find(|c: char| !c.is_ascii_digit()).unwrap_or(0);
+    format!("{}-3{}", &base[..at], &base[end..])
 }
 
 #[test]
