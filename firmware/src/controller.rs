@@ -707,6 +707,14 @@ struct IssuedCommands {
 }
 
 impl IssuedCommands {
+    /// No command issued yet.
+    fn new() -> Self {
+        IssuedCommands {
+            window: Deque::new(),
+            first_at_us: None,
+        }
+    }
+
     /// Records `acceleration` issued at `at_us`; entries older than `keep_from_us` are no
     /// longer asked about and go.
     fn push(&mut self, at_us: u64, acceleration: f32, keep_from_us: u64) {
@@ -862,10 +870,7 @@ impl<'t> Controller<'t> {
             clock_recovery: (0, Fault::ClockJumped),
             margin_lost: false,
             events: Deque::new(),
-            issued: IssuedCommands {
-                window: Deque::new(),
-                first_at_us: None,
-            },
+            issued: IssuedCommands::new(),
             braking_since_us: None,
             leader: None,
             speed_kept_from_us: None,
@@ -1115,6 +1120,20 @@ impl<'t> Controller<'t> {
             && m.timestamp_us <= now_us
     }
 
+    /// Whether `m` is plausible and newer than the measurement `kept` (its time and track): a
+    /// later time stamp, or the same one with another value.
+    fn is_new_measurement(
+        &self,
+        m: &Measurement<Track>,
+        kept: Option<(u64, Track)>,
+        now: u64,
+    ) -> bool {
+        self.is_plausible(m, now)
+            && kept.is_none_or(|(at, track)| {
+                m.timestamp_us > at || (m.timestamp_us == at && m.value != track)
+            })
+    }
+
     /// The state of a track kept from `at_us`, at `now`.
     fn track_state(&self, at_us: u64, now: u64) -> TrackState {
         self.config.sensors.track_state(now.saturating_sub(at_us))
@@ -1170,10 +1189,7 @@ impl<'t> Controller<'t> {
     /// Takes this period's leader measurement if it is plausible and newer than the one kept,
     /// and says what the controller makes of the track.
     fn observe_leader(&mut self, m: &Measurement<Track>, now: u64, model: &Model) -> TrackState {
-        let newer = self.is_plausible(m, now)
-            && self.leader.is_none_or(|l| {
-                m.timestamp_us > l.at_us || (m.timestamp_us == l.at_us && m.value != l.track)
-            });
+        let newer = self.is_new_measurement(m, self.leader.map(|l| (l.at_us, l.track)), now);
         if !newer {
             return self
                 .leader
@@ -1223,10 +1239,7 @@ impl<'t> Controller<'t> {
     /// Takes this period's follower measurement if it is plausible and newer than the one
     /// kept, computing its rear value at its time, and says what the controller makes of it.
     fn observe_follower(&mut self, m: &Measurement<Track>, now: u64, model: &Model) -> TrackState {
-        let newer = self.is_plausible(m, now)
-            && self.rear.is_none_or(|r| {
-                m.timestamp_us > r.at_us || (m.timestamp_us == r.at_us && m.value != r.track)
-            });
+        let newer = self.is_new_measurement(m, self.rear.map(|r| (r.at_us, r.track)), now);
         if let (true, Ok((table, _))) = (newer, &self.table) {
             let sensors = &self.config.sensors;
             let (ego_low, ego_high) = self.ego_speed_interval_at(m.timestamp_us, model);
@@ -1611,10 +1624,7 @@ mod tests {
     /// band's top where the window no longer knows.
     #[test]
     fn the_command_window_merges_and_forgets_without_under_stating() {
-        let mut w = IssuedCommands {
-            window: Deque::new(),
-            first_at_us: None,
-        };
+        let mut w = IssuedCommands::new();
         let commands: Vec<(u64, f32)> = (0..1_000u64)
             .map(|k| (k * 10_000, 2.0 - 0.005 * k as f32))
             .collect();
@@ -1632,10 +1642,7 @@ mod tests {
             assert!(got >= truth, "since {t0}: {got} below {truth}");
         }
         // Dropped before a horizon: asked about, the window answers with the band's top.
-        let mut w = IssuedCommands {
-            window: Deque::new(),
-            first_at_us: None,
-        };
+        let mut w = IssuedCommands::new();
         for k in 0..10u64 {
             w.push(k * 10_000, 1.0 - 0.1 * k as f32, 0);
         }

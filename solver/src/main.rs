@@ -347,7 +347,7 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path) -> Result<()> {
         &dir.join("robustness.json"),
         &serde_json::json!({ "exact": exact, "declared": declared }),
     )?;
-    solver::robust::plot(&table, &report, axes, &[&exact, &declared], &dir, 20.0)?;
+    solver::robust::plot(axes, &[&exact, &declared], &dir, 20.0)?;
     for r in [&exact, &declared] {
         println!(
             "  measurement error {:?}: {} of {} measured rear states pass the firmware's test ({:.2}%), \

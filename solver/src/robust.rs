@@ -83,6 +83,9 @@ pub struct Robustness {
     pub unproven: usize,
     /// Passing measurements whose box could not be evaluated (wider than the lookup takes).
     pub too_wide: usize,
+    /// Whether each node, taken as a measurement, passes (C order; not written to the JSON).
+    #[serde(skip)]
+    pub passes: Vec<bool>,
 }
 
 /// The error box around the measured rear state `(gap, follower_speed, ego_speed)`, clipped to
@@ -182,6 +185,7 @@ pub fn robustness(
         passing_share: passing as f64 / measurements.max(1) as f64,
         unproven: results.iter().filter(|r| r.2).count(),
         too_wide: results.iter().filter(|r| r.3).count(),
+        passes: results.iter().map(|r| r.1).collect(),
     }
 }
 
@@ -190,8 +194,6 @@ pub fn robustness(
 /// passing only with the first (exact sensors), or passing with neither. Writes
 /// `robustness-ego-<v>.png`.
 pub fn plot(
-    table: &Table<'_>,
-    report: &Report,
     axes: [&[f64]; 3],
     runs: &[&Robustness],
     dir: &std::path::Path,
@@ -199,20 +201,13 @@ pub fn plot(
 ) -> Result<std::path::PathBuf, crate::error::SolverError> {
     use crate::output::{draw_cell_map, CellMap, PlotAxis};
     use plotters::style::RGBColor;
-    let level = report.level as f32;
-    let k = axes[2]
-        .partition_point(|&b| b < ego_speed)
-        .min(axes[2].len() - 1);
-    let band = match table.header().game {
-        table_format::Game::ThreeCarSplit { ego, max_speed, .. } => ((ego.min, ego.max), max_speed),
-        _ => ((0.0, 0.0), 0.0),
-    };
-    let gaps = table.axis_bounds(0).map_or([0.0, 0.0], |b| [b.min, b.max]);
-    let passes = |e: &MeasurementError, i: usize, j: usize| {
-        let m = [axes[0][i] as f32, axes[1][j] as f32, axes[2][k] as f32];
-        error_box(e, m, band.0, (gaps, band.1))
-            .and_then(|(lo, hi)| table.least_over_box(&lo, &hi).ok())
-            .is_some_and(|w| w > level)
+    let (nj, nk) = (axes[1].len(), axes[2].len());
+    let k = axes[2].partition_point(|&b| b < ego_speed).min(nk - 1);
+    let passes = |r: &Robustness, i: usize, j: usize| {
+        r.passes
+            .get((i * nj + j) * nk + k)
+            .copied()
+            .unwrap_or(false)
     };
     let (Some(first), Some(last)) = (runs.first(), runs.last()) else {
         return Ok(dir.to_path_buf());
@@ -223,9 +218,9 @@ pub fn plot(
         ("certified with the declared error", RGBColor(90, 170, 90)),
     ];
     let cell = |i: usize, j: usize| {
-        Some(if passes(&last.error, i, j) {
+        Some(if passes(last, i, j) {
             2
-        } else if passes(&first.error, i, j) {
+        } else if passes(first, i, j) {
             1
         } else {
             0
