@@ -1022,6 +1022,22 @@ fn an_aging_track_slows_the_car_smoothly_within_the_covered_age() {
         }
     }
     assert!(previous < 0.0, "a second-old track brakes: {previous}");
+    // It is the look-ahead's response that grows, not only the ego's speed interval: with the
+    // ego's speed measured every period (so its interval at the track's time stays tight) and
+    // the leader's track frozen, the nominal law passes while the track is fresh, and the
+    // leader's worst case since the measurement makes the look-ahead refuse it within the
+    // covered age.
+    let mut c = Controller::new(DEFAULT_TABLE, datasheet());
+    let state = inputs((45.0, 0.0), (40.0, 0.0), 25.0);
+    let frozen = at(state, NOW).leader;
+    let mut modes = Vec::new();
+    for k in 0..50u64 {
+        let mut i = at(state, NOW + k * 20_000);
+        i.leader = frozen;
+        modes.push(c.step(&i).mode);
+    }
+    assert_eq!(modes[0], Mode::Nominal);
+    assert!(modes.contains(&Mode::Override), "{modes:?}");
 }
 
 /// Issue 20 (3): beyond the covered age the fallback is certified: the minimum-risk
