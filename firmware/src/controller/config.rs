@@ -1,0 +1,170 @@
+//! The controller's configuration: the period, the law's tuning, the margins, the delays the
+//! certificate covers, the vehicle's envelope and the sensors' bounds, with their limits.
+
+use crate::math;
+use crate::sensing::SensorBounds;
+
+/// Tuning of the controller. Units: SI.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Config {
+    /// Control period, microseconds (default 20 ms).
+    pub period_us: u32,
+    /// An ego-speed measurement older than this many periods is stale (the radar tracks' age
+    /// is covered up to `sensors.max_track_age_us`).
+    pub stale_periods: u32,
+    /// Speed set-point, m/s.
+    pub set_speed: f32,
+    /// Nominal ACC time gap, s.
+    pub time_gap: f32,
+    /// Nominal ACC gap at standstill, m.
+    pub standstill_gap: f32,
+    /// Nominal law: acceleration per metre of gap error.
+    pub gap_gain: f32,
+    /// Nominal law: acceleration per m/s of relative speed.
+    pub rel_speed_gain: f32,
+    /// Nominal law: acceleration per m/s of speed error.
+    pub speed_gain: f32,
+    /// The front value (m) a certified state keeps, and the look-ahead demands of the nominal
+    /// command.
+    pub front_margin: f32,
+    /// The rear value (m, after the table's error bound) a certified state has.
+    pub rear_margin: f32,
+    /// Minimum-risk deceleration, m/s^2 (positive, at most 4).
+    pub mrm_deceleration: f32,
+    /// Minimum-risk deceleration when the follower is close and closing, m/s^2 (positive).
+    pub mrm_gentle_deceleration: f32,
+    /// "Close" for the follower in the minimum-risk manoeuvre, m.
+    pub follower_close_gap: f32,
+    /// The actuator's dead time the certificate covers, microseconds (at most
+    /// [`MAX_DEAD_TIME_US`]): a command acts this long after it is issued.
+    pub actuator_dead_time_us: u32,
+    /// The time constant of the actuator's first-order lag the certificate covers,
+    /// microseconds (at most [`MAX_ACTUATOR_LAG_US`]): `a' = (command - a) / lag`.
+    pub actuator_lag_us: u32,
+    /// The vehicle's own limits, whatever the table says.
+    pub envelope: Envelope,
+    /// The sensors' error bounds and timing the certificate covers ([`crate::sensing`]).
+    pub sensors: SensorBounds,
+}
+
+/// The vehicle's envelope: what the firmware may command and the speeds it may certify, set by
+/// the integrator for the car, not by the table. Every command, in every mode, is clamped into
+/// it, and a table whose band does not fit inside it is refused at load
+/// ([`Fault::TableOutsideEnvelope`](super::Fault::TableOutsideEnvelope)): clamping the table's braking level instead would void
+/// the certificate, which assumes the ego brakes at `beta` when told to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Envelope {
+    /// The hardest braking the firmware may command, m/s^2 (negative).
+    pub min_acceleration: f32,
+    /// The largest acceleration the firmware may command, m/s^2 (positive).
+    pub max_acceleration: f32,
+    /// Ego speeds above this are outside the certified domain, whatever the table covers, m/s.
+    pub max_speed: f32,
+}
+
+impl Default for Envelope {
+    /// ISO 15622's limits for an ACC at speed (-3.5 and 2 m/s^2), up to 35 m/s.
+    fn default() -> Self {
+        Envelope {
+            min_acceleration: ISO_15622_LIMITS.0,
+            max_acceleration: ISO_15622_LIMITS.1,
+            max_speed: 35.0,
+        }
+    }
+}
+
+impl Envelope {
+    pub(super) fn is_valid(&self) -> bool {
+        math::is_finite(self.min_acceleration)
+            && math::is_finite(self.max_acceleration)
+            && math::is_finite(self.max_speed)
+            && self.min_acceleration < 0.0
+            && self.max_acceleration > 0.0
+            && self.max_speed > 0.0
+    }
+
+    /// `a` within the envelope (NaN becomes the hardest braking).
+    pub(super) fn clamp(&self, a: f32) -> f32 {
+        if a.is_nan() {
+            return self.min_acceleration;
+        }
+        math::clamp(a, self.min_acceleration, self.max_acceleration)
+    }
+}
+
+impl Config {
+    /// Whether the configuration lies within the limits the certificate is argued for: a period
+    /// of 10 to 100 ms, a stale limit of 1 to [`MAX_STALE_PERIODS`] periods, a dead time and a
+    /// lag within their limits, finite non-negative margins and gains.
+    pub fn is_valid(&self) -> bool {
+        let finite_non_negative = [
+            self.set_speed,
+            self.time_gap,
+            self.standstill_gap,
+            self.gap_gain,
+            self.rel_speed_gain,
+            self.speed_gain,
+            self.front_margin,
+            self.rear_margin,
+            self.mrm_deceleration,
+            self.mrm_gentle_deceleration,
+            self.follower_close_gap,
+        ]
+        .iter()
+        .all(|x| math::is_finite(*x) && *x >= 0.0);
+        finite_non_negative
+            && (MIN_PERIOD_US..=MAX_PERIOD_US).contains(&self.period_us)
+            && (1..=MAX_STALE_PERIODS).contains(&self.stale_periods)
+            && self.actuator_dead_time_us <= MAX_DEAD_TIME_US
+            && self.actuator_lag_us <= MAX_ACTUATOR_LAG_US
+            && self.envelope.is_valid()
+            && self.sensors.is_valid()
+    }
+}
+
+/// The largest actuator dead time a configuration may declare, microseconds.
+pub const MAX_DEAD_TIME_US: u32 = 100_000;
+/// The largest actuator lag time constant a configuration may declare, microseconds.
+pub const MAX_ACTUATOR_LAG_US: u32 = 300_000;
+/// The smallest control period a configuration may declare, microseconds.
+pub const MIN_PERIOD_US: u32 = 10_000;
+/// The largest control period a configuration may declare, microseconds.
+pub const MAX_PERIOD_US: u32 = 100_000;
+/// The largest `stale_periods` a configuration may declare.
+pub const MAX_STALE_PERIODS: u32 = 10;
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            period_us: 20_000,
+            stale_periods: 5,
+            set_speed: 30.0,
+            time_gap: 1.8,
+            standstill_gap: 5.0,
+            gap_gain: 0.23,
+            rel_speed_gain: 0.7,
+            speed_gain: 0.3,
+            front_margin: 0.5,
+            rear_margin: 0.0,
+            mrm_deceleration: 2.0,
+            mrm_gentle_deceleration: 1.0,
+            follower_close_gap: 15.0,
+            actuator_dead_time_us: MAX_DEAD_TIME_US,
+            actuator_lag_us: MAX_ACTUATOR_LAG_US,
+            envelope: Envelope::default(),
+            sensors: SensorBounds::default(),
+        }
+    }
+}
+
+/// A gap between two steps longer than this many periods is a clock jump.
+pub const MAX_STEP_GAP_PERIODS: u64 = 10;
+/// After a clock jump, the minimum-risk manoeuvre lasts for the step of the jump and this many
+/// good periods after it; the command history is forgotten (the actuator's state is then
+/// assumed unknown until it is known again, see the module docs).
+pub const CLOCK_RECOVERY_PERIODS: u32 = 5;
+
+/// ISO 15622 acceleration limits for ACC, m/s^2.
+pub const ISO_15622_LIMITS: (f32, f32) = (-3.5, 2.0);

@@ -1,0 +1,63 @@
+//! Why the controller is not in certified nominal control: every bad input and refused table
+//! is one variant, with its reaction documented in the controller's module docs.
+
+/// Why the controller is in the minimum-risk manoeuvre or uncertified.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum Fault {
+    /// The table did not pass `Table::parse`.
+    Table(table_format::Error),
+    /// The table is not a split three-car table ([`Game::ThreeCarSplit`](table_format::Game::ThreeCarSplit)).
+    WrongGame,
+    /// The leader track is flagged invalid, non-finite or impossible.
+    LeaderInvalid,
+    /// The leader track is older than the covered age (`sensors.max_track_age_us`): the
+    /// certified fallback on its last good measurement.
+    LeaderStale,
+    /// The follower track is flagged invalid, non-finite or impossible.
+    FollowerInvalid,
+    /// The follower track is older than the covered age: the certified fallback, the rear kept
+    /// by the band from its last good measurement.
+    FollowerStale,
+    /// The ego speed is flagged invalid, non-finite, negative or above 100 m/s.
+    EgoSpeedInvalid,
+    /// The ego speed is older than `stale_periods` periods.
+    EgoSpeedStale,
+    /// The state is outside the table's domain on this axis of the rear table (0:
+    /// gap_follower below the grid, 1: follower_speed above `max_speed`, 2: ego_speed above
+    /// `max_speed`). Not a sensor fault: the controller runs the nominal law uncertified
+    /// ([`Mode::Uncertified`](super::Mode::Uncertified)), as a conventional ACC would outside its certified range,
+    /// rather than braking hard into the follower.
+    OutsideDomain {
+        /// The axis.
+        axis: u8,
+    },
+    /// The measurements' times are so far apart that the box of rear states they leave holds
+    /// more than [`table_format::BOX_INTERIOR`] of the table's breakpoints on this axis: the
+    /// step does not evaluate the rear half ([`Mode::Uncertified`](super::Mode::Uncertified), the front still enforced).
+    RearBoxTooWide {
+        /// The axis.
+        axis: u8,
+    },
+    /// The clock went backwards. Recovers after [`CLOCK_RECOVERY_PERIODS`](super::CLOCK_RECOVERY_PERIODS) good periods.
+    ClockWentBackwards,
+    /// The configuration is outside the limits the certificate is argued for (period, stale
+    /// limit, dead time or lag above their limits, a negative or non-finite value, an envelope
+    /// without braking or acceleration).
+    InvalidConfig,
+    /// The table's band of ego accelerations does not fit inside the vehicle's envelope.
+    TableOutsideEnvelope,
+    /// The clock jumped forward by more than [`MAX_STEP_GAP_PERIODS`](super::MAX_STEP_GAP_PERIODS) periods since the last
+    /// step. Recovers after [`CLOCK_RECOVERY_PERIODS`](super::CLOCK_RECOVERY_PERIODS) good periods.
+    ClockJumped,
+    /// The table carries no record of `solver verify`, a record of a proof that left cells
+    /// unproven, one for another `rear_margin` than the configuration's (a proof at one level
+    /// says nothing about another), or one of a `verify` older than
+    /// [`table_format::REAR_SAMPLE_VERIFIER`] (which did not bound the samples in between).
+    TableNotVerified,
+    /// The board restarted after a fault of its own: the watchdog expired, or a HardFault
+    /// (a stack overflow among them) or a panic ended the last run. The minimum-risk manoeuvre
+    /// until the next power-on reset (see [`Controller::latch_minimum_risk`](super::Controller::latch_minimum_risk)).
+    RestartedAfterFault,
+}

@@ -1,0 +1,545 @@
+//! The control step: one set of inputs in, one acceleration command out.
+//!
+//! # The certificate: a split of the three-car game at one braking level
+//! The table is a [`Game::ThreeCarSplit`](table_format::Game::ThreeCarSplit) table. For the ego's braking level `beta` (the
+//! table's `-ego.min`) a state `(gap_leader, leader_speed, gap_follower, follower_speed,
+//! ego_speed)` is **certified** when
+//! - the *front value* `F(z) = front_value(gap_leader, leader_speed, ego_speed)`, the smallest
+//!   gap to a leader braking as hard as its model allows while the ego brakes at `beta`, in
+//!   closed form ([`table_format::front`]), exceeds `front_margin`, and
+//! - the *rear value* `W(z)`, the table's value at `(gap_follower, follower_speed, ego_speed)`
+//!   less its error bound, exceeds `rear_margin`. `W` is the stationary (infinite-horizon)
+//!   value of the rear game in which the ego's acceleration anywhere in the band
+//!   `[-beta, a_max]` is adversarial: it bounds the rear gap from below for as long as the
+//!   ego keeps its command in the band, whatever the command is.
+//!
+//! # The law, and why it keeps a certified state certified
+//! Every command is in the band `[-beta, a_max]`, in every mode, so the rear half needs no
+//! decision: it is a property of the band, proven for the table itself, cell by cell, by
+//! `solver verify` (below). The front half decides the command. The nominal ACC law's command `u`
+//! is held for one period `h`; the look-ahead computes `front_value` with a *response* of `u`
+//! for `h` before the braking at `beta` (plus the delays, see below). That is the smallest
+//! front gap over every leader
+//! behaviour, the period included, and every state the period can reach has a front value at
+//! least as large (the reached state's worst case is one of the behaviours the look-ahead
+//! took the minimum over). So if the look-ahead exceeds `front_margin` the nominal command is
+//! applied ([`Mode::Nominal`]); otherwise ([`Mode::Override`]) a gentler braking the
+//! look-ahead passes (a secant step between the refused command and `beta`), or braking at
+//! `beta` itself, along which the front value never decreases (checked by property tests in
+//! `table_format::front`). Either way a certified state's front value stays above
+//! `front_margin`. No monotonicity of
+//! the table is used: the rear value is a property of the band, and the front value is exact.
+//!
+//! # Delays: the measurements' age, the actuator's dead time and lag
+//! The configuration declares the actuator's dead time `D` (a command acts `D` after it is
+//! issued, at most 100 ms) and the time constant `tau` of its first-order lag (at most 0.3 s);
+//! a track of any age is argued from its time (below: aging and lost tracks), the ego's speed
+//! up to `stale_periods` periods old. The front is argued from the
+//! leader track's measurement time `t_m`, not from now: the front value is a minimum over
+//! every leader behaviour from `t_m` on, so what the leader did since is covered. The ego's
+//! speed at `t_m` comes from its own measurement, moved to `t_m` within the accelerations the
+//! ego can have had in between (the highest speed for the ego, the lowest for the leader).
+//!
+//! The ego's acceleration is bounded through the commands the controller has issued, which it
+//! keeps (a sliding-window maximum back to the oldest kept measurement, less `D` and `5 tau`).
+//! Until braking at
+//! beta takes full effect, the acceleration is at most `pending`: the largest command issued
+//! since `t_m - D - 5 tau`, plus what older commands can still pass through the lag (at most
+//! `e^-5` of the band's width); before the controller's first command it is the band's
+//! largest. A braking command issued at `t_b` takes full effect, in the sense that matters
+//! here, at `t_b + D + tau`: a first-order lag's speed never exceeds that of the step delayed
+//! by `tau` (see `table_format::front`). So the **certified front value** is
+//! `front_value` at the state of `t_m` with a response of `pending` until `t_b + D + tau`,
+//! where `t_b` is when the current run of commands at beta began, or now. The **look-ahead**
+//! of a command `u` uses a response of `max(pending, u + tail)` until `now + h + D + tau`, with
+//! `tail` the lag's `e^-5` of the band's width: the next step's `pending` is `u + tail` when `u`
+//! is the largest command (before issue 20's review the look-ahead took `max(pending, u)`,
+//! which under-stated it by up to the tail, 0.037 m/s^2). Why it is
+//! invariant: at the next step the certified value's response ends at the same instant (either
+//! the braking run goes on from the same `t_b`, or `u` was held and the run starts at
+//! `now + h`), with a `pending` no larger, from a later state that one of the behaviours the
+//! look-ahead took the minimum over has reached; so it is at least the look-ahead's value.
+//!
+//! # The ego's speed: kept in the domain, not assumed
+//! The rear value is the rear game's value over speeds in `[0, max_speed]`, so a certified
+//! state must stay inside that range, and the ego's speed is the firmware's to keep there: no
+//! human model bounds it. The **speed headroom** of a state is `max_ego_speed` less the
+//! highest speed the ego can reach before braking at beta takes full effect: from its
+//! measurement at `t_e`, `ego_speed + max(pending, 0) (t_b + D + tau - t_e)` (the response's
+//! end as in the front value; a first-order lag's speed never exceeds the step's). A certified
+//! state has a headroom of zero or more ([`Certificate::is_certified`]). The look-ahead of a
+//! command `u` caps it so that `ego_speed + max(pending, u + tail, 0) (now + h + D + tau - t_e)`
+//! stays within `max_ego_speed` (`ego_speed` at its measurement's highest):
+//! the cap is `(max_ego_speed - ego_speed) / (now + h + D + tau - t_e) - tail`,
+//! and when even `pending` alone breaks it, nothing passes and the command is beta. Why it is
+//! invariant: braking at beta keeps the response's end where it was and `pending` no larger, as
+//! for the front value, and a capped command ends its response at `now + h + D + tau`, which the
+//! next step's headroom uses. Before (issue 19), the front value held the ego at `max_speed`
+//! during its response, which the dynamics do not: a start 0.05 m above the margin, engaged at
+//! 34.8 m/s and +0.8 m/s^2, collided.
+//!
+//! # The domain
+//! The rear table covers `gap_follower` up to its last breakpoint, and speeds in
+//! `[0, max_speed]`. A follower farther back than the grid (or none: a gap of `+inf`) is safe
+//! until it crosses the grid's last gap, where its value is at least the smallest value on that
+//! face of the grid, computed once when the table is loaded: that is its rear value. A leader
+//! farther than any gap (or none) has an infinite front value. A measured speed of a human
+//! slightly below zero is taken as zero (a slower follower and a faster leader are never
+//! worse).
+//!
+//! **The rear state at one time.** The rear value is argued at the follower track's time
+//! `t_f`: from a certified state at `t_f` the rear is safe for ever while every command is in
+//! the band, whatever came after. The follower's speed is `ego_speed - rel_speed` with the
+//! ego's speed *at `t_f`*, which its own measurement at `t_e` gives only within the
+//! accelerations possible in between: `[ego - pending dt, ego + beta dt]` for an older track,
+//! `[ego - beta dt, ego + pending dt]` for a newer one. So the rear value is the table's least
+//! value over the box of those ego speeds and the follower speeds that go with them, held in
+//! the human's `[0, max_speed]` ([`Table::least_over_box`]: exact for the multilinear interpolation, one
+//! lookup when the times agree, at most `8^3` points with [`table_format::BOX_INTERIOR`] breakpoints
+//! inside). Before (issue 19), the two were subtracted as if taken at once: a follower at
+//! exactly 35 m/s read 35.05 m/s behind an accelerating ego, and the firmware ran uncertified.
+//!
+//! An ego or follower faster than `max_speed` at that time, or a follower gap below the grid,
+//! is outside the domain: [`Fault::OutsideDomain`], [`Mode::Uncertified`]. Only the rear half
+//! is unknown there: the command is the nominal law under the same speed cap and front
+//! look-ahead as in the domain, so the front override still acts (before issue 19 the nominal
+//! law ran unchecked, and an ego at 35.14 m/s braked at -1.5 m/s^2 into a stopped leader). The
+//! nominal law's set speed (30 m/s by default, below the table's 35) and the cap bring a fast
+//! ego back into the domain, and its braking, like every command's, is at most `beta`, which
+//! spares the follower: a rear table certifies nothing unless the follower can out-brake the
+//! band (measured: with the follower's braking equal to `beta` the rear value's plateau is
+//! -0.99 m, README).
+//!
+//! # Measurement error, aging and lost tracks, cut-ins (issue 20)
+//! The sensors' error is bounded and declared in [`Config::sensors`] ([`crate::sensing`]): every
+//! measurement stands for the box of true values its error allows.
+//! - **Front**: the front value is evaluated at the box's worst corner: the least gap, the
+//!   slowest leader (the ego's lowest speed at `t_m` plus the least range rate) and the fastest
+//!   ego. It is non-decreasing in the gap and the leader's speed and non-increasing in the ego's
+//!   speed ([`table_format::front`]'s property test `the_error_boxs_worst_corner_is_its_least_value`),
+//!   so that corner is the least value over the box; the leader's speed is `ego + range_rate`,
+//!   and taking each at its own worst end covers the pair (conservative by the ego's error
+//!   twice). The speed headroom and cap take the ego at its highest.
+//! - **Rear**: the table's exact least value over the box (gap interval, the ego's speed at
+//!   `t_f` within its error and its possible change since, the follower's with it and the
+//!   range-rate error), [`Table::least_over_box`], the multilinear interpolant's minimum over the
+//!   candidates (box ends and breakpoints inside), at most [`table_format::BOX_INTERIOR`]
+//!   breakpoints per axis. Why at run time and not in a table eroded at compile time: the box
+//!   depends on the track's age, known only at run time (an eroded table must take its worst);
+//!   one table serves every declared sensor; the minimum is exact, not a second bound; and it is
+//!   computed once per follower measurement (below). Measured on the deployed table
+//!   (`solver verify`, `solver::robust`): 74.8% of the measured rear states pass with the
+//!   default error against 77.1% with exact sensors; every passing measurement's box lies in
+//!   cells the proof covers. Cost: the worst control step on the Cortex-M4F is 12,916
+//!   instructions (QEMU, README), against a budget of 20,000 (0.12 ms at one instruction per
+//!   cycle, 0.71 ms at six: 3.6% of the 20 ms period at 168 MHz).
+//! - **Aging**: a measurement is argued from its own time, so its age is inside the argument.
+//!   The last plausible leader measurement is kept with the interval of the ego's speed at its
+//!   time (from the kept ego measurement nearest it); its look-ahead's response runs from then,
+//!   so it grows with the age and the car slows as the track ages. The follower's rear value is
+//!   computed once per measurement and kept: from a certified rear state at `t_f` the rear is
+//!   safe for ever while every command is in the band, whatever the track's age. An invalid or
+//!   implausible measurement is a missed refresh: the last good one goes on aging. The command
+//!   history is kept back to the oldest kept measurement (merged, never under-stated, when it
+//!   fills), so `pending` is known at any age.
+//! - **Lost**: beyond `sensors.max_track_age_us` (1 s by default), the certified fallback: the
+//!   minimum-risk deceleration under the front half of the last good leader measurement
+//!   (braking harder, up to beta, when the leader's worst case since then needs it), the rear
+//!   kept by the band; [`Mode::MinimumRisk`] with the fault and a margin. A track that comes back
+//!   is a new measurement: its certificate is evaluated and its look-ahead decides before the
+//!   nominal law resumes. Each command reports the tracks' states ([`TrackState`]), on CAN too.
+//! - **Cut-ins**: a leader measurement whose range is below the least the last track's vehicle
+//!   can have closed to is a new vehicle ([`TrackState::New`], [`Event::NewLeader`]). It is used in
+//!   the period it arrives; where its front value is below the margin no command passes the
+//!   look-ahead (it is non-increasing in the command) and the command is beta, with the
+//!   takeover request ([`Command::takeover`]). A cut-in is outside the model: the certificate
+//!   cannot promise what follows, only the best answer.
+//!
+//! # Faults and the minimum-risk manoeuvre
+//! A table that does not parse, is not a split table, whose band does not fit the vehicle's
+//! [`Envelope`] or that carries no complete `solver verify` record for the configured
+//! `rear_margin`, a configuration outside its limits, a measurement the sensor flags invalid, a
+//! non-finite or physically impossible ego speed, one older than `stale_periods`
+//! periods, no plausible track yet, a track beyond its covered age (the certified fallback,
+//! above), or a clock that jumps (backwards, or forwards by more than
+//! [`MAX_STEP_GAP_PERIODS`] periods): each is a [`Fault`], reported in the command and logged,
+//! and the command is the minimum-risk manoeuvre: a controlled deceleration of
+//! `mrm_deceleration` (default 2 m/s^2, at most 4), softened to `mrm_gentle_deceleration` when
+//! the follower is known, close and closing, so as not to provoke a rear-end collision. Where
+//! the table is loaded and the leader track and the ego's speed are good (the fault is
+//! elsewhere: the follower track, the clock), the front half still applies to that
+//! deceleration exactly as to the nominal law: the speed cap and the look-ahead, so the
+//! manoeuvre brakes harder, up to beta, when the leader needs it (after a clock jump the
+//! forgotten history makes the look-ahead assume the band's top). A clock
+//! jump is never latched: the new time is adopted, the command history forgotten, and the
+//! manoeuvre ends after [`CLOCK_RECOVERY_PERIODS`] good periods. A board that restarted after
+//! a fault of its own (watchdog, HardFault, panic) latches the manoeuvre until power-on
+//! ([`Controller::latch_minimum_risk`], [`Fault::RestartedAfterFault`]). Every command, in
+//! every mode, is clamped into the envelope, and (with a table) into the band.
+//!
+//! # What `solver verify` proves of the rear table
+//! `cargo run -p solver --release -- verify firmware/tables/default.bin` proves, by interval
+//! bounds over every cell of the table and every admissible input (not by sampling), that every
+//! state with `W > error_bound + rear_margin` (the firmware's rear test, `rear_margin` 0) is
+//! safe from the follower for ever while the ego's acceleration stays in the band: for each
+//! such state one of the periods 20, 100, 200 or 300 ms (chosen by the state) takes it, whatever
+//! the ego does in the band and whatever time gap the IDM follower holds, to a state that passes
+//! the test again, with the gap above zero in between; at standstill, below the gap where the
+//! IDM brakes at its clip (0.756 m), a closed-form lemma does the same. Measured: 537,280 of
+//! 537,280 certified cells, 26 s on two cores (`solver::verify` has the method and why the
+//! deployment table is solved with the follower pushed 0.2 m/s^2 beyond its model). The actuator's
+//! dead time and lag do not enter: whatever they do, the realised acceleration stays in the
+//! band when every command is in it. Between those periods the value may dip below the level:
+//! by at most [`REAR_SAMPLE_TOLERANCE`] (10 cm; 8.3 cm measured by verify's bounds on the
+//! deployed table) at every 20 ms sample, which verify proves from its version 2 on. What it
+//! does not claim: anything about `f32` rounding beyond `solver::verify::TOLERANCE`.
+//!
+//! # The tolerances, per part
+//! Each part of a certified state's certificate is claimed to stay above its own stated
+//! tolerance at every control period: the front half above `-CERTIFICATE_TOLERANCE` (1 cm,
+//! `f32` rounding of the closed form), the rear half above `-REAR_SAMPLE_TOLERANCE` (10 cm,
+//! proven by verify; above zero at its proof periods), the speed headroom above
+//! `-SPEED_TOLERANCE` (1 mm/s, `f32` rounding near 35 m/s).
+//!
+//! # What is assumed
+//! The humans keep to the table's model (the leader brakes at most `-leader.min` and keeps its
+//! speed in `[0, max_speed]`, the follower drives by the IDM with its time gap in range and
+//! keeps its speed there too), and no vehicle cuts in; the measurements are within their
+//! declared error bounds ([`Config::sensors`]) and time-stamped on the controller's clock (a
+//! track of any age is argued from its time; the ego's speed at most `stale_periods` old; each
+//! channel may have its own age); the actuator is a
+//! dead time and a first-order lag no slower than the configuration declares, and brakes at
+//! beta when told to. Nothing is assumed of the ego's speed: the firmware keeps it in the
+//! domain (above). The front value is exact, and its look-ahead over the
+//! delays is argued above and checked by property tests; its `f32` evaluation is within about
+//! 1.4 mm (measured), inside [`CERTIFICATE_TOLERANCE`].
+
+mod certificate;
+mod command;
+mod config;
+mod faults;
+mod history;
+mod law;
+mod tracks;
+
+pub use certificate::{Certificate, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE};
+pub use command::{Command, Event, Mode};
+pub use config::{
+    Config, Envelope, CLOCK_RECOVERY_PERIODS, ISO_15622_LIMITS, MAX_ACTUATOR_LAG_US,
+    MAX_DEAD_TIME_US, MAX_PERIOD_US, MAX_STALE_PERIODS, MAX_STEP_GAP_PERIODS, MIN_PERIOD_US,
+};
+pub use faults::Fault;
+
+use heapless::Deque;
+use table_format::Table;
+
+use crate::fmt::{log_info, log_warn};
+use crate::inputs::Inputs;
+use crate::math;
+use crate::sensing::TrackState;
+
+use certificate::{model_of, Model};
+use history::IssuedCommands;
+use tracks::{LeaderMemo, RearMemo, EGO_HISTORY};
+
+/// The ACC safety controller. It owns the table and a log of recent events; it never allocates
+/// and never panics. A clone is an independent controller in the same state (host-side
+/// searches look ahead with one).
+#[derive(Clone)]
+pub struct Controller<'t> {
+    table: Result<(Table<'t>, Model), Fault>,
+    config: Config,
+    mode: Mode,
+    /// The last command's takeover request.
+    takeover: bool,
+    /// The time of the last step (`None` before the first).
+    last_now_us: Option<u64>,
+    /// Periods of the minimum-risk manoeuvre left after a clock jump, and its fault.
+    clock_recovery: (u32, Fault),
+    margin_lost: bool,
+    events: Deque<Event, 32>,
+    issued: IssuedCommands,
+    /// When the current run of commands braking at beta began (`None`: the last command was
+    /// not braking at beta): the braking is under way since then, not only from now.
+    braking_since_us: Option<u64>,
+    /// The last plausible leader measurement, with the ego's speed interval at its time.
+    leader: Option<LeaderMemo>,
+    /// Since when (the ego measurement's time of the first of an unbroken run of steps) every
+    /// step's speed headroom was zero or more: from then on the ego's true speed has stayed
+    /// within the domain.
+    speed_kept_from_us: Option<u64>,
+    /// The last plausible follower measurement, with its rear value at its time.
+    rear: Option<RearMemo>,
+    /// The latest ego-speed measurements `(time, speed)`, oldest first: the one nearest a
+    /// track's time gives the ego's speed there.
+    ego_history: Deque<(u64, f32), EGO_HISTORY>,
+}
+
+impl<'t> Controller<'t> {
+    /// A controller running `table_bytes`. A table that does not parse, or is not a split
+    /// three-car table, leaves the controller in the minimum-risk manoeuvre for good, with the
+    /// reason in every command.
+    pub fn new(table_bytes: &'t [u8], config: Config) -> Self {
+        let table = if config.is_valid() {
+            Table::parse(table_bytes)
+                .map_err(Fault::Table)
+                .and_then(|t| model_of(&t, &config).map(|m| (t, m)))
+        } else {
+            Err(Fault::InvalidConfig)
+        };
+        if let Err(fault) = &table {
+            log_warn!("table refused: {}", fault);
+        }
+        let mut config = config;
+        config.mrm_deceleration = math::clamp(config.mrm_deceleration, 0.5, 4.0);
+        config.mrm_gentle_deceleration =
+            math::clamp(config.mrm_gentle_deceleration, 0.5, config.mrm_deceleration);
+        Controller {
+            table,
+            config,
+            mode: Mode::MinimumRisk,
+            takeover: true,
+            last_now_us: None,
+            clock_recovery: (0, Fault::ClockJumped),
+            margin_lost: false,
+            events: Deque::new(),
+            issued: IssuedCommands::new(),
+            braking_since_us: None,
+            leader: None,
+            speed_kept_from_us: None,
+            rear: None,
+            ego_history: Deque::new(),
+        }
+    }
+
+    /// Ends certified control for good: every later step is the minimum-risk manoeuvre, with
+    /// `fault` as its reason. For a board that restarted after a fault of its own (watchdog,
+    /// HardFault, panic): software that failed once in a drive is not trusted again in that
+    /// drive, so a restart brings the car to a stop instead of resuming control. The
+    /// manoeuvre is the usual one (softened for a close, closing follower); nothing but a new
+    /// controller ends it.
+    pub fn latch_minimum_risk(&mut self, fault: Fault) {
+        log_warn!("minimum-risk manoeuvre latched: {}", fault);
+        self.table = Err(fault);
+    }
+
+    /// The table, if it was accepted.
+    pub fn table(&self) -> Option<&Table<'t>> {
+        self.table.as_ref().ok().map(|(t, _)| t)
+    }
+
+    /// The configuration in force (decelerations clamped to their limits).
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// The mode of the last command.
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// The last command's takeover request ([`Command::takeover`]; true before the first
+    /// command).
+    pub fn takeover_requested(&self) -> bool {
+        self.takeover
+    }
+
+    /// Recent events (the last 32), oldest first.
+    pub fn events(&self) -> impl Iterator<Item = &Event> {
+        self.events.iter()
+    }
+
+    /// Appends to the event log, dropping the oldest entry when it is full. (`heapless::Deque`
+    /// rather than `HistoryBuf`: its ring arithmetic has no bounds check the optimiser cannot
+    /// remove, so the control step keeps no panic path; see the `no-panic` binary.)
+    fn log(&mut self, event: Event) {
+        if self.events.is_full() {
+            self.events.pop_front();
+        }
+        let _ = self.events.push_back(event);
+    }
+
+    /// One control step. Never inlined: it is the unit the target's cost figures (stack,
+    /// instructions per step) are measured on.
+    #[inline(never)]
+    pub fn step(&mut self, inputs: &Inputs) -> Command {
+        let now = inputs.now_us;
+        // The clock: a step earlier than the last, or more than MAX_STEP_GAP_PERIODS periods
+        // after it, is a jump. The new time is adopted (so a jump never latches), the command
+        // history is forgotten (its time stamps belong to the old time line), and the
+        // minimum-risk manoeuvre lasts CLOCK_RECOVERY_PERIODS good periods more.
+        let max_gap = MAX_STEP_GAP_PERIODS * u64::from(self.config.period_us);
+        let jump = match self.last_now_us {
+            Some(last) if now < last => Some(Fault::ClockWentBackwards),
+            Some(last) if now - last > max_gap => Some(Fault::ClockJumped),
+            _ => None,
+        };
+        self.last_now_us = Some(now);
+        let command = if let Some(fault) = jump {
+            self.issued.forget();
+            self.braking_since_us = None;
+            // The kept measurements' times belong to the old time line.
+            self.leader = None;
+            self.speed_kept_from_us = None;
+            self.rear = None;
+            self.ego_history.clear();
+            self.clock_recovery = (CLOCK_RECOVERY_PERIODS, fault);
+            self.minimum_risk(inputs, fault)
+        } else if self.clock_recovery.0 > 0 {
+            self.clock_recovery.0 -= 1;
+            self.minimum_risk(inputs, self.clock_recovery.1)
+        } else {
+            self.decide(inputs)
+        };
+        let command = Command {
+            acceleration: self.config.envelope.clamp(command.acceleration),
+            ..command
+        };
+        if command.mode != self.mode {
+            self.log(Event::ModeChanged {
+                at_us: now,
+                to: command.mode,
+                fault: command.fault,
+            });
+            log_info!("mode {} (fault {})", command.mode, command.fault);
+        }
+        self.mode = command.mode;
+        self.takeover = command.takeover;
+        // Every command goes to the actuator: the look-ahead of later steps must know it.
+        let keep_from = self.keep_commands_from(now);
+        self.issued.push(now, command.acceleration, keep_from);
+        let at_beta = self
+            .table
+            .as_ref()
+            .is_ok_and(|(_, m)| command.acceleration <= m.ego.min);
+        self.braking_since_us = match (at_beta, self.braking_since_us) {
+            (true, Some(since)) => Some(since),
+            (true, None) => Some(now),
+            (false, _) => None,
+        };
+        command
+    }
+
+    fn minimum_risk(&self, inputs: &Inputs, fault: Fault) -> Command {
+        let deceleration = self.mrm_deceleration(inputs);
+        let mut command = Command::bare(-deceleration, Mode::MinimumRisk, Some(fault));
+        command.takeover = true;
+        let Ok((_, model)) = &self.table else {
+            return command;
+        };
+        let planned = math::clamp(-deceleration, model.ego.min, model.ego.max);
+        command.acceleration = planned;
+        // The front half still applies where its inputs are good (module docs): the manoeuvre
+        // brakes harder when the leader needs it, never more than beta.
+        let now = inputs.now_us;
+        if let (Some(leader), Ok(ego_speed)) =
+            (self.leader, self.check_ego_speed(&inputs.ego_speed, now))
+        {
+            let t_e = inputs.ego_speed.timestamp_us;
+            let pending = self.pending(leader.at_us.min(t_e), model);
+            command.acceleration = self
+                .enforce_front(model, &leader, ego_speed, t_e, now, pending, planned)
+                .command;
+            command.leader = self.track_state(leader.at_us, now);
+        }
+        command
+    }
+
+    /// The minimum-risk deceleration: `mrm_deceleration`, softened to
+    /// `mrm_gentle_deceleration` when the follower is known, close and closing (by this
+    /// period's plausible track, or the last one kept).
+    fn mrm_deceleration(&self, inputs: &Inputs) -> f32 {
+        let c = &self.config;
+        let follower = if self.is_plausible(&inputs.follower, inputs.now_us) {
+            Some(inputs.follower.value)
+        } else {
+            self.rear.map(|r| r.track)
+        };
+        let close_and_closing = follower.is_some_and(|t| {
+            math::is_finite(t.gap) && t.gap < c.follower_close_gap && t.rel_speed < 0.0
+        });
+        if close_and_closing {
+            c.mrm_gentle_deceleration
+        } else {
+            c.mrm_deceleration
+        }
+    }
+
+    fn decide(&mut self, inputs: &Inputs) -> Command {
+        let model = match &self.table {
+            Ok((_, m)) => *m,
+            Err(f) => return self.minimum_risk(inputs, *f),
+        };
+        let now = inputs.now_us;
+        let ego = inputs.ego_speed;
+        let ego_speed = match self.check_ego_speed(&ego, now) {
+            Ok(v) => v,
+            Err(f) => return self.minimum_risk(inputs, f),
+        };
+        let t_e = ego.timestamp_us;
+        self.remember_ego_speed(t_e, ego_speed);
+        let leader_state = self.observe_leader(&inputs.leader, now, &model);
+        let follower_state = self.observe_follower(&inputs.follower, now, &model);
+        let with_tracks = |mut c: Command| {
+            c.leader = leader_state;
+            c.follower = follower_state;
+            c
+        };
+        let Some(leader) = self.leader else {
+            return with_tracks(self.minimum_risk(inputs, Fault::LeaderInvalid));
+        };
+        let Some(rear) = self.rear else {
+            return with_tracks(self.minimum_risk(inputs, Fault::FollowerInvalid));
+        };
+        // Beyond the covered age: the certified fallback (module docs), the minimum-risk
+        // deceleration under the front half of the last good leader measurement.
+        let lost = match (leader_state, follower_state) {
+            (TrackState::Lost, _) => Some(Fault::LeaderStale),
+            (_, TrackState::Lost) => Some(Fault::FollowerStale),
+            _ => None,
+        };
+        let proposal = match lost {
+            Some(_) => math::clamp(-self.mrm_deceleration(inputs), model.ego.min, model.ego.max),
+            None => self.nominal(leader.track, ego_speed, model.ego),
+        };
+        let pending = self.pending(leader.at_us.min(t_e), &model);
+        let front = self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, proposal);
+        self.speed_kept_from_us = if front.headroom >= 0.0 {
+            self.speed_kept_from_us.or(Some(t_e))
+        } else {
+            None
+        };
+        let mode = match (lost, front.overridden) {
+            (Some(_), _) => Mode::MinimumRisk,
+            (None, true) => Mode::Override,
+            (None, false) => Mode::Nominal,
+        };
+        let front_certified = front.value > self.config.front_margin;
+        let mut command = with_tracks(Command::bare(front.command, mode, lost));
+        command.takeover = lost.is_some() || !front_certified;
+        // Outside the rear table's domain the front override (and the speed cap) still act:
+        // only the rear half is unknown (module docs).
+        let rear = match rear.value {
+            Ok(w) => w,
+            Err(fault) => {
+                if lost.is_none() {
+                    command.mode = Mode::Uncertified;
+                    command.fault = Some(fault);
+                }
+                command.takeover = true;
+                return command;
+            }
+        };
+        let margin = self
+            .certificate_of(front.value, rear, front.headroom, &model)
+            .margin();
+        // Diagnostics: the state itself is no longer certified (logged once per excursion).
+        let outside = margin.is_nan() || margin <= 0.0;
+        if outside && !self.margin_lost {
+            self.log(Event::MarginLost { at_us: now, margin });
+        }
+        self.margin_lost = outside;
+        command.margin = Some(margin);
+        command
+    }
+}
