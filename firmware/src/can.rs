@@ -7,7 +7,9 @@
 //! | `0x120` | front track (leader) | 0-1 gap `u16` 0.01 m (`0xFFFF`: no vehicle), 2-3 relative speed `i16` 0.01 m/s (`v_leader - v_ego`), 4 flags (bit 0: valid), 5 age `u8` ms, 6 counter, 7 CRC |
 //! | `0x121` | rear track (follower) | as `0x120`, relative speed `v_ego - v_follower` |
 //! | `0x130` | ego speed | 0-1 speed `u16` 0.01 m/s, 2 flags (bit 0: valid), 3 age `u8` ms, 4 counter, 5 CRC |
-//! | `0x200` | acceleration request (sent) | 0-1 acceleration `i16` 0.001 m/s^2, 2 mode (0 nominal, 1 override, 2 minimum risk, 3 uncertified), 3 status ([`status_byte`]: certified, takeover request, the tracks' states), 4 counter, 5 CRC |
+//! | `0x131` | actuator state ([`crate::Inputs::ego_acceleration`]) | 0-1 acceleration `i16` 0.001 m/s^2 (the largest of the powertrain's realised acceleration and its requests in force and in flight), 2 flags (bit 0: valid), 3 age `u8` ms, 4 counter, 5 CRC |
+//! | `0x140` | driver request ([`crate::controller::DriverRequest`]) | 0 request (1 engage/SET, 2 cancel, 3 resume, 4 set speed, 5 time gap), 1-2 value `u16` (set speed 0.01 m/s; time-gap setting), 3 counter, 4 CRC; one request per frame, delivered one per period in order (up to 4 queued) |
+//! | `0x200` | acceleration request (sent) | 0-1 acceleration `i16` 0.001 m/s^2, 2 mode (0 nominal, 1 override, 2 minimum risk, 3 uncertified, 4 standby: not for the actuator), 3 status ([`status_byte`]: certified, takeover request, the tracks' states), 4 counter, 5 CRC |
 //!
 //! # End-to-end protection (after AUTOSAR E2E profile 1)
 //! - **CRC**: CRC-8 SAE J1850 (polynomial 0x1D, initial value 0xFF, final XOR 0xFF, the
@@ -30,7 +32,7 @@
 
 use embedded_can::{Frame, Id, StandardId};
 
-use crate::controller::{Command, Mode};
+use crate::controller::{Command, DriverRequest, Mode};
 use crate::inputs::{Actuator, Inputs, Measurement, Sensors, Track};
 use crate::math;
 use crate::sensing::TrackState;
@@ -41,6 +43,10 @@ pub const FRONT_TRACK_ID: u16 = 0x120;
 pub const REAR_TRACK_ID: u16 = 0x121;
 /// Identifier of the ego speed.
 pub const EGO_SPEED_ID: u16 = 0x130;
+/// Identifier of the actuator's state.
+pub const ACTUATOR_STATE_ID: u16 = 0x131;
+/// Identifier of a driver request.
+pub const DRIVER_REQUEST_ID: u16 = 0x140;
 /// Identifier of the acceleration request.
 pub const ACCEL_REQUEST_ID: u16 = 0x200;
 
@@ -66,12 +72,22 @@ pub struct CanBus<C> {
     inputs: Inputs,
     counter: u8,
     counts: E2eCounts,
-    /// The last counter accepted per identifier: front, rear, ego speed.
-    last_counters: [Option<u8>; 3],
+    /// The last counter accepted per identifier: front, rear, ego speed, actuator state,
+    /// driver request.
+    last_counters: [Option<u8>; 5],
+    /// Driver requests received and not yet delivered (one per period, oldest first).
+    driver: heapless::Deque<DriverRequest, 4>,
 }
 
 fn u16_at(data: &[u8], at: usize) -> Option<u16> {
     Some(u16::from_le_bytes([*data.get(at)?, *data.get(at + 1)?]))
+}
+
+/// What a received frame carries.
+enum Payload {
+    Track(Track),
+    Scalar(f32),
+    Driver(DriverRequest),
 }
 
 /// The largest counter jump that still counts as frames lost, not out of sequence.
@@ -187,6 +203,63 @@ pub fn encode_ego_speed(speed: f32, valid: bool, age_ms: u8, counter: u8) -> [u8
     ]
 }
 
+/// Decodes an actuator-state frame's payload.
+pub fn decode_actuator_state(data: &[u8]) -> Result<Received<f32>, FrameError> {
+    let body = checked(ACTUATOR_STATE_ID, data, 6)?;
+    let field = |at| body.get(at).copied().ok_or(FrameError::Length);
+    Ok(Received {
+        value: f32::from(i16::from_le_bytes([field(0)?, field(1)?])) * 0.001,
+        valid: field(2)? & 1 == 1,
+        age_ms: field(3)?,
+        counter: field(4)?,
+    })
+}
+
+/// Encodes an actuator state (for simulations and tests of the other end).
+pub fn encode_actuator_state(acceleration: f32, valid: bool, age_ms: u8, counter: u8) -> [u8; 6] {
+    let [a0, a1] = quantize_i16(acceleration * 1000.0).to_le_bytes();
+    let body = [a0, a1, u8::from(valid), age_ms, counter];
+    [
+        a0,
+        a1,
+        u8::from(valid),
+        age_ms,
+        counter,
+        frame_crc(ACTUATOR_STATE_ID, &body),
+    ]
+}
+
+/// Decodes a driver-request frame's payload: the request and the counter. An unknown request
+/// code is a malformed frame ([`FrameError::Length`]'s count).
+pub fn decode_driver_request(data: &[u8]) -> Result<(DriverRequest, u8), FrameError> {
+    let body = checked(DRIVER_REQUEST_ID, data, 5)?;
+    let field = |at| body.get(at).copied().ok_or(FrameError::Length);
+    let value = u16_at(body, 1).ok_or(FrameError::Length)?;
+    let request = match field(0)? {
+        1 => DriverRequest::Engage,
+        2 => DriverRequest::Cancel,
+        3 => DriverRequest::Resume,
+        4 => DriverRequest::SetSpeed(f32::from(value) * 0.01),
+        5 => DriverRequest::TimeGap(u8::try_from(value).unwrap_or(u8::MAX)),
+        _ => return Err(FrameError::Length),
+    };
+    Ok((request, field(3)?))
+}
+
+/// Encodes a driver request (for simulations and tests of the other end).
+pub fn encode_driver_request(request: &DriverRequest, counter: u8) -> [u8; 5] {
+    let (code, value) = match *request {
+        DriverRequest::Engage => (1, 0),
+        DriverRequest::Cancel => (2, 0),
+        DriverRequest::Resume => (3, 0),
+        DriverRequest::SetSpeed(v) => (4, quantize_u16(v * 100.0)),
+        DriverRequest::TimeGap(k) => (5, u16::from(k)),
+    };
+    let [v0, v1] = value.to_le_bytes();
+    let body = [code, v0, v1, counter];
+    [code, v0, v1, counter, frame_crc(DRIVER_REQUEST_ID, &body)]
+}
+
 /// Encodes an acceleration request's payload: the acceleration, the mode, the status byte
 /// ([`status_byte`]), the counter and the CRC.
 pub fn encode_command(command: &Command, counter: u8) -> [u8; 6] {
@@ -196,6 +269,7 @@ pub fn encode_command(command: &Command, counter: u8) -> [u8; 6] {
         Mode::Override => 1,
         Mode::MinimumRisk => 2,
         Mode::Uncertified => 3,
+        Mode::Standby => 4,
     };
     let status = status_byte(command);
     let body = [a0, a1, mode, status, counter];
@@ -310,7 +384,8 @@ impl<C: embedded_can::nb::Can> CanBus<C> {
             inputs: Inputs::invalid(0),
             counter,
             counts: E2eCounts::default(),
-            last_counters: [None; 3],
+            last_counters: [None; 5],
+            driver: heapless::Deque::new(),
         }
     }
 
@@ -358,14 +433,24 @@ impl<C: embedded_can::nb::Can> CanBus<C> {
                 FRONT_TRACK_ID => 0,
                 REAR_TRACK_ID => 1,
                 EGO_SPEED_ID => 2,
+                ACTUATOR_STATE_ID => 3,
+                DRIVER_REQUEST_ID => 4,
                 _ => continue,
             };
-            let decoded = if raw == EGO_SPEED_ID {
-                decode_ego_speed(data).map(|r| (None, r.valid, r.age_ms, r.counter, r.value))
-            } else {
-                decode_track(raw, data).map(|r| (Some(r.value), r.valid, r.age_ms, r.counter, 0.0))
+            let decoded = match raw {
+                EGO_SPEED_ID => decode_ego_speed(data).map(|r| {
+                    (Payload::Scalar(r.value), r.valid, r.age_ms, r.counter)
+                }),
+                ACTUATOR_STATE_ID => decode_actuator_state(data).map(|r| {
+                    (Payload::Scalar(r.value), r.valid, r.age_ms, r.counter)
+                }),
+                DRIVER_REQUEST_ID => {
+                    decode_driver_request(data).map(|(d, c)| (Payload::Driver(d), true, 0, c))
+                }
+                _ => decode_track(raw, data)
+                    .map(|r| (Payload::Track(r.value), r.valid, r.age_ms, r.counter)),
             };
-            let (track, valid, age_ms, counter, speed) = match decoded {
+            let (value, valid, age_ms, counter) = match decoded {
                 Ok(d) => d,
                 Err(FrameError::Length) => {
                     self.counts.malformed = self.counts.malformed.saturating_add(1);
@@ -383,25 +468,26 @@ impl<C: embedded_can::nb::Can> CanBus<C> {
                 continue;
             }
             let timestamp_us = now_us.saturating_sub(u64::from(age_ms) * 1000);
-            match track {
-                Some(value) => {
-                    let m = Measurement {
-                        value,
-                        timestamp_us,
-                        valid,
-                    };
-                    if raw == FRONT_TRACK_ID {
-                        self.inputs.leader = m;
-                    } else {
-                        self.inputs.follower = m;
+            let measured = |value: f32| Measurement {
+                value,
+                timestamp_us,
+                valid,
+            };
+            let track = |value: Track| Measurement {
+                value,
+                timestamp_us,
+                valid,
+            };
+            match (value, raw) {
+                (Payload::Track(t), FRONT_TRACK_ID) => self.inputs.leader = track(t),
+                (Payload::Track(t), _) => self.inputs.follower = track(t),
+                (Payload::Scalar(v), EGO_SPEED_ID) => self.inputs.ego_speed = measured(v),
+                (Payload::Scalar(a), _) => self.inputs.ego_acceleration = measured(a),
+                (Payload::Driver(d), _) => {
+                    if self.driver.is_full() {
+                        self.driver.pop_front();
                     }
-                }
-                None => {
-                    self.inputs.ego_speed = Measurement {
-                        value: speed,
-                        timestamp_us,
-                        valid,
-                    }
+                    let _ = self.driver.push_back(d);
                 }
             }
         }
@@ -416,6 +502,7 @@ impl<C: embedded_can::nb::Can> Sensors for CanBus<C> {
         self.poll(now_us)?;
         let mut inputs = self.inputs;
         inputs.now_us = now_us;
+        inputs.driver = self.driver.pop_front();
         Ok(inputs)
     }
 }

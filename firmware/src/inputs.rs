@@ -50,6 +50,15 @@ pub struct Inputs {
     pub follower: Measurement<Track>,
     /// The ego's own speed over ground, m/s.
     pub ego_speed: Measurement<f32>,
+    /// The actuator's state, m/s^2: an upper bound, from the vehicle, of the acceleration its
+    /// powertrain and brakes deliver and have been asked for (the request in force and in
+    /// flight, the driver's pedal before engagement). The certificate uses it for what the
+    /// car does before the controller's own commands are known (at engagement, after a
+    /// cancel, after a clock jump), within `sensors.acceleration_error`; invalid or older than
+    /// the ego speed's stale limit, it is not used and the band's top is assumed.
+    pub ego_acceleration: Measurement<f32>,
+    /// A request from the driver's controls this period, if any.
+    pub driver: Option<crate::controller::DriverRequest>,
     /// The time of this control step, microseconds.
     pub now_us: u64,
 }
@@ -75,6 +84,12 @@ impl Inputs {
                 timestamp_us: now_us,
                 valid: false,
             },
+            ego_acceleration: Measurement {
+                value: f32::NAN,
+                timestamp_us: now_us,
+                valid: false,
+            },
+            driver: None,
             now_us,
         }
     }

@@ -37,11 +37,13 @@ mod fmt;
 pub mod can;
 pub mod controller;
 pub mod inputs;
+pub mod iso15622;
 pub mod math;
 pub mod sensing;
 
 pub use controller::{
-    Certificate, Command, Config, Controller, Event, Fault, Mode, CERTIFICATE_TOLERANCE,
+    Certificate, Command, Config, Controller, DriverError, DriverRequest, DriverState, Event,
+    Fault, Mode, OverridePolicy, CERTIFICATE_TOLERANCE,
     REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
 };
 pub use inputs::{Actuator, Clock, Inputs, Measurement, Sensors, Track, Watchdog};

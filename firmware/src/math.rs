@@ -2,8 +2,9 @@
 //! target runs. On a host, `x.abs()` or `x.sqrt()` would silently pick std's methods over
 //! micromath's; everything here calls micromath (or plain IEEE operations) explicitly.
 //!
-//! The controller needs only comparisons, products and sums, plus `abs`; nothing here uses
-//! micromath's approximate `powf` or `sqrt`.
+//! The controller needs comparisons, products and sums, `abs`, and one square root (the law's
+//! approach speed to a stopped car), which is libm's correctly rounded `sqrtf`; nothing here
+//! uses micromath's approximate `powf` or `sqrt`.
 
 use micromath::F32Ext;
 
@@ -46,6 +47,12 @@ pub fn max(a: f32, b: f32) -> f32 {
     } else {
         a
     }
+}
+
+/// `sqrt(x)`, correctly rounded (libm; NaN below zero).
+#[inline]
+pub fn sqrt(x: f32) -> f32 {
+    libm::sqrtf(x)
 }
 
 /// Whether `x` is neither NaN nor infinite.

@@ -28,7 +28,8 @@
 //! inside), 0.14 m/s of range rate (the largest of the three), 80 ms cycles (the slowest) and
 //! 50 ms of latency, tracks covered up to 1 s. The ego's speed over ground is not in the
 //! radar's datasheets: 0.1 m/s + 0.5% is an assumption (wheel speeds with a calibrated rolling
-//! radius); a car whose speed signal is worse must declare it.
+//! radius); a car whose speed signal is worse must declare it. The actuator's reported state
+//! (the powertrain's acceleration request in force) within 0.2 m/s^2 is an assumption too.
 
 use crate::math;
 
@@ -46,6 +47,9 @@ pub struct SensorBounds {
     pub ego_speed_error: f32,
     /// The ego speed's error relative to the speed (at most [`MAX_RELATIVE_ERROR`]).
     pub ego_speed_error_relative: f32,
+    /// The error of the actuator's reported state ([`crate::Inputs::ego_acceleration`]),
+    /// m/s^2 (at most [`MAX_SPEED_ERROR`] in m/s^2).
+    pub acceleration_error: f32,
     /// The radar's cycle, microseconds (10 to 200 ms).
     pub cycle_us: u32,
     /// The radar's latency from measurement to delivery, microseconds (at most 200 ms).
@@ -74,6 +78,7 @@ impl Default for SensorBounds {
             range_rate_error: 0.14,
             ego_speed_error: 0.1,
             ego_speed_error_relative: 0.005,
+            acceleration_error: 0.2,
             cycle_us: 80_000,
             latency_us: 50_000,
             max_track_age_us: 1_000_000,
@@ -90,6 +95,7 @@ impl SensorBounds {
         range_rate_error: 0.0,
         ego_speed_error: 0.0,
         ego_speed_error_relative: 0.0,
+        acceleration_error: 0.0,
         cycle_us: 80_000,
         latency_us: 50_000,
         max_track_age_us: 1_000_000,
@@ -104,6 +110,7 @@ impl SensorBounds {
             && within(self.range_rate_error, MAX_SPEED_ERROR)
             && within(self.ego_speed_error, MAX_SPEED_ERROR)
             && within(self.ego_speed_error_relative, MAX_RELATIVE_ERROR)
+            && within(self.acceleration_error, MAX_SPEED_ERROR)
             && (10_000..=200_000).contains(&self.cycle_us)
             && self.latency_us <= 200_000
             && self.max_track_age_us <= MAX_TRACK_AGE_US

@@ -102,7 +102,7 @@ fn healthy_frames() -> Vec<MockFrame> {
 
 fn healthy_frames_counted(counter: u8) -> Vec<MockFrame> {
     vec![
-        front(60.0, 0, counter),
+        front(100.0, 0, counter),
         frame(
             can::REAR_TRACK_ID,
             &can::encode_track(
@@ -120,6 +120,10 @@ fn healthy_frames_counted(counter: u8) -> Vec<MockFrame> {
             can::EGO_SPEED_ID,
             &can::encode_ego_speed(25.0, true, 0, counter),
         ),
+        frame(
+            can::ACTUATOR_STATE_ID,
+            &can::encode_actuator_state(0.0, true, 0, counter),
+        ),
     ]
 }
 
@@ -128,7 +132,7 @@ fn frames_decode_into_inputs() {
     let mut bus = CanBus::new(MockBus::default());
     bus = push_all(&mut bus, healthy_frames());
     let inputs = bus.read(1_000).unwrap();
-    assert!((inputs.leader.value.gap - 60.0).abs() < 0.01);
+    assert!((inputs.leader.value.gap - 100.0).abs() < 0.01);
     assert!((inputs.follower.value.rel_speed + 0.5).abs() < 0.01);
     assert!((inputs.ego_speed.value - 25.0).abs() < 0.01);
     assert!(inputs.leader.valid && inputs.follower.valid && inputs.ego_speed.valid);

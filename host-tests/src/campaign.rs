@@ -429,7 +429,7 @@ pub fn run_group(
             ModeName::Nominal => by_mode.nominal += 1,
             ModeName::Override => by_mode.r#override += 1,
             ModeName::MinimumRisk => by_mode.minimum_risk += 1,
-            ModeName::Uncertified => by_mode.uncertified += 1,
+            ModeName::Uncertified | ModeName::Standby => by_mode.uncertified += 1,
         }
         match half {
             Half::Front => by_mode.front += 1,

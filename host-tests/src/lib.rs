@@ -17,6 +17,7 @@
 pub mod campaign;
 pub mod falsify;
 pub mod humans;
+pub mod iso;
 pub mod sim;
 pub mod world;
 

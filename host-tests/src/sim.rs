@@ -163,6 +163,11 @@ impl Actuator {
         c + (start - c) * self.model.lag * (1.0 - decay) / dt
     }
 
+    /// The actuator's model.
+    pub fn model(&self) -> ActuatorModel {
+        self.model
+    }
+
     /// The acceleration the lag has reached.
     pub fn acceleration(&self) -> f32 {
         self.acceleration
@@ -234,6 +239,8 @@ pub struct ErrorBounds {
     pub ego_speed: f32,
     /// Ego-speed error, relative part.
     pub ego_speed_relative: f32,
+    /// The actuator's reported state's error, m/s^2.
+    pub acceleration: f32,
 }
 
 impl From<&firmware::SensorBounds> for ErrorBounds {
@@ -244,6 +251,7 @@ impl From<&firmware::SensorBounds> for ErrorBounds {
             range_rate: b.range_rate_error,
             ego_speed: b.ego_speed_error,
             ego_speed_relative: b.ego_speed_error_relative,
+            acceleration: b.acceleration_error,
         }
     }
 }
@@ -300,6 +308,7 @@ impl SensorModel {
             range_rate: 0.0,
             ego_speed: 0.0,
             ego_speed_relative: 0.0,
+            acceleration: 0.0,
         },
         channels: [Channel::IDEAL; 3],
     };
@@ -452,14 +461,29 @@ impl Sensors {
         &self.model
     }
 
-    /// The firmware's inputs at `now_us` for the true state `cars` (leader, ego, follower).
-    pub fn measure(&mut self, now_us: u64, cars: [Car; 3], rng: &mut impl Rng) -> Inputs {
+    /// The firmware's inputs at `now_us` for the true state `cars` (leader, ego, follower) and
+    /// the actuator's state `actuator` (the largest of its acceleration and its commands in
+    /// force and in flight, m/s^2).
+    pub fn measure(
+        &mut self,
+        now_us: u64,
+        cars: [Car; 3],
+        actuator: f32,
+        rng: &mut impl Rng,
+    ) -> Inputs {
         let [leader, ego, follower] = cars;
         let b = self.model.bounds;
         let error: [f32; 5] = match self.model.noise {
             Noise::None => [0.0; 5],
             Noise::Uniform => std::array::from_fn(|_| rng.random::<f32>() * 2.0 - 1.0),
             Noise::WorstCorner => [1.0, 1.0, 1.0, 1.0, -1.0],
+        };
+        // The actuator's state at the low end of its error at the worst corner (the firmware
+        // then assumes exactly the truth), anywhere in it otherwise.
+        let actuator_error = match self.model.noise {
+            Noise::None => 0.0,
+            Noise::Uniform => rng.random::<f32>() * 2.0 - 1.0,
+            Noise::WorstCorner => -1.0,
         };
         let range = |g: f32, e: f32| g + e * (b.range + b.range_relative * g.max(0.0));
         let leader_track = Track {
@@ -476,6 +500,9 @@ impl Sensors {
             leader: self.leader.step(&cl, now_us, leader_track, rng),
             follower: self.follower.step(&cf, now_us, follower_track, rng),
             ego_speed: self.ego.step(&ce, now_us, ego_speed, rng),
+            // Reported with the ego's speed, on its channel's timing.
+            ego_acceleration: Measurement::new(actuator + actuator_error * b.acceleration, now_us),
+            driver: None,
             now_us,
         }
     }

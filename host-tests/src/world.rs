@@ -43,6 +43,8 @@ pub enum ModeName {
     MinimumRisk,
     /// [`Mode::Uncertified`].
     Uncertified,
+    /// [`Mode::Standby`].
+    Standby,
 }
 
 impl From<Mode> for ModeName {
@@ -52,6 +54,7 @@ impl From<Mode> for ModeName {
             Mode::Override => ModeName::Override,
             Mode::MinimumRisk => ModeName::MinimumRisk,
             Mode::Uncertified => ModeName::Uncertified,
+            Mode::Standby => ModeName::Standby,
         }
     }
 }
@@ -142,8 +145,13 @@ pub struct Score {
     pub min_gap_leader: f32,
     /// Smallest gap to the follower, m.
     pub min_gap_follower: f32,
-    /// Periods per firmware mode: nominal, override, minimum risk, uncertified.
-    pub periods_by_mode: [u64; 4],
+    /// Periods per firmware mode: nominal, override, minimum risk, uncertified, standby.
+    pub periods_by_mode: [u64; 5],
+    /// Periods whose command broke ISO 15622's jerk limit because the certificate needed it
+    /// ([`firmware::Command::emergency`]).
+    pub emergency_periods: u64,
+    /// The worst of ISO 15622's checks after the first second ([`crate::iso::IsoCheck`]).
+    pub iso: crate::iso::IsoWorst,
     /// Periods run.
     pub periods: u64,
     /// Largest |jerk| of the ego's command, m/s^3.
@@ -211,7 +219,9 @@ impl Score {
             min_speed: f32::INFINITY,
             min_gap_leader: f32::INFINITY,
             min_gap_follower: f32::INFINITY,
-            periods_by_mode: [0; 4],
+            periods_by_mode: [0; 5],
+            emergency_periods: 0,
+            iso: crate::iso::IsoWorst::default(),
             periods: 0,
             max_jerk: 0.0,
             leader_stops: 0,
@@ -299,6 +309,8 @@ pub struct World<'t> {
     score: Score,
     /// A cut-in under way: its period and the period its track was first delivered.
     cut_in: Option<(u64, Option<u64>)>,
+    /// ISO 15622's checks on the ego's realised motion, from 1 s after engagement.
+    iso: crate::iso::IsoCheck,
 }
 
 impl<'t> World<'t> {
@@ -329,6 +341,7 @@ impl<'t> World<'t> {
             last: None,
             score: Score::new(),
             cut_in: None,
+            iso: crate::iso::IsoCheck::new(1.0),
         }
     }
 
@@ -431,12 +444,20 @@ impl<'t> World<'t> {
         self.last
     }
 
-    /// The certificate at the true state now, with what the actuator has yet to do.
+    /// The certificate at the true state now, with what the actuator has yet to do and the
+    /// braking the firmware is committed to (its ramp), through the real actuator. Called
+    /// after the firmware's step and before its command goes to the actuator.
     pub fn certificate(&self) -> Option<Certificate> {
         let now_us = self.period * self.period_us;
-        let (time, accel) = self.actuator.response(now_us, self.model.band_min);
-        self.controller
-            .certificate_with_response(state_of(self.cars), time, accel)
+        let (_, pending) = self.actuator.response(now_us, self.model.band_min);
+        let model = self.actuator.model();
+        self.controller.certificate_with_actuator(
+            state_of(self.cars),
+            now_us,
+            model.dead_time_us(),
+            model.lag,
+            pending,
+        )
     }
 
     /// One period: the firmware measures and commands, the humans hold `a_leader` and
@@ -472,7 +493,10 @@ impl<'t> World<'t> {
         {
             self.score.unavoidable_from = Some(t);
         }
-        let inputs = self.sensors.measure(now_us, self.cars, &mut self.rng);
+        let actuator_state = self.actuator.response(now_us, self.model.band_min).1;
+        let inputs = self
+            .sensors
+            .measure(now_us, self.cars, actuator_state, &mut self.rng);
         let mut command = self.controller.step(&inputs);
         if let Some(a) = command_override {
             command.acceleration = a;
@@ -495,8 +519,12 @@ impl<'t> World<'t> {
             Mode::Override => 1,
             Mode::MinimumRisk => 2,
             Mode::Uncertified => 3,
+            Mode::Standby => 4,
         };
         s.periods_by_mode[mode_index] += 1;
+        if command.emergency {
+            s.emergency_periods += 1;
+        }
         s.periods += 1;
         if command.mode == Mode::MinimumRisk {
             if command.margin.is_some() {
@@ -515,6 +543,14 @@ impl<'t> World<'t> {
         self.last_command = Some(command.acceleration);
         self.last = Some((command, certificate));
         let ego_acceleration = self.actuator.acceleration();
+        // The realised acceleration (none at a standstill held by the brakes).
+        let realised = if self.cars[1].v <= 0.0 {
+            ego_acceleration.max(0.0)
+        } else {
+            ego_acceleration
+        };
+        self.iso.push(t, self.cars[1].v, realised);
+        s.iso = self.iso.worst();
         self.actuator.request(now_us, command.acceleration);
         let before = self.cars;
         let [mut leader, mut ego, mut follower] = self.cars;

@@ -106,13 +106,7 @@ fn main() {
         let rear_alone = sets[1].1.iter().filter(|s| rear_ok(s)).count();
         let mut points = Vec::new();
         for bl in leader_brakings {
-            let model = FrontModel {
-                leader_braking: bl,
-                ego_braking: beta,
-                response_time: 0.0,
-                response_acceleration: 0.0,
-                max_speed: 35.0,
-            };
+            let model = FrontModel::step(bl, beta, 0.0, 0.0, 35.0);
             let share: Vec<f64> = sets
                 .iter()
                 .map(|(_, states)| {

@@ -34,15 +34,31 @@
 //! model of the human, and a measured leader speed above it is taken at `max_speed` (a slower
 //! leader is never better for the ego).
 //!
+//! # The braking ramp
+//! A controller that limits its jerk cannot brake at `beta` at once: from the response's end
+//! its acceleration ramps down, `max(r - j s, -beta)` at `s` seconds into the ramp, from
+//! `ramp_from = r` at the jerk `j`. The ramp is in the model exactly (not bounded by a later
+//! step), because a later step is not invariant: a controller re-evaluating mid-ramp would move
+//! the step later by half of every period. The firmware's argument (`controller`'s module docs)
+//! uses the ramp's start and reference, which stay fixed while it runs. Why a dead time and a
+//! lag before a ramp are still bounded by a hold for `D + tau`: the commands form a
+//! non-increasing profile `c` (the hold, then the ramp), so its integral `C` (the speed it
+//! gives) is concave; a first-order lag averages the speed over an exponential delay of mean
+//! `tau`, and by Jensen's inequality the average of a concave function is at most its value at
+//! the mean delay. So the lagged ego is never faster than the profile delayed by `tau`; the
+//! dead time delays it by `D` more. The property test `bounds_a_ramp_through_the_delays`
+//! checks it by brute force, ramp started before the measurement included.
+//!
 //! # Evaluation
-//! Between events (the response ends, a car stops) both accelerations are constant and the gap
-//! is a parabola in time: its smallest value on a segment is at an end or at the vertex, where
-//! the relative speed changes sign from closing to opening. There are at most four segments
-//! (the response ends, the leader stops, the ego stops, then nothing moves). f32 throughout; no
-//! panics, no loops without a bound.
+//! Between events (the response ends, the ramp ends, a car stops) the leader's acceleration is
+//! constant and the ego's constant or falling at the jerk: the gap is a parabola or a cubic in
+//! time. Its relative speed is then a convex quadratic, so its smallest value on a segment is
+//! at an end or where the relative speed crosses zero upwards (the larger root). There are at
+//! most five segments (the response ends, the ramp ends, the leader stops, the ego stops, then
+//! nothing moves). f32 throughout; no panics, no loops without a bound.
 
-/// The front model: the leader's hardest braking, and the ego's braking level, response time,
-/// acceleration during the response and speed limit. All in SI units.
+/// The front model: the leader's hardest braking, and the ego's braking level, response, braking
+/// ramp and the leader's speed limit. All in SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FrontModel {
@@ -50,62 +66,143 @@ pub struct FrontModel {
     pub leader_braking: f32,
     /// The ego's braking level `beta`, m/s^2 (positive).
     pub ego_braking: f32,
-    /// How long the ego keeps `response_acceleration` before braking, s (zero or positive).
+    /// How long the ego keeps `response_acceleration` before its braking ramp, s (zero or
+    /// positive).
     pub response_time: f32,
     /// The ego's acceleration during the response, m/s^2.
     pub response_acceleration: f32,
+    /// Where the ego's braking ramp starts, m/s^2: after the response its acceleration is
+    /// `max(ramp_from - jerk s, -beta)`, `s` seconds into the ramp (module docs: the ramp).
+    pub ramp_from: f32,
+    /// The ramp's jerk, m/s^3 (positive; `f32::INFINITY`: no ramp, the braking at `beta` takes
+    /// effect at once, as before the ramp entered the model).
+    pub jerk: f32,
     /// The leader's largest speed, m/s (the human's model; the ego's speed is not held by it).
     pub max_speed: f32,
+}
+
+impl FrontModel {
+    /// The model without a braking ramp: a response, then `beta` at once.
+    pub const fn step(
+        leader_braking: f32,
+        ego_braking: f32,
+        response_time: f32,
+        response_acceleration: f32,
+        max_speed: f32,
+    ) -> Self {
+        FrontModel {
+            leader_braking,
+            ego_braking,
+            response_time,
+            response_acceleration,
+            ramp_from: 0.0,
+            jerk: f32::INFINITY,
+            max_speed,
+        }
+    }
+
+    /// Whether the model has a ramp to run (a finite positive jerk, a start above `-beta`).
+    fn has_ramp(&self) -> bool {
+        self.jerk.is_finite() && self.jerk > 0.0 && self.ramp_from > -self.ego_braking
+    }
+}
+
+/// The ego's phase in [`front_value`]'s evaluation.
+#[derive(Clone, Copy)]
+enum Phase {
+    /// The response, with its time left.
+    Hold(f32),
+    /// The braking ramp, with its acceleration now.
+    Ramp(f32),
+    /// Braking at `beta` (or stopped).
+    Brake,
 }
 
 /// The smallest gap (m) to a leader `gap` metres ahead at `leader_speed`, for an ego at
 /// `ego_speed`, under [`FrontModel`]: the front game's value with constraint `l = gap`.
 /// The leader's speed is taken in `[0, max_speed]`, the ego's at or above zero (module docs:
 /// no speed limit holds the ego). Non-decreasing in `gap` and `leader_speed`, non-increasing
-/// in `ego_speed`, `response_time` and `response_acceleration`. NaN in, NaN out.
+/// in `ego_speed`, `response_time`, `response_acceleration` and `ramp_from`, non-decreasing in
+/// `jerk`. NaN in, NaN out.
 pub fn front_value(gap: f32, leader_speed: f32, ego_speed: f32, model: &FrontModel) -> f32 {
     let vmax = model.max_speed;
-    let (bl, beta) = (model.leader_braking, model.ego_braking);
+    let (bl, beta, jerk) = (model.leader_braking, model.ego_braking, model.jerk);
     let mut g = gap;
     // (Not `f32::clamp`: it asserts its bounds are ordered, a panic path.)
     let mut vl = leader_speed.max(0.0).min(vmax);
     let mut ve = ego_speed.max(0.0);
-    let mut response = model.response_time.max(0.0);
+    let after_hold = if model.has_ramp() {
+        Phase::Ramp(model.ramp_from)
+    } else {
+        Phase::Brake
+    };
+    let mut phase = if model.response_time > 0.0 {
+        Phase::Hold(model.response_time)
+    } else {
+        after_hold
+    };
     let mut least = g;
-    // Each pass ends at an event that does not recur: the response ends, the leader stops, the
-    // ego stops. Five passes cover them all with one to spare.
-    for _ in 0..5 {
+    // Each pass ends at an event that does not recur: the response ends, the ramp ends, the
+    // leader stops, the ego stops (once it has moved). Seven passes cover them all with two to
+    // spare.
+    for _ in 0..7 {
         let al = if vl > 0.0 { -bl } else { 0.0 };
-        let ae = if response > 0.0 {
-            let a = model.response_acceleration;
-            if a < 0.0 && ve <= 0.0 {
-                0.0
-            } else {
-                a
+        // The ego's acceleration at the segment's start and its rate of change.
+        let (ae, rate) = match phase {
+            Phase::Hold(_) => {
+                let a = model.response_acceleration;
+                (if a < 0.0 && ve <= 0.0 { 0.0 } else { a }, 0.0)
             }
-        } else if ve > 0.0 {
-            -beta
-        } else {
-            0.0
+            Phase::Ramp(a) => {
+                if a <= 0.0 && ve <= 0.0 {
+                    // Stopped with the ramp braking: it stays stopped.
+                    phase = Phase::Brake;
+                    (0.0, 0.0)
+                } else {
+                    (a, -jerk)
+                }
+            }
+            Phase::Brake => (if ve > 0.0 { -beta } else { 0.0 }, 0.0),
         };
         // Time to each event; the segment ends at the first, and the cars whose event it is
         // are set exactly to their limit (no rounding remainder to start a spurious segment).
         let t_leader = if al < 0.0 { vl / bl } else { f32::INFINITY };
-        let t_response = if response > 0.0 {
-            response
+        let t_phase = match phase {
+            Phase::Hold(left) => left,
+            Phase::Ramp(a) => (a + beta) / jerk,
+            Phase::Brake => f32::INFINITY,
+        };
+        // The ego stops where `ve + ae s + rate s^2 / 2` reaches zero.
+        let t_ego = if rate < 0.0 {
+            let j = -rate;
+            (ae + libm::sqrtf((ae * ae + 2.0 * j * ve).max(0.0))) / j
+        } else if ae < 0.0 {
+            ve / -ae
         } else {
             f32::INFINITY
         };
-        let t_ego = if ae < 0.0 { ve / -ae } else { f32::INFINITY };
-        let len = t_leader.min(t_response).min(t_ego);
+        let len = t_leader.min(t_phase).min(t_ego);
         let dv = vl - ve;
         let da = al - ae;
-        // The vertex of a closing-then-opening parabola inside the segment.
-        if dv < 0.0 && da > 0.0 {
-            let s = -dv / da;
-            if s < len {
-                least = least.min(g + 0.5 * dv * s);
+        // The gap is `g + dv s + da s^2 / 2 - rate s^3 / 6`; its relative speed
+        // `dv + da s - rate s^2 / 2` is convex in `s`, so the gap's one local minimum is where
+        // that speed crosses zero upwards: the larger root.
+        let gap_at = |s: f32| g + dv * s + 0.5 * da * s * s - rate * s * s * s / 6.0;
+        let vertex = if rate < 0.0 {
+            let c = -0.5 * rate;
+            let disc = da * da - 4.0 * c * dv;
+            if disc >= 0.0 {
+                (-da + libm::sqrtf(disc)) / (2.0 * c)
+            } else {
+                f32::NAN
             }
+        } else if dv < 0.0 && da > 0.0 {
+            -dv / da
+        } else {
+            f32::NAN
+        };
+        if vertex > 0.0 && vertex < len {
+            least = least.min(gap_at(vertex));
         }
         if !len.is_finite() {
             // Nothing changes any more: both at constant speed, the ego no faster (it stops
@@ -115,7 +212,7 @@ pub fn front_value(gap: f32, leader_speed: f32, ego_speed: f32, model: &FrontMod
             }
             break;
         }
-        g += dv * len + 0.5 * da * len * len;
+        g = gap_at(len);
         vl = if len >= t_leader {
             0.0
         } else {
@@ -124,12 +221,14 @@ pub fn front_value(gap: f32, leader_speed: f32, ego_speed: f32, model: &FrontMod
         ve = if len >= t_ego {
             0.0
         } else {
-            (ve + ae * len).max(0.0)
+            (ve + ae * len + 0.5 * rate * len * len).max(0.0)
         };
-        response = if len >= t_response {
-            0.0
-        } else {
-            response - len
+        phase = match phase {
+            Phase::Hold(_) if len >= t_phase => after_hold,
+            Phase::Hold(left) => Phase::Hold(left - len),
+            Phase::Ramp(_) if len >= t_phase || len >= t_ego => Phase::Brake,
+            Phase::Ramp(a) => Phase::Ramp(a + rate * len),
+            Phase::Brake => Phase::Brake,
         };
         least = least.min(g);
     }
@@ -151,10 +250,14 @@ mod tests {
         let (mut g, mut vl, mut ve, mut t) = (gap, vl, ve, 0.0);
         let mut least = g;
         while vl > 0.0 || ve > 0.0 {
+            let beta = f64::from(m.ego_braking);
             let ae = if t < f64::from(m.response_time) {
                 f64::from(m.response_acceleration)
+            } else if m.jerk.is_finite() {
+                let s = t - f64::from(m.response_time);
+                (f64::from(m.ramp_from) - f64::from(m.jerk) * s).max(-beta)
             } else {
-                -f64::from(m.ego_braking)
+                -beta
             };
             let nl = (vl - f64::from(m.leader_braking) * dt).max(0.0);
             let ne = (ve + ae * dt).max(0.0);
@@ -171,12 +274,14 @@ mod tests {
     }
 
     fn model(bl: f32, beta: f32, rho: f32, ar: f32) -> FrontModel {
+        FrontModel::step(bl, beta, rho, ar, 35.0)
+    }
+
+    fn ramped(bl: f32, beta: f32, rho: f32, ar: f32, r: f32, j: f32) -> FrontModel {
         FrontModel {
-            leader_braking: bl,
-            ego_braking: beta,
-            response_time: rho,
-            response_acceleration: ar,
-            max_speed: 35.0,
+            ramp_from: r,
+            jerk: j,
+            ..model(bl, beta, rho, ar)
         }
     }
 
@@ -242,13 +347,7 @@ mod tests {
         ) {
             let (a0, c0) = (if a0 < 0.0 { a0 * beta } else { 2.0 * a0 }, if c0 < 0.0 { c0 * beta } else { 2.0 * c0 });
             let hold = a0.max(c0);
-            let m = FrontModel {
-                leader_braking: bl,
-                ego_braking: beta,
-                response_time: dead + tau,
-                response_acceleration: hold,
-                max_speed: 35.0,
-            };
+            let m = model(bl, beta, dead + tau, hold);
             let bound = f64::from(front_value(gap, vl, ve, &m));
             // The real actuator.
             let dt = 1e-4f64;
@@ -277,6 +376,98 @@ mod tests {
                 least = least.min(g);
             }
             prop_assert!(bound <= least + 0.01, "closed form {} above the real {}", bound, least);
+        }
+
+        /// The ramp's closed form against brute force: a response, then the acceleration
+        /// falling at the jerk from `ramp_from` to `-beta`, with stops on the way.
+        #[test]
+        fn the_ramp_matches_brute_force_integration(
+            gap in -5.0f32..150.0, vl in 0.0f32..35.0, ve in 0.0f32..35.0,
+            bl in 1.0f32..9.0, beta in 1.0f32..6.0, rho in 0.0f32..1.0, ar in -4.0f32..2.0,
+            r in -4.0f32..2.0, j in 0.5f32..10.0,
+        ) {
+            let m = ramped(bl, beta, rho, ar, r, j);
+            let exact = front_value(gap, vl, ve, &m);
+            let brute = simulated(f64::from(gap), f64::from(vl), f64::from(ve), &m);
+            prop_assert!((f64::from(exact) - brute).abs() < 0.01, "{} vs {} {:?}", exact, brute, m);
+        }
+
+        /// The value is non-increasing in the ramp's start and non-decreasing in its jerk (a
+        /// ramp that starts lower or falls faster is behind at every instant), and the step is
+        /// the ramp's limit as the jerk grows.
+        #[test]
+        fn the_ramp_is_monotone_and_tends_to_the_step(
+            gap in 0.0f32..150.0, vl in 0.0f32..35.0, ve in 0.0f32..35.0,
+            rho in 0.0f32..1.0, ar in -3.5f32..2.0, r in -3.5f32..2.0, dr in 0.0f32..2.0,
+            j in 0.5f32..10.0, dj in 0.0f32..10.0,
+        ) {
+            let v = |r: f32, j: f32| front_value(gap, vl, ve, &ramped(6.0, 3.5, rho, ar, r, j));
+            let tol = |x: f32| 1e-3 * (1.0 + x.abs());
+            let base = v(r, j);
+            prop_assert!(v(r + dr, j) <= base + tol(base), "higher start {} above {}", v(r + dr, j), base);
+            prop_assert!(v(r, j + dj) >= base - tol(base), "more jerk {} below {}", v(r, j + dj), base);
+            let step = front_value(gap, vl, ve, &model(6.0, 3.5, rho, ar));
+            let steep = v(r, 1e5);
+            prop_assert!((steep - step).abs() < 0.01, "jerk 1e5 {} against the step {}", steep, step);
+        }
+
+        /// The ramp bounds the real actuator: commands held per period (a staircase below the
+        /// ramp from `r`, started `t_b` before the measurement, at or before it), taking force
+        /// after a dead time `D` and passing a first-order lag `tau` from wherever the lag was
+        /// (`a_0`), with the commands in force before the ramp at most `c_0`. The closed form
+        /// with a hold of `max(a_0, c_0, ramp start)` for `max(D - t_b, 0) + tau` and the ramp
+        /// from `r - j max(t_b - D, 0)` (the firmware's formula, `controller`'s module docs) is
+        /// never above the smallest gap of brute-force integration (f64, 0.1 ms steps).
+        #[test]
+        fn bounds_a_ramp_through_the_delays(
+            gap in 0.0f32..150.0, vl in 0.0f32..35.0, ve in 0.0f32..35.0,
+            bl in 1.0f32..9.0, beta in 1.0f32..6.0,
+            dead in 0.0f32..0.1, tau in 0.0f32..0.3,
+            a0 in -1.0f32..1.0, c0 in -1.0f32..1.0, r in -1.0f32..1.0,
+            j in 1.0f32..10.0, since in 0.0f32..2.0,
+        ) {
+            let scale = |x: f32| if x < 0.0 { x * beta } else { 2.0 * x };
+            let (a0, c0, r) = (scale(a0), scale(c0), scale(r));
+            let h = 0.02f64;
+            let ramp_from = r - j * (since - dead).max(0.0);
+            let hold = a0.max(c0).max(ramp_from.max(-beta));
+            let m = ramped(bl, beta, (dead - since).max(0.0) + tau, hold, ramp_from, j);
+            let bound = f64::from(front_value(gap, vl, ve, &m));
+            // The real actuator; time 0 is the measurement, the ramp began at `-since`.
+            let (dt, tb) = (1e-4f64, -f64::from(since));
+            let (jj, bb, rr) = (f64::from(j), f64::from(beta), f64::from(r));
+            let issued = |t: f64| -> f64 {
+                if t < tb {
+                    f64::from(c0)
+                } else {
+                    let k = ((t - tb) / h).floor();
+                    (rr - jj * (k + 1.0) * h).max(-bb)
+                }
+            };
+            let (mut g, mut l, mut e, mut a, mut t) =
+                (f64::from(gap), f64::from(vl), f64::from(ve), f64::from(a0), 0.0f64);
+            let mut least = g;
+            while (l > 0.0 || e > 0.0) && t < 200.0 {
+                let command = issued(t - f64::from(dead));
+                let mean = if tau > 0.0 {
+                    let k = (-dt / f64::from(tau)).exp();
+                    let next = command + (a - command) * k;
+                    let mean = command + (a - command) * f64::from(tau) * (1.0 - k) / dt;
+                    a = next;
+                    mean
+                } else {
+                    a = command;
+                    command
+                };
+                let nl = (l - f64::from(bl) * dt).max(0.0);
+                let ne = (e + mean * dt).max(0.0);
+                g += 0.5 * (l + nl) * dt - 0.5 * (e + ne) * dt;
+                l = nl;
+                e = ne;
+                t += dt;
+                least = least.min(g);
+            }
+            prop_assert!(bound <= least + 0.01, "closed form {} above the real {} ({:?})", bound, least, m);
         }
 
         /// Why the firmware evaluates the front at one corner of a measurement's error box:

@@ -282,7 +282,7 @@ impl Game {
 
     /// The front model of a [`Game::ThreeCarSplit`] table: the leader braking at `-leader.min`,
     /// the ego at `beta = -ego.min` after holding `response_acceleration` for `response_time`
-    /// seconds. `None` for every other game.
+    /// seconds, braking at `beta` at once after it (no ramp). `None` for every other game.
     pub fn front_model(
         &self,
         response_time: f32,
@@ -294,13 +294,13 @@ impl Game {
                 leader,
                 max_speed,
                 ..
-            } => Some(crate::front::FrontModel {
-                leader_braking: -leader.min,
-                ego_braking: -ego.min,
+            } => Some(crate::front::FrontModel::step(
+                -leader.min,
+                -ego.min,
                 response_time,
                 response_acceleration,
-                max_speed: *max_speed,
-            }),
+                *max_speed,
+            )),
             _ => None,
         }
     }

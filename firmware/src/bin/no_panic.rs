@@ -121,6 +121,12 @@ fn main() -> ! {
                 timestamp_us: black_box(now_us),
                 valid: black_box(true),
             },
+            ego_acceleration: Measurement {
+                value: black_box(0.5),
+                timestamp_us: black_box(now_us),
+                valid: black_box(true),
+            },
+            driver: black_box(None),
             now_us: black_box(now_us),
         };
         black_box(controller.step(&inputs));

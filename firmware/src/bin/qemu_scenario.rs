@@ -241,6 +241,10 @@ fn main() -> ! {
                 (ego.v - s.ego_speed_error - s.ego_speed_error_relative * ego.v).max(0.0),
                 now_us,
             ),
+            // The actuator's state: the last command (this plant has no delay), reported at
+            // the low end of its error.
+            ego_acceleration: Measurement::new(last_command - s.acceleration_error, now_us),
+            driver: None,
             now_us,
         };
         let mut inputs = inputs;

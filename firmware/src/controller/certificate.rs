@@ -7,7 +7,7 @@ use table_format::{Bounds, Game, Table};
 
 use super::history::seconds;
 use super::tracks::LeaderMemo;
-use super::{Config, Controller, Fault};
+use super::{Config, Controller, Fault, OverridePolicy};
 use crate::math;
 
 /// e^-5: what a first-order lag still passes on, after five time constants, of a command older
@@ -90,16 +90,27 @@ pub(super) struct Model {
 }
 
 impl Model {
-    pub(super) fn front(&self, response_time: f32, response_acceleration: f32) -> FrontModel {
+    /// The front model with a response of `hold` for `response_time`, then the braking ramp
+    /// from `ramp_from` at `jerk`.
+    pub(super) fn front(
+        &self,
+        response_time: f32,
+        hold: f32,
+        ramp_from: f32,
+        jerk: f32,
+    ) -> FrontModel {
         FrontModel {
             leader_braking: self.leader_braking,
             ego_braking: -self.ego.min,
             response_time,
-            response_acceleration,
+            response_acceleration: hold,
+            ramp_from,
+            jerk,
             max_speed: self.max_speed,
         }
     }
 }
+
 pub(super) fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
     let envelope = &config.envelope;
     let header = table.header();
@@ -157,23 +168,103 @@ pub(super) fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Faul
     })
 }
 
+/// A braking ramp: the commands from `start_us` on are at most `max(from - jerk (t -
+/// start_us), beta)` (module docs: the braking ramp).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Ramp {
+    pub(super) start_us: u64,
+    pub(super) from: f32,
+}
+
+/// The profile a ramp gives an ego argued from time `t_0` through the actuator's dead time
+/// and lag: `(response_time, ramp_from)`, the hold lasting until the ramp's start takes force
+/// plus the lag, and the ramp's value at the hold's end (`table_format::front`'s module docs:
+/// a hold of `D + tau` bounds the delays before a ramp).
+fn profile(t_0: u64, ramp: Ramp, dead_us: u64, lag: f32, jerk: f32) -> (f32, f32) {
+    let in_force = ramp.start_us.saturating_add(dead_us);
+    let response = seconds(in_force.saturating_sub(t_0)) + lag;
+    let ramp_from = if math::is_finite(jerk) {
+        ramp.from - jerk * seconds(t_0.saturating_sub(in_force))
+    } else {
+        ramp.from
+    };
+    (response, ramp_from)
+}
+
+/// The highest speed gain of an ego holding `hold` for `response` seconds, then ramping down
+/// from `ramp_from` at `jerk` (zero once the ramp's acceleration is negative), m/s.
+fn speed_rise(hold: f32, response: f32, ramp_from: f32, jerk: f32) -> f32 {
+    let during_ramp = if math::is_finite(jerk) && ramp_from > 0.0 {
+        ramp_from * ramp_from / (2.0 * jerk)
+    } else {
+        0.0
+    };
+    math::max(hold, 0.0) * math::max(response, 0.0) + during_ramp
+}
+
 impl Controller<'_> {
     /// The certificate at the true state `(gap_leader, leader_speed, gap_follower,
     /// follower_speed, ego_speed)`, with the same domain rules as the control step: `None`
     /// outside the domain or without a table. For tests and campaigns, which judge the
-    /// certificate on the state the firmware cannot see exactly.
+    /// certificate on the state the firmware cannot see exactly. The ego is taken at rest in
+    /// its actuator (acceleration zero, no delay) and braking along the controller's ramp.
     pub fn certificate(&self, state: [f32; 5]) -> Option<Certificate> {
         self.certificate_with_response(state, 0.0, 0.0)
     }
 
     /// [`Controller::certificate`] for an ego whose acceleration is at most
-    /// `response_acceleration` for `response_time` seconds before braking at beta takes effect
-    /// (its actuator's dead time and lag, with the commands still in its pipeline).
+    /// `response_acceleration` for `response_time` seconds (its actuator's dead time and lag,
+    /// with the commands still in its pipeline), then ramps down from there at the
+    /// configured `brake_jerk` to beta: what a controller engaged at that acceleration does.
     pub fn certificate_with_response(
         &self,
         state: [f32; 5],
         response_time: f32,
         response_acceleration: f32,
+    ) -> Option<Certificate> {
+        let jerk = self.config.brake_jerk;
+        self.certificate_with_profile(
+            state,
+            response_time,
+            response_acceleration,
+            response_acceleration,
+            jerk,
+        )
+    }
+
+    /// The certificate at the true state `state` at time `now_us`, for a real actuator with
+    /// dead time `dead_time_us` and lag `lag` (s) whose acceleration and commands in force and
+    /// in flight are at most `pending`: the braking the controller is committed to (its ramp
+    /// under way, or the last command for a period and then the ramp from it), through that
+    /// actuator. For closed-loop campaigns, called after a step and before its command goes
+    /// to the actuator.
+    pub fn certificate_with_actuator(
+        &self,
+        state: [f32; 5],
+        now_us: u64,
+        dead_time_us: u64,
+        lag: f32,
+        pending: f32,
+    ) -> Option<Certificate> {
+        let jerk = self.config.brake_jerk;
+        let h = u64::from(self.config.period_us);
+        let last = self.last_command?;
+        let ramp = self.ramp.unwrap_or(Ramp {
+            start_us: now_us.saturating_add(h),
+            from: last,
+        });
+        let (response, ramp_from) = profile(now_us, ramp, dead_time_us, lag, jerk);
+        let hold = math::max(math::max(pending, last), ramp_from);
+        self.certificate_with_profile(state, response, hold, ramp_from, jerk)
+    }
+
+    fn certificate_with_profile(
+        &self,
+        state: [f32; 5],
+        response: f32,
+        hold: f32,
+        ramp_from: f32,
+        jerk: f32,
     ) -> Option<Certificate> {
         let (table, model) = self.table.as_ref().ok()?;
         let [gap_leader, leader_speed, gap_follower, follower_speed, ego_speed] = state;
@@ -189,10 +280,9 @@ impl Controller<'_> {
             gap_leader,
             leader_speed,
             ego_speed,
-            &model.front(response_time, response_acceleration),
+            &model.front(response, hold, ramp_from, jerk),
         );
-        let peak =
-            ego_speed + math::max(response_acceleration, 0.0) * math::max(response_time, 0.0);
+        let peak = ego_speed + speed_rise(hold, response, ramp_from, jerk);
         Some(self.certificate_of(front, rear, model.max_ego_speed - peak, model))
     }
 
@@ -210,13 +300,22 @@ impl Controller<'_> {
         }
     }
 
-    /// An upper bound of the ego's acceleration since `t_0` until braking at beta takes full
-    /// effect: the largest command issued since `t_0`, less the dead time and five lag time
-    /// constants, plus what older commands can still add through the lag (at most e^-5 of the
-    /// band's width); the band's top before the first command.
+    /// What the actuator may be doing before the controller's own commands are known: the
+    /// actuator's reported state plus its error where it is valid and fresh
+    /// ([`crate::Inputs::ego_acceleration`]), else the band's top.
+    pub(super) fn unknown_acceleration(&self, model: &Model) -> f32 {
+        self.reported_acceleration
+            .map_or(model.ego.max, |a| math::min(a, model.ego.max))
+    }
+
+    /// An upper bound of the ego's acceleration since `t_0` until the braking takes effect:
+    /// the largest command issued since `t_0`, less the dead time and five lag time constants,
+    /// plus what older commands can still add through the lag (at most e^-5 of the band's
+    /// width); before the first command, what the actuator may be doing
+    /// ([`Controller::unknown_acceleration`]).
     pub(super) fn pending(&self, t_0: u64, model: &Model) -> f32 {
         self.issued
-            .largest_since(t_0, self.command_span_us(), model.ego.max)
+            .largest_since(t_0, self.command_span_us(), self.unknown_acceleration(model))
             + self.lag_tail(model)
     }
 
@@ -230,10 +329,63 @@ impl Controller<'_> {
         }
     }
 
+    /// The braking the controller is committed to at `now`: the ramp under way, or one
+    /// starting now from the last command (from what the actuator may be doing, when no
+    /// command is known).
+    pub(super) fn committed_ramp(&self, now: u64, model: &Model) -> Ramp {
+        self.ramp.unwrap_or(Ramp {
+            start_us: now,
+            from: self
+                .last_command
+                .unwrap_or_else(|| self.unknown_acceleration(model)),
+        })
+    }
+
+    /// The hardest braking the ramp allows now: the committed ramp's command for the period
+    /// from `now` (module docs: the braking ramp), at least beta.
+    pub(super) fn ramp_floor(&self, now: u64, model: &Model) -> f32 {
+        let jerk = self.config.brake_jerk;
+        if !math::is_finite(jerk) {
+            return model.ego.min;
+        }
+        let ramp = self.committed_ramp(now, model);
+        let h = seconds(u64::from(self.config.period_us));
+        let into = seconds(now.saturating_sub(ramp.start_us)) + h;
+        math::clamp(ramp.from - jerk * into, model.ego.min, model.ego.max)
+    }
+
+    /// The least measured gap at which a command of zero passes the look-ahead behind a leader
+    /// at the ego's own speed `speed`, with a track as old as the radar delivers it
+    /// (`latency + cycle`) and no command above zero pending: the certificate's steady
+    /// following gap, m (the nominal law's gap policy keeps room over it). `+inf` without a
+    /// table.
+    pub fn steady_gap(&self, speed: f32) -> f32 {
+        let Ok((_, model)) = &self.table else {
+            return f32::INFINITY;
+        };
+        let c = &self.config;
+        let sensors = &c.sensors;
+        let h = seconds(u64::from(c.period_us));
+        let dead = seconds(u64::from(c.actuator_dead_time_us));
+        let lag = seconds(u64::from(c.actuator_lag_us));
+        let age = seconds(u64::from(sensors.latency_us) + u64::from(sensors.cycle_us));
+        let (ego_low, ego_high) = sensors.ego_speed(speed);
+        let leader_low = math::max(ego_low + sensors.range_rate(0.0).0, 0.0);
+        let tail = self.lag_tail(model);
+        let jerk = c.brake_jerk;
+        let front = model.front(age + h + dead + lag, tail, 0.0, jerk);
+        // The front value is the gap plus a function of the speeds; the measured gap `m` has
+        // its least true gap at `(m - e) / (1 + r)` (sensing's module docs).
+        let offset = front_value(0.0, leader_low, ego_high, &front);
+        let needed = c.front_margin - offset;
+        needed * (1.0 + sensors.range_error_relative) + sensors.range_error
+    }
+
     /// The front half applied to a `proposal` (module docs: the delays, the measurement error,
-    /// the ego's speed): the certified front value and speed headroom of the state, and the
-    /// command, which is the proposal under the speed cap if its look-ahead passes, else the
-    /// gentlest braking that passes, at most beta.
+    /// the ego's speed, the braking ramp): the certified front value and speed headroom of the
+    /// state, and the command, which is the proposal under the speed cap if its look-ahead
+    /// passes, else the gentlest braking down to the ramp's floor that passes, else the ramp
+    /// (or, where the state's front is not certified, beta at once).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn enforce_front(
         &self,
@@ -246,9 +398,10 @@ impl Controller<'_> {
         proposal: f32,
     ) -> FrontCheck {
         let c = &self.config;
-        let h = seconds(u64::from(c.period_us));
-        let dead = seconds(u64::from(c.actuator_dead_time_us));
+        let h_us = u64::from(c.period_us);
+        let dead_us = u64::from(c.actuator_dead_time_us);
         let lag = seconds(u64::from(c.actuator_lag_us));
+        let jerk = c.brake_jerk;
         let t_m = leader.at_us;
         // The worst point of the error box (module docs): the least gap, the slowest leader
         // (the ego's lowest speed at `t_m` plus the least range rate), the fastest ego; the
@@ -257,64 +410,94 @@ impl Controller<'_> {
         let gap = sensors.range(leader.track.gap).0;
         let (ego_low, ego_high) = leader.ego;
         let leader_at_m = math::max(ego_low + sensors.range_rate(leader.track.rel_speed).0, 0.0);
-        let age = seconds(now.saturating_sub(t_m));
-        // The certified front value: braking at beta, commanded since the current run of such
-        // commands began, or from now.
-        let braking_from = self.braking_since_us.unwrap_or(now).min(now);
-        let braking_age = seconds(braking_from.saturating_sub(t_m));
+        let ego_now = sensors.ego_speed(ego_speed).1;
+        // The certified front value and speed headroom: the committed ramp, argued from the
+        // leader's measurement and from the ego's.
+        let committed = self.committed_ramp(now, model);
+        let (response, ramp_from) = profile(t_m, committed, dead_us, lag, jerk);
         let value = front_value(
             gap,
             leader_at_m,
             ego_high,
-            &model.front(braking_age + dead + lag, pending),
+            &model.front(response, math::max(pending, ramp_from), ramp_from, jerk),
         );
-        // The speed headroom (module docs): until the braking takes full effect the ego's
-        // speed grows at most at `pending` from its measurement's highest.
-        let ego_now = sensors.ego_speed(ego_speed).1;
-        let since_e = |t: u64| seconds(t.saturating_sub(t_e));
-        let headroom = model.max_ego_speed
-            - (ego_now + math::max(pending, 0.0) * (since_e(braking_from) + dead + lag));
-        // The look-ahead (module docs): `u` held for one period before the braking at beta.
-        // Its response acceleration is `max(pending, u + tail)`: the lag averages every command
-        // ever issued, and the window's older ones (up to the band's top) still pass `tail` on
-        // top of `u` (found in review for issue 20: with `max(pending, u)` the next step's
-        // `pending`, `u + tail`, could exceed what the look-ahead had assumed).
+        let (response_e, ramp_from_e) = profile(t_e, committed, dead_us, lag, jerk);
+        let rise = speed_rise(
+            math::max(pending, ramp_from_e),
+            response_e,
+            ramp_from_e,
+            jerk,
+        );
+        let headroom = model.max_ego_speed - (ego_now + rise);
+        // The look-ahead (module docs): `u` held for one period, then the ramp from `u`. Its
+        // hold is `max(pending, u + tail)`: the lag averages every command ever issued, and the
+        // window's older ones (up to the band's top) still pass `tail` on top of `u` (found in
+        // review for issue 20).
         let tail = self.lag_tail(model);
-        let response = |u: f32| math::max(pending, u + tail);
-        // First the speed: the largest command whose response keeps the ego in the domain.
-        let response_end = since_e(now) + h + dead + lag;
-        let room = model.max_ego_speed - (ego_now + math::max(pending, 0.0) * response_end);
-        let speed_cap = if room < 0.0 {
-            // Nothing passes: brake at beta (which keeps a certified headroom, module docs).
-            model.ego.min
-        } else if response_end > 0.0 {
-            math::max(
-                (model.max_ego_speed - ego_now) / response_end - tail,
-                model.ego.min,
-            )
-        } else {
-            model.ego.max
+        let after = |u: f32| Ramp {
+            start_us: now.saturating_add(h_us),
+            from: u,
         };
-        let capped = math::min(proposal, speed_cap);
-        let margin_front = c.front_margin;
+        let peak_of = |u: f32| {
+            let (response, from) = profile(t_e, after(u), dead_us, lag, jerk);
+            ego_now + speed_rise(math::max(math::max(pending, u + tail), from), response, from, jerk)
+        };
         let ahead = |u: f32| {
+            let (response, from) = profile(t_m, after(u), dead_us, lag, jerk);
+            let hold = math::max(math::max(pending, u + tail), from);
             front_value(
                 gap,
                 leader_at_m,
                 ego_high,
-                &model.front(age + h + dead + lag, response(u)),
+                &model.front(response, hold, from, jerk),
             )
         };
+        let floor = self.ramp_floor(now, model);
+        // First the speed: the largest command whose response keeps the ego in the domain
+        // (the peak is non-decreasing in `u`; bisection, keeping the end that passes).
+        let top = model.max_ego_speed;
+        let speed_fits = |u: f32| peak_of(u) <= top;
+        let low = math::min(floor, proposal);
+        let (speed_cap, room) = if speed_fits(proposal) {
+            (proposal, true)
+        } else if !speed_fits(low) {
+            (low, false)
+        } else {
+            let (mut lo, mut hi) = (low, proposal);
+            for _ in 0..12 {
+                let mid = 0.5 * (lo + hi);
+                if speed_fits(mid) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            (lo, true)
+        };
+        let capped = math::min(proposal, speed_cap);
+        let margin_front = c.front_margin;
         let at_capped = ahead(capped);
-        let passes = room >= 0.0 && at_capped > margin_front;
-        let command = if room < 0.0 {
-            model.ego.min
-        } else if passes {
+        let passes = room && at_capped > margin_front;
+        let certified = value > margin_front && headroom >= 0.0;
+        let command = if passes {
             capped
         } else {
-            least_braking(capped, at_capped, model.ego.min, value, margin_front, |u| {
-                ahead(u) > margin_front
-            })
+            let graded = c.override_policy == OverridePolicy::Graded && room && capped > floor;
+            let gentler = if graded {
+                least_braking(capped, at_capped, floor, value, margin_front, |u| {
+                    ahead(u) > margin_front
+                })
+            } else {
+                None
+            };
+            match gentler {
+                Some(u) => u,
+                // Nothing passes: the ramp, which keeps a certified state certified; an
+                // uncertified one gets beta at once (an emergency: the best answer, not a
+                // promise).
+                None if certified => math::min(capped, floor),
+                None => model.ego.min,
+            }
         };
         let command = math::clamp(command, model.ego.min, model.ego.max);
         FrontCheck {
@@ -391,40 +574,35 @@ pub(super) fn rear_value(
     })
 }
 
-/// The override's command: a gentler braking than `beta_command` where one passes the
-/// look-ahead, else `beta_command` itself.
+/// The override's graded command: a braking between the ramp's `floor` and the `refused`
+/// command that passes the look-ahead, if one is found.
 ///
-/// The look-ahead's front value `F(u)` (the command `u` held for a period, then braking at
-/// beta) is non-increasing in `u`: a harder-accelerating ego is ahead of a gentler one at every
-/// instant. It is known at the refused command (`F(refused) <= margin`) and at `beta_command`
-/// (`F(beta) = front`, braking from now). Over one period it is nearly affine in `u` (the
-/// extra speed `(u + beta) h` is what matters), so the secant's root, pulled 10% towards
-/// `beta`, is a candidate; it is used only if the look-ahead passes it, else the midpoint
-/// between it and `beta`, else `beta`. Two evaluations at most (the control step's budget:
-/// each costs about 560 instructions on the Cortex-M4F). Whatever is returned either passed the
-/// look-ahead or is the braking at beta, which keeps a certified front value (module docs).
-/// Braking no harder than needed spares the follower and the jerk.
+/// The look-ahead's front value `F(u)` (the command `u` held for a period, then the ramp from
+/// `u`) is non-increasing in `u`: a harder-accelerating ego is ahead of a gentler one at every
+/// instant. It is known at the refused command (`F(refused) <= margin`), and the certified
+/// value `front` (the ramp from now) stands in for `F(floor)`. Over one period `F` is nearly
+/// affine in `u`, so the secant's root, pulled 10% towards the floor, is a candidate; it is
+/// used only if the look-ahead passes it, else the midpoint between it and the floor, else
+/// nothing (the caller follows the ramp). Two evaluations at most (the control step's budget).
+/// Whatever is returned passed the look-ahead. Braking no harder than needed spares the
+/// follower and the jerk.
 pub(super) fn least_braking(
     refused: f32,
     at_refused: f32,
-    beta_command: f32,
+    floor: f32,
     front: f32,
     margin: f32,
     passes: impl Fn(f32) -> bool,
-) -> f32 {
+) -> Option<f32> {
     let drop = front - at_refused;
     if !(front > margin && drop > 0.0) {
-        return beta_command;
+        return None;
     }
     let share = 0.9 * (front - margin) / drop;
-    let candidate = beta_command + math::clamp(share, 0.0, 1.0) * (refused - beta_command);
+    let candidate = floor + math::clamp(share, 0.0, 1.0) * (refused - floor);
     if passes(candidate) {
-        return candidate;
+        return Some(candidate);
     }
-    let halfway = 0.5 * (beta_command + candidate);
-    if passes(halfway) {
-        halfway
-    } else {
-        beta_command
-    }
+    let halfway = 0.5 * (floor + candidate);
+    passes(halfway).then_some(halfway)
 }

@@ -1,6 +1,6 @@
 //! What one control step gives out: the command, its mode, and the events worth a log line.
 
-use super::Fault;
+use super::{DriverError, Fault};
 use crate::sensing::TrackState;
 
 /// Which law produced the command.
@@ -18,6 +18,8 @@ pub enum Mode {
     /// The nominal law (in the band) without a certificate: the state is outside the table's
     /// domain ([`Fault::OutsideDomain`]).
     Uncertified,
+    /// Disengaged by the driver: the command is not for the actuator (acceleration 0).
+    Standby,
 }
 
 /// One control step's output.
@@ -39,6 +41,11 @@ pub struct Command {
     /// closer than the certificate allows), the rear half is unknown ([`Mode::Uncertified`]),
     /// or the command is a minimum-risk manoeuvre.
     pub takeover: bool,
+    /// The command brakes faster than ISO 15622's jerk limit at the ego's speed allows
+    /// ([`crate::iso15622`]): the certificate needed it (an uncertified front: a cut-in, a
+    /// leader outside its model), or a brake ramp configured above the limit. The takeover
+    /// request is raised with it.
+    pub emergency: bool,
     /// What the controller made of the leader track ([`TrackState`]).
     pub leader: TrackState,
     /// What the controller made of the follower track.
@@ -55,6 +62,7 @@ impl Command {
             fault,
             margin: None,
             takeover: false,
+            emergency: false,
             leader: TrackState::Missing,
             follower: TrackState::Missing,
         }
@@ -80,6 +88,13 @@ pub enum Event {
         at_us: u64,
         /// The new track's measured gap, m.
         gap: f32,
+    },
+    /// A driver request was refused (the driver's state is unchanged).
+    DriverRequestRefused {
+        /// Time, microseconds.
+        at_us: u64,
+        /// Why.
+        error: DriverError,
     },
     /// The state is no longer certified (its margin is zero or below): logged once per
     /// excursion.

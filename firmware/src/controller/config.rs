@@ -13,18 +13,49 @@ pub struct Config {
     /// An ego-speed measurement older than this many periods is stale (the radar tracks' age
     /// is covered up to `sensors.max_track_age_us`).
     pub stale_periods: u32,
-    /// Speed set-point, m/s.
+    /// The speed set-point at start, m/s (the driver changes it at run time:
+    /// [`DriverRequest`](super::DriverRequest)).
     pub set_speed: f32,
-    /// Nominal ACC time gap, s.
-    pub time_gap: f32,
-    /// Nominal ACC gap at standstill, m.
+    /// The time gaps the driver may select, s, shortest first; the shortest no shorter than
+    /// ISO 15622's minimum ([`crate::iso15622::MIN_TIME_GAP`]).
+    pub time_gaps: [f32; TIME_GAP_SETTINGS],
+    /// The time-gap setting at start (an index into `time_gaps`).
+    pub time_gap_setting: u8,
+    /// Nominal ACC gap at standstill, m: where the car stops behind a stopped one.
     pub standstill_gap: f32,
+    /// The gap policy's room over the certificate, per m/s of speed (s): the law's desired
+    /// gap is at least the certificate's steady-following gap plus `gap_room_time * v +
+    /// gap_room`, so that steady following never touches the override.
+    pub gap_room_time: f32,
+    /// The gap policy's room over the certificate at standstill, m.
+    pub gap_room: f32,
     /// Nominal law: acceleration per metre of gap error.
     pub gap_gain: f32,
     /// Nominal law: acceleration per m/s of relative speed.
     pub rel_speed_gain: f32,
     /// Nominal law: acceleration per m/s of speed error.
     pub speed_gain: f32,
+    /// Nominal law: the speed error's integral gain, m/s^2 per m/s per s (anti-windup: it
+    /// integrates only while the speed law is the command).
+    pub speed_integral_gain: f32,
+    /// Nominal law: the share of the leader's estimated acceleration fed forward.
+    pub feedforward_gain: f32,
+    /// Nominal law: the constant deceleration a stop behind a stopped car aims at, at least,
+    /// m/s^2 (positive): the approach keeps its speed until that braking stops it at the
+    /// standstill gap, so that the last metres do not crawl.
+    pub stop_deceleration: f32,
+    /// After a stop, the car moves off by itself when its leader does within this time,
+    /// microseconds; later it waits for the driver's resume (ISO 15622's full-speed-range
+    /// type).
+    pub auto_resume_us: u32,
+    /// The jerk of the braking ramp the certificate's actuator model assumes, m/s^3: the
+    /// override ramps its braking down at this rate, never faster, and the look-ahead accounts
+    /// for the ramp. At most ISO 15622's limit at speed (2.5 m/s^3, the default), every
+    /// certified command keeps to ISO 15622's jerk limit at every speed. `f32::INFINITY`: no
+    /// ramp (braking at `beta` at once, the paper's policy).
+    pub brake_jerk: f32,
+    /// How the override chooses its braking ([`OverridePolicy`]).
+    pub override_policy: OverridePolicy,
     /// The front value (m) a certified state keeps, and the look-ahead demands of the nominal
     /// command.
     pub front_margin: f32,
@@ -46,6 +77,20 @@ pub struct Config {
     pub envelope: Envelope,
     /// The sensors' error bounds and timing the certificate covers ([`crate::sensing`]).
     pub sensors: SensorBounds,
+}
+
+/// How many time-gap settings a driver chooses from.
+pub const TIME_GAP_SETTINGS: usize = 4;
+
+/// How the override brakes when the look-ahead refuses the law's command.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum OverridePolicy {
+    /// As little braking as passes the look-ahead, down to the ramp (the default).
+    Graded,
+    /// The paper's bang-bang `u2*`: the hardest braking the ramp allows (`beta` at once with
+    /// `brake_jerk = f32::INFINITY`).
+    BangBang,
 }
 
 /// The vehicle's envelope: what the firmware may command and the speeds it may certify, set by
@@ -101,11 +146,15 @@ impl Config {
     pub fn is_valid(&self) -> bool {
         let finite_non_negative = [
             self.set_speed,
-            self.time_gap,
             self.standstill_gap,
+            self.gap_room_time,
+            self.gap_room,
             self.gap_gain,
             self.rel_speed_gain,
             self.speed_gain,
+            self.speed_integral_gain,
+            self.feedforward_gain,
+            self.stop_deceleration,
             self.front_margin,
             self.rear_margin,
             self.mrm_deceleration,
@@ -114,7 +163,17 @@ impl Config {
         ]
         .iter()
         .all(|x| math::is_finite(*x) && *x >= 0.0);
+        let gaps_ordered = self.time_gaps.windows(2).all(|w| w.iter().all(|g| math::is_finite(*g)) && w.first() <= w.last());
+        let time_gaps = gaps_ordered
+            && self.time_gaps.first().is_some_and(|g| *g >= crate::iso15622::MIN_TIME_GAP)
+            && self.time_gaps.last().is_some_and(|g| *g <= 5.0)
+            && usize::from(self.time_gap_setting) < TIME_GAP_SETTINGS;
+        // A jerk of at least 0.5 m/s^3 (a ramp of 11 s to 3.5 m/s^2 at most), or no ramp.
+        let jerk = self.brake_jerk >= 0.5;
         finite_non_negative
+            && time_gaps
+            && jerk
+            && self.stop_deceleration >= 0.3
             && (MIN_PERIOD_US..=MAX_PERIOD_US).contains(&self.period_us)
             && (1..=MAX_STALE_PERIODS).contains(&self.stale_periods)
             && self.actuator_dead_time_us <= MAX_DEAD_TIME_US
@@ -135,17 +194,44 @@ pub const MAX_PERIOD_US: u32 = 100_000;
 /// The largest `stale_periods` a configuration may declare.
 pub const MAX_STALE_PERIODS: u32 = 10;
 
+impl Config {
+    /// The paper's policy: the override brakes at `beta` at once (bang-bang `u2*`, no ramp),
+    /// the rest of the configuration the default.
+    pub fn bang_bang() -> Self {
+        Config {
+            brake_jerk: f32::INFINITY,
+            override_policy: OverridePolicy::BangBang,
+            ..Config::default()
+        }
+    }
+
+    /// The time gap of `setting`, s (the last one for a setting past the end).
+    pub fn time_gap(&self, setting: u8) -> f32 {
+        let last = self.time_gaps.last().copied().unwrap_or(crate::iso15622::MIN_TIME_GAP);
+        self.time_gaps.get(usize::from(setting)).copied().unwrap_or(last)
+    }
+}
+
 impl Default for Config {
     fn default() -> Self {
         Config {
             period_us: 20_000,
             stale_periods: 5,
             set_speed: 30.0,
-            time_gap: 1.8,
-            standstill_gap: 5.0,
+            time_gaps: [1.0, 1.4, 1.8, 2.2],
+            time_gap_setting: 2,
+            standstill_gap: 4.0,
+            gap_room_time: 0.3,
+            gap_room: 1.0,
             gap_gain: 0.23,
             rel_speed_gain: 0.7,
-            speed_gain: 0.3,
+            speed_gain: 0.4,
+            speed_integral_gain: 0.1,
+            feedforward_gain: 0.5,
+            stop_deceleration: 1.0,
+            auto_resume_us: 3_000_000,
+            brake_jerk: crate::iso15622::jerk_limit(f32::INFINITY),
+            override_policy: OverridePolicy::Graded,
             front_margin: 0.5,
             rear_margin: 0.0,
             mrm_deceleration: 2.0,

@@ -1,26 +1,222 @@
 //! The nominal ACC law: what a comfortable ACC would command, before the certificate has its
-//! say. It knows nothing of the certificate; the certificate never trusts it.
+//! say. It knows nothing of the certificate but one number, the certificate's steady-following
+//! gap at the ego's speed ([`Controller::steady_gap`](super::Controller::steady_gap)), which its
+//! gap policy keeps room over; the certificate never trusts it.
+//!
+//! # The law
+//! - **Gap policy**: the desired gap is the larger of the driver's
+//!   `standstill_gap + time_gap v` and the certificate's steady gap plus
+//!   `gap_room_time v + gap_room`. Steady following at the policy's gap is then inside the
+//!   certified set with that room to spare, so it never touches the override (before, from
+//!   27.5 m/s up the 1.8 s policy was shorter than the certified gap itself, and the override
+//!   threw the car back at full braking every 2 s).
+//! - **Following**: `gap_gain (gap - desired) + rel_speed_gain rel_speed + feedforward_gain
+//!   a_leader`, the leader's acceleration estimated from its speed (ego speed plus range rate),
+//!   filtered twice (0.3 s on the speed, 0.5 s on its derivative).
+//! - **Speed**: `speed_gain (set_speed - v) + I`, the integral `I` of `speed_integral_gain
+//!   (set_speed - v)` updated only in periods whose command is the speed law's own, unclipped
+//!   (conditional integration: no windup behind a leader, under the override, or at a limit),
+//!   and held within +-1.5 m/s^2 (a 15% grade). The speed law brakes at most 1.5 m/s^2: a lower
+//!   set speed is reached gently.
+//! - **Stop and go**: behind a stopped car (estimated speed below 0.5 m/s) the approach keeps
+//!   to `sqrt(2 b d)`, `d` the gap beyond the standstill gap and `b = stop_deceleration`, and
+//!   brakes at `v^2 / (2 d)` once that is at least `b`: a constant deceleration that ends at the
+//!   standstill gap, with no crawl (a proportional law converges exponentially: 9 s below 1 m/s
+//!   before). Stopped, the car holds at -1 m/s^2; it moves off when the leader does, within
+//!   `auto_resume_us` of the stop by itself, later on the driver's resume.
+//! - **Comfort**: the command is held within ISO 15622's acceleration and deceleration limits at
+//!   the ego's speed, and moves from the last command by at most ISO 15622's jerk limit per
+//!   period, both ways ([`crate::iso15622`]).
 
-use table_format::Bounds;
-
-use super::{Controller, ISO_15622_LIMITS};
+use super::Config;
 use crate::inputs::Track;
+use crate::iso15622;
 use crate::math;
 
-impl Controller<'_> {
-    /// The nominal ACC law: constant time gap with a speed set-point, limited to ISO 15622 and
-    /// then to the band.
-    pub(super) fn nominal(&self, leader: Track, ego_speed: f32, ego: Bounds) -> f32 {
-        let c = &self.config;
-        let speed_law = c.speed_gain * (c.set_speed - ego_speed);
-        let law = if math::is_finite(leader.gap) {
-            let desired = c.standstill_gap + c.time_gap * ego_speed;
-            let gap_law = c.gap_gain * (leader.gap - desired) + c.rel_speed_gain * leader.rel_speed;
-            math::min(gap_law, speed_law)
-        } else {
-            speed_law
+/// A leader slower than this is stopped, for the law, m/s.
+const STOPPED: f32 = 0.5;
+/// The ego is at standstill below this measured speed, m/s.
+const STANDSTILL: f32 = 0.1;
+/// The brake hold at standstill, m/s^2.
+const HOLD: f32 = -1.0;
+/// The speed law's hardest braking, m/s^2.
+const SPEED_LAW_BRAKING: f32 = -1.5;
+/// The speed integral's bound, m/s^2.
+const INTEGRAL_MAX: f32 = 1.5;
+
+/// The law's memory: the speed integral, the leader's speed and acceleration estimates, the
+/// stop.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Law {
+    integral: f32,
+    leader: Option<LeaderEstimate>,
+    stopped_since_us: Option<u64>,
+    /// The last proposal was the speed law's, unclipped: `(proposal, speed error)`.
+    speed_law: Option<(f32, f32)>,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct LeaderEstimate {
+    at_us: u64,
+    speed: f32,
+    acceleration: f32,
+}
+
+/// What the law sees in one period.
+pub(super) struct LawInputs {
+    /// The last plausible leader measurement: its time and track (`gap = inf`: no vehicle).
+    pub(super) leader: Option<(u64, Track)>,
+    pub(super) ego_speed: f32,
+    pub(super) now_us: u64,
+    pub(super) period: f32,
+    pub(super) set_speed: f32,
+    pub(super) time_gap: f32,
+    /// The certificate's steady-following gap at the ego's speed, m.
+    pub(super) steady_gap: f32,
+    /// The last command issued (or what the actuator is doing, before the first), m/s^2.
+    pub(super) last_command: f32,
+    /// The driver asked to resume.
+    pub(super) resume: bool,
+}
+
+impl Law {
+    pub(super) fn new() -> Self {
+        Law {
+            integral: 0.0,
+            leader: None,
+            stopped_since_us: None,
+            speed_law: None,
+        }
+    }
+
+    /// Forgets the leader's estimate and the integral (a disengagement).
+    pub(super) fn reset(&mut self) {
+        *self = Law::new();
+    }
+
+    /// Forgets the leader's estimate (a new vehicle ahead).
+    pub(super) fn forget_leader(&mut self) {
+        self.leader = None;
+    }
+
+    /// The desired gap at speed `v`, m (module docs: the gap policy).
+    pub(super) fn desired_gap(config: &Config, time_gap: f32, steady_gap: f32, v: f32) -> f32 {
+        let driver = config.standstill_gap + time_gap * v;
+        let certified = steady_gap + config.gap_room_time * v + config.gap_room;
+        math::max(driver, certified)
+    }
+
+    /// Whether the law holds the car at standstill (waiting for the leader or for the
+    /// driver's resume).
+    pub(super) fn is_holding(&self) -> bool {
+        self.stopped_since_us.is_some()
+    }
+
+    /// The law's command for this period.
+    pub(super) fn propose(&mut self, config: &Config, x: &LawInputs) -> f32 {
+        let c = config;
+        let v = x.ego_speed;
+        self.update_leader(x);
+        let speed_error = x.set_speed - v;
+        let speed_law = math::clamp(
+            c.speed_gain * speed_error + self.integral,
+            SPEED_LAW_BRAKING,
+            iso15622::acceleration_limit(v),
+        );
+        let leader_law = x
+            .leader
+            .filter(|(_, t)| math::is_finite(t.gap))
+            .map(|(_, t)| self.leader_law(c, x, t));
+        let law = match leader_law {
+            Some(a) if a < speed_law => a,
+            _ => speed_law,
         };
-        let law = math::clamp(law, ISO_15622_LIMITS.0, ISO_15622_LIMITS.1);
-        math::clamp(law, ego.min, ego.max)
+        let limited = math::clamp(
+            law,
+            -iso15622::deceleration_limit(v),
+            iso15622::acceleration_limit(v),
+        );
+        let step = iso15622::jerk_limit(v) * x.period;
+        let proposal = math::clamp(limited, x.last_command - step, x.last_command + step);
+        self.speed_law = (leader_law.is_none_or(|a| a >= speed_law) && proposal == speed_law)
+            .then_some((proposal, speed_error));
+        proposal
+    }
+
+    /// After the step: the integral moves only if the command issued was the speed law's own
+    /// proposal (conditional integration).
+    pub(super) fn settle(&mut self, config: &Config, issued: f32, period: f32) {
+        if let Some((proposal, error)) = self.speed_law {
+            if math::abs(issued - proposal) <= 1e-4 {
+                self.integral = math::clamp(
+                    self.integral + config.speed_integral_gain * error * period,
+                    -INTEGRAL_MAX,
+                    INTEGRAL_MAX,
+                );
+            }
+        }
+    }
+
+    fn update_leader(&mut self, x: &LawInputs) {
+        let Some((at, track)) = x.leader.filter(|(_, t)| math::is_finite(t.gap)) else {
+            self.leader = None;
+            return;
+        };
+        let measured = math::max(x.ego_speed + track.rel_speed, 0.0);
+        self.leader = Some(match self.leader {
+            Some(e) if at > e.at_us => {
+                let dt = (at - e.at_us) as f32 * 1e-6;
+                let dt = math::min(dt, 1.0);
+                let speed = e.speed + dt / (0.3 + dt) * (measured - e.speed);
+                let slope = (speed - e.speed) / dt;
+                LeaderEstimate {
+                    at_us: at,
+                    speed,
+                    acceleration: e.acceleration + dt / (0.5 + dt) * (slope - e.acceleration),
+                }
+            }
+            Some(e) => e,
+            None => LeaderEstimate {
+                at_us: at,
+                speed: measured,
+                acceleration: 0.0,
+            },
+        });
+    }
+
+    /// The law behind a leader: following, or stop and go (module docs).
+    fn leader_law(&mut self, c: &Config, x: &LawInputs, track: Track) -> f32 {
+        let v = x.ego_speed;
+        let (leader_speed, leader_acceleration) = self
+            .leader
+            .map_or((v + track.rel_speed, 0.0), |e| (e.speed, e.acceleration));
+        let beyond = track.gap - c.standstill_gap;
+        let stopped = v < STANDSTILL;
+        // The stop: held until the leader moves off, then (after `auto_resume_us`) until the
+        // driver resumes.
+        if stopped && leader_speed < STOPPED && beyond < 1.0 {
+            self.stopped_since_us = self.stopped_since_us.or(Some(x.now_us));
+        }
+        if let Some(since) = self.stopped_since_us {
+            let leader_gone = leader_speed >= STOPPED || beyond >= 1.0;
+            let waited = x.now_us.saturating_sub(since) > u64::from(c.auto_resume_us);
+            if !stopped || (leader_gone && (!waited || x.resume)) {
+                self.stopped_since_us = None;
+            } else {
+                return HOLD;
+            }
+        }
+        if leader_speed < STOPPED {
+            let d = math::max(beyond, 0.0);
+            let needed = v * v / (2.0 * math::max(d, 0.05));
+            if needed >= c.stop_deceleration || d <= 0.0 {
+                return -needed;
+            }
+            let approach = math::sqrt(2.0 * c.stop_deceleration * d);
+            return c.speed_gain * (approach - v);
+        }
+        let desired = Law::desired_gap(c, x.time_gap, x.steady_gap, v);
+        let feedforward = c.feedforward_gain * math::clamp(leader_acceleration, -3.5, 1.0);
+        c.gap_gain * (track.gap - desired) + c.rel_speed_gain * track.rel_speed + feedforward
     }
 }

@@ -217,6 +217,7 @@
 mod certificate;
 mod command;
 mod config;
+mod driver;
 mod faults;
 mod history;
 mod law;
@@ -225,21 +226,25 @@ mod tracks;
 pub use certificate::{Certificate, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE};
 pub use command::{Command, Event, Mode};
 pub use config::{
-    Config, Envelope, CLOCK_RECOVERY_PERIODS, ISO_15622_LIMITS, MAX_ACTUATOR_LAG_US,
-    MAX_DEAD_TIME_US, MAX_PERIOD_US, MAX_STALE_PERIODS, MAX_STEP_GAP_PERIODS, MIN_PERIOD_US,
+    Config, Envelope, OverridePolicy, CLOCK_RECOVERY_PERIODS, ISO_15622_LIMITS,
+    MAX_ACTUATOR_LAG_US, MAX_DEAD_TIME_US, MAX_PERIOD_US, MAX_STALE_PERIODS, MAX_STEP_GAP_PERIODS,
+    MIN_PERIOD_US, TIME_GAP_SETTINGS,
 };
+pub use driver::{DriverError, DriverRequest, DriverState};
 pub use faults::Fault;
 
 use heapless::Deque;
 use table_format::Table;
 
 use crate::fmt::{log_info, log_warn};
-use crate::inputs::Inputs;
+use crate::inputs::{Inputs, Measurement};
+use crate::iso15622;
 use crate::math;
 use crate::sensing::TrackState;
 
-use certificate::{model_of, Model};
-use history::IssuedCommands;
+use certificate::{model_of, Model, Ramp};
+use history::{seconds, IssuedCommands};
+use law::{Law, LawInputs};
 use tracks::{LeaderMemo, RearMemo, EGO_HISTORY};
 
 /// The ACC safety controller. It owns the table and a log of recent events; it never allocates
@@ -259,9 +264,18 @@ pub struct Controller<'t> {
     margin_lost: bool,
     events: Deque<Event, 32>,
     issued: IssuedCommands,
-    /// When the current run of commands braking at beta began (`None`: the last command was
-    /// not braking at beta): the braking is under way since then, not only from now.
-    braking_since_us: Option<u64>,
+    /// The braking ramp under way (`None`: the last command passed the look-ahead): the
+    /// commands follow it since its start, not only from now (module docs: the braking ramp).
+    ramp: Option<Ramp>,
+    /// The last command issued (`None` before the first, and after a cancel or a clock jump:
+    /// then what the actuator does is only known from its reported state).
+    last_command: Option<f32>,
+    /// This period's reported actuator state plus its error, where valid and fresh.
+    reported_acceleration: Option<f32>,
+    /// The driver's controls.
+    driver: DriverState,
+    /// The nominal law's memory.
+    law: Law,
     /// The last plausible leader measurement, with the ego's speed interval at its time.
     leader: Option<LeaderMemo>,
     /// Since when (the ego measurement's time of the first of an unbroken run of steps) every
@@ -304,7 +318,11 @@ impl<'t> Controller<'t> {
             margin_lost: false,
             events: Deque::new(),
             issued: IssuedCommands::new(),
-            braking_since_us: None,
+            ramp: None,
+            last_command: None,
+            reported_acceleration: None,
+            driver: DriverState::new(&config),
+            law: Law::new(),
             leader: None,
             speed_kept_from_us: None,
             rear: None,
@@ -344,6 +362,51 @@ impl<'t> Controller<'t> {
         self.takeover
     }
 
+    /// The driver's state: engaged or not, the set speed, the time-gap setting.
+    pub fn driver(&self) -> DriverState {
+        self.driver
+    }
+
+    /// The desired gap of the nominal law at `speed` with the driver's time-gap setting, m:
+    /// the gap policy (the driver's `standstill_gap + time_gap v`, at least the certificate's
+    /// steady gap plus its room; [`Controller::steady_gap`]).
+    pub fn desired_gap(&self, speed: f32) -> f32 {
+        let time_gap = self.config.time_gap(self.driver.time_gap_setting);
+        Law::desired_gap(&self.config, time_gap, self.steady_gap(speed), speed)
+    }
+
+    /// A request from the driver's controls (also taken from [`Inputs::driver`] in the step).
+    /// Nothing but the driver's state changes: the command history stays, so the certificate
+    /// keeps knowing what the actuator was told. A cancel forgets it (the driver drives until
+    /// the next engagement, which the actuator's reported state covers).
+    pub fn request(&mut self, request: DriverRequest) -> Result<(), DriverError> {
+        let ego_speed = self.ego_history.back().map(|e| e.1);
+        let was_engaged = self.driver.engaged;
+        self.driver
+            .apply(request, ego_speed, self.config.envelope.max_speed)?;
+        if was_engaged && !self.driver.engaged {
+            self.forget_commands();
+        }
+        Ok(())
+    }
+
+    /// Forgets what the actuator was told: from here on it is what its reported state says.
+    fn forget_commands(&mut self) {
+        self.issued.forget();
+        self.ramp = None;
+        self.last_command = None;
+        self.law.reset();
+    }
+
+    /// The actuator's reported state plus its error, if valid (finite, within 20 m/s^2) and
+    /// no older than the ego speed's stale limit.
+    fn reported(&self, m: &Measurement<f32>, now: u64) -> Option<f32> {
+        let limit = u64::from(self.config.period_us) * u64::from(self.config.stale_periods);
+        let fresh = m.timestamp_us <= now && now - m.timestamp_us <= limit;
+        (m.valid && fresh && math::is_finite(m.value) && math::abs(m.value) <= 20.0)
+            .then_some(m.value + self.config.sensors.acceleration_error)
+    }
+
     /// Recent events (the last 32), oldest first.
     pub fn events(&self) -> impl Iterator<Item = &Event> {
         self.events.iter()
@@ -375,9 +438,18 @@ impl<'t> Controller<'t> {
             _ => None,
         };
         self.last_now_us = Some(now);
-        let command = if let Some(fault) = jump {
-            self.issued.forget();
-            self.braking_since_us = None;
+        self.reported_acceleration = self.reported(&inputs.ego_acceleration, now);
+        if let Some(request) = inputs.driver {
+            if let Err(error) = self.request(request) {
+                self.log(Event::DriverRequestRefused { at_us: now, error });
+            }
+        }
+        let model = self.table.as_ref().ok().map(|(_, m)| *m);
+        let floor = model.map(|m| self.ramp_floor(now, &m));
+        let command = if !self.driver.engaged {
+            self.standby(inputs)
+        } else if let Some(fault) = jump {
+            self.forget_commands();
             // The kept measurements' times belong to the old time line.
             self.leader = None;
             self.speed_kept_from_us = None;
@@ -391,10 +463,19 @@ impl<'t> Controller<'t> {
         } else {
             self.decide(inputs)
         };
-        let command = Command {
+        let mut command = Command {
             acceleration: self.config.envelope.clamp(command.acceleration),
             ..command
         };
+        // Braking faster than ISO 15622's jerk limit allows: an emergency (module docs).
+        if let (Some(last), true) = (self.last_command, command.mode != Mode::Standby) {
+            let speed = self.ego_history.back().map_or(f32::NAN, |e| e.1);
+            let allowed = iso15622::jerk_limit(speed) * seconds(u64::from(self.config.period_us));
+            if last - command.acceleration > allowed * (1.0 + 1e-3) + 1e-4 {
+                command.emergency = true;
+                command.takeover = true;
+            }
+        }
         if command.mode != self.mode {
             self.log(Event::ModeChanged {
                 at_us: now,
@@ -405,29 +486,75 @@ impl<'t> Controller<'t> {
         }
         self.mode = command.mode;
         self.takeover = command.takeover;
+        if command.mode == Mode::Standby {
+            return command;
+        }
         // Every command goes to the actuator: the look-ahead of later steps must know it.
         let keep_from = self.keep_commands_from(now);
         self.issued.push(now, command.acceleration, keep_from);
-        let at_beta = self
-            .table
-            .as_ref()
-            .is_ok_and(|(_, m)| command.acceleration <= m.ego.min);
-        self.braking_since_us = match (at_beta, self.braking_since_us) {
-            (true, Some(since)) => Some(since),
-            (true, None) => Some(now),
-            (false, _) => None,
+        // The ramp (module docs): a command at or below the ramp's floor follows the committed
+        // ramp (one under way keeps its start; a new one starts now from the last command, or
+        // from beta for a command at beta); one above it passed the look-ahead.
+        let c = command.acceleration;
+        self.ramp = match (model, floor) {
+            (Some(m), Some(floor)) if c <= floor => Some(self.ramp.unwrap_or(Ramp {
+                start_us: now,
+                from: if c <= m.ego.min {
+                    m.ego.min
+                } else {
+                    self.last_command
+                        .unwrap_or_else(|| self.unknown_acceleration(&m))
+                },
+            })),
+            _ => None,
         };
+        self.last_command = Some(c);
+        let config = self.config;
+        self.law
+            .settle(&config, c, seconds(u64::from(config.period_us)));
         command
+    }
+
+    /// Disengaged: no command for the actuator to follow; the tracks and the ego's speed are
+    /// still observed, so that an engagement starts from known measurements.
+    fn standby(&mut self, inputs: &Inputs) -> Command {
+        let now = inputs.now_us;
+        if let (Ok(model), Ok(v)) = (
+            self.table.as_ref().map(|(_, m)| *m),
+            self.check_ego_speed(&inputs.ego_speed, now),
+        ) {
+            self.remember_ego_speed(inputs.ego_speed.timestamp_us, v);
+            let mut command = Command::bare(0.0, Mode::Standby, None);
+            command.leader = self.observe_leader(&inputs.leader, now, &model);
+            command.follower = self.observe_follower(&inputs.follower, now, &model);
+            return command;
+        }
+        Command::bare(0.0, Mode::Standby, None)
+    }
+
+    /// The minimum-risk deceleration, reached from the last command at ISO 15622's jerk limit
+    /// (a controlled deceleration, not a jab).
+    fn comfortable(&self, deceleration: f32, inputs: &Inputs) -> f32 {
+        let Some(last) = self.last_command else {
+            return -deceleration;
+        };
+        let v = inputs.ego_speed.value;
+        let step = iso15622::jerk_limit(v) * seconds(u64::from(self.config.period_us));
+        math::max(-deceleration, last - step)
     }
 
     fn minimum_risk(&self, inputs: &Inputs, fault: Fault) -> Command {
         let deceleration = self.mrm_deceleration(inputs);
-        let mut command = Command::bare(-deceleration, Mode::MinimumRisk, Some(fault));
+        let mut command = Command::bare(
+            self.comfortable(deceleration, inputs),
+            Mode::MinimumRisk,
+            Some(fault),
+        );
         command.takeover = true;
         let Ok((_, model)) = &self.table else {
             return command;
         };
-        let planned = math::clamp(-deceleration, model.ego.min, model.ego.max);
+        let planned = math::clamp(command.acceleration, model.ego.min, model.ego.max);
         command.acceleration = planned;
         // The front half still applies where its inputs are good (module docs): the manoeuvre
         // brakes harder when the leader needs it, never more than beta.
@@ -488,6 +615,9 @@ impl<'t> Controller<'t> {
         let Some(leader) = self.leader else {
             return with_tracks(self.minimum_risk(inputs, Fault::LeaderInvalid));
         };
+        if leader_state == TrackState::New {
+            self.law.forget_leader();
+        }
         let Some(rear) = self.rear else {
             return with_tracks(self.minimum_risk(inputs, Fault::FollowerInvalid));
         };
@@ -499,8 +629,32 @@ impl<'t> Controller<'t> {
             _ => None,
         };
         let proposal = match lost {
-            Some(_) => math::clamp(-self.mrm_deceleration(inputs), model.ego.min, model.ego.max),
-            None => self.nominal(leader.track, ego_speed, model.ego),
+            Some(_) => math::clamp(
+                self.comfortable(self.mrm_deceleration(inputs), inputs),
+                model.ego.min,
+                model.ego.max,
+            ),
+            None => {
+                let config = self.config;
+                let x = LawInputs {
+                    leader: Some((leader.at_us, leader.track)),
+                    ego_speed,
+                    now_us: now,
+                    period: seconds(u64::from(config.period_us)),
+                    set_speed: self.driver.set_speed,
+                    time_gap: config.time_gap(self.driver.time_gap_setting),
+                    steady_gap: self.steady_gap(ego_speed),
+                    last_command: self
+                        .last_command
+                        .unwrap_or_else(|| self.unknown_acceleration(&model)),
+                    resume: self.driver.resume_requested,
+                };
+                let a = self.law.propose(&config, &x);
+                if !self.law.is_holding() {
+                    self.driver.resume_requested = false;
+                }
+                math::clamp(a, model.ego.min, model.ego.max)
+            }
         };
         let pending = self.pending(leader.at_us.min(t_e), &model);
         let front = self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, proposal);

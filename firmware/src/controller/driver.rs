@@ -1,0 +1,101 @@
+//! The driver's controls at run time: engage (SET), cancel, resume, the set speed and the
+//! time-gap setting. Each request changes the driver's state only; the command history, which
+//! the certificate needs, is kept across every change.
+
+use super::{Config, TIME_GAP_SETTINGS};
+use crate::math;
+
+/// A request from the driver's controls (the API: [`Controller::request`]; CAN: frame `0x140`,
+/// [`crate::can`]).
+///
+/// [`Controller::request`]: super::Controller::request
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum DriverRequest {
+    /// SET: engage at the ego's measured speed as the new set speed (at least 1 m/s).
+    Engage,
+    /// Disengage: the controller stops commanding ([`Mode::Standby`](super::Mode::Standby)).
+    Cancel,
+    /// Engage again at the last set speed; after a stop held longer than `auto_resume_us`, move
+    /// off.
+    Resume,
+    /// A new set speed, m/s (in `[0, envelope.max_speed]`).
+    SetSpeed(f32),
+    /// A new time-gap setting (an index into `Config::time_gaps`).
+    TimeGap(u8),
+}
+
+/// Why a driver request was refused (the state is unchanged).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum DriverError {
+    /// The set speed is not a number or outside `[0, envelope.max_speed]`.
+    SetSpeedOutOfRange,
+    /// The time-gap setting is not one of `Config::time_gaps`.
+    NoSuchTimeGap,
+}
+
+/// The driver's state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DriverState {
+    /// Whether the controller is in control.
+    pub engaged: bool,
+    /// The speed set-point, m/s.
+    pub set_speed: f32,
+    /// The time-gap setting (an index into `Config::time_gaps`).
+    pub time_gap_setting: u8,
+    /// A resume was asked for and not yet used by a move-off.
+    pub resume_requested: bool,
+}
+
+impl DriverState {
+    /// The state at start: engaged, the configuration's set speed and time-gap setting.
+    pub(super) fn new(config: &Config) -> Self {
+        DriverState {
+            engaged: true,
+            set_speed: config.set_speed,
+            time_gap_setting: config.time_gap_setting,
+            resume_requested: false,
+        }
+    }
+
+    /// Applies `request`, with the ego's measured speed (for SET) and the envelope's top speed.
+    pub(super) fn apply(
+        &mut self,
+        request: DriverRequest,
+        ego_speed: Option<f32>,
+        max_speed: f32,
+    ) -> Result<(), DriverError> {
+        match request {
+            DriverRequest::Engage => {
+                if let Some(v) = ego_speed.filter(|v| math::is_finite(*v)) {
+                    self.set_speed = math::clamp(v, 1.0, max_speed);
+                }
+                self.engaged = true;
+            }
+            DriverRequest::Cancel => {
+                self.engaged = false;
+                self.resume_requested = false;
+            }
+            DriverRequest::Resume => {
+                self.engaged = true;
+                self.resume_requested = true;
+            }
+            DriverRequest::SetSpeed(v) => {
+                if !(math::is_finite(v) && (0.0..=max_speed).contains(&v)) {
+                    return Err(DriverError::SetSpeedOutOfRange);
+                }
+                self.set_speed = v;
+            }
+            DriverRequest::TimeGap(k) => {
+                if usize::from(k) >= TIME_GAP_SETTINGS {
+                    return Err(DriverError::NoSuchTimeGap);
+                }
+                self.time_gap_setting = k;
+            }
+        }
+        Ok(())
+    }
+}
