@@ -438,12 +438,10 @@ impl<C: embedded_can::nb::Can> CanBus<C> {
                 _ => continue,
             };
             let decoded = match raw {
-                EGO_SPEED_ID => decode_ego_speed(data).map(|r| {
-                    (Payload::Scalar(r.value), r.valid, r.age_ms, r.counter)
-                }),
-                ACTUATOR_STATE_ID => decode_actuator_state(data).map(|r| {
-                    (Payload::Scalar(r.value), r.valid, r.age_ms, r.counter)
-                }),
+                EGO_SPEED_ID => decode_ego_speed(data)
+                    .map(|r| (Payload::Scalar(r.value), r.valid, r.age_ms, r.counter)),
+                ACTUATOR_STATE_ID => decode_actuator_state(data)
+                    .map(|r| (Payload::Scalar(r.value), r.valid, r.age_ms, r.counter)),
                 DRIVER_REQUEST_ID => {
                     decode_driver_request(data).map(|(d, c)| (Payload::Driver(d), true, 0, c))
                 }

@@ -128,8 +128,14 @@ fn near_the_margin_a_hard_braking_leader_is_answered_within_the_jerk_limit() {
         );
         let cmd = c.step(&at(state, NOW + k * 20_000));
         assert!(!cmd.emergency, "{k}: {cmd:?}");
-        assert!(cmd.acceleration >= last - 0.05 - 1e-5, "{k}: {cmd:?} after {last}");
-        assert!(cmd.margin.unwrap() > -firmware::CERTIFICATE_TOLERANCE, "{k}: {cmd:?}");
+        assert!(
+            cmd.acceleration >= last - 0.05 - 1e-5,
+            "{k}: {cmd:?} after {last}"
+        );
+        assert!(
+            cmd.margin.unwrap() > -firmware::CERTIFICATE_TOLERANCE,
+            "{k}: {cmd:?}"
+        );
         overrides += usize::from(cmd.mode == Mode::Override);
         last = cmd.acceleration;
         let (dl, vl) = travel(leader, -f64::from(leader_braking), h);
@@ -364,7 +370,10 @@ fn a_latched_controller_stays_in_minimum_risk_on_good_inputs() {
         let command = c.step(&later);
         assert_eq!(fault_of(command), Fault::RestartedAfterFault, "step {k}");
         // Reached at ISO 15622's jerk limit at 25 m/s (2.5 m/s^3), then held.
-        assert!(command.acceleration >= last - 0.05 - 1e-5, "step {k}: {command:?}");
+        assert!(
+            command.acceleration >= last - 0.05 - 1e-5,
+            "step {k}: {command:?}"
+        );
         if k > 50 {
             assert_eq!(command.acceleration, -2.0);
         }
@@ -863,7 +872,10 @@ fn no_command_may_take_the_ego_past_the_speed_domain() {
     }
     let (rho, j) = (0.42f32, 2.5f32);
     let cap = j * (-rho + (rho * rho + 2.0 * 0.1 / j).sqrt());
-    assert!(largest > 0.0 && largest <= cap + 1e-3, "{largest} above {cap}");
+    assert!(
+        largest > 0.0 && largest <= cap + 1e-3,
+        "{largest} above {cap}"
+    );
 }
 
 /// Issue 19 (C): a follower at exactly 35 m/s, its track 60 ms older than the ego's speed,

@@ -18,6 +18,7 @@ pub mod campaign;
 pub mod falsify;
 pub mod humans;
 pub mod iso;
+pub mod scenarios;
 pub mod sim;
 pub mod world;
 

@@ -53,6 +53,24 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         table: Option<PathBuf>,
     },
+    /// Runs the scenario suite (openpilot's maneuvers, Euro NCAP's CCR tests, the issue's
+    /// checks) under ISO 15622's comfort checks, with the graded override and the paper's
+    /// bang-bang policy.
+    Scenarios {
+        /// Output folder.
+        #[arg(long, default_value = "out/scenarios")]
+        out: PathBuf,
+        /// Only scenarios whose name contains this.
+        #[arg(long)]
+        only: Option<String>,
+    },
+    /// Plots the nominal law's gap policy beside the certificate's steady-following gap, at
+    /// every time-gap setting, with and without the braking ramp.
+    GapPolicy {
+        /// Output folder.
+        #[arg(long, default_value = "out/gap-policy")]
+        out: PathBuf,
+    },
     /// Replays one case of a findings file and writes its trace.
     Replay {
         /// The findings file (`falsify`'s `findings.json`).
@@ -310,6 +328,8 @@ fn real_main() -> Result<()> {
             table,
         } => replay(&findings, worst.as_deref(), finding, &out, &table),
         Command::Campaign(args) => campaign(args),
+        Command::Scenarios { out, only } => scenarios(&out, only.as_deref()),
+        Command::GapPolicy { out } => gap_policy(&out),
     }
 }
 
@@ -709,5 +729,272 @@ fn campaign(args: CampaignArgs) -> Result<()> {
          losses and {uncertified_mrm} uncertified minimum-risk periods with humans within the \
          model, sensors and actuator within its limits"
     );
+    Ok(())
+}
+
+/// The traces the suite plots (a part of the name).
+const PLOTTED: [&str; 4] = [
+    "lead accel and decel at 0.5m/s^2 every 2s",
+    "stop and go with 1m/s2 lead decel and accel, with full stops",
+    "CCRb: both 50 km/h, 40 m apart, target braking at 6",
+    "steady following at 30",
+];
+
+fn scenarios(out: &std::path::Path, only: Option<&str>) -> Result<()> {
+    use host_tests::scenarios::{run, suite};
+    let bytes = firmware::DEFAULT_TABLE;
+    let (table, _) = split_table(bytes)?;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let suite: Vec<_> = suite()
+        .into_iter()
+        .filter(|s| only.is_none_or(|o| s.name.contains(o)))
+        .collect();
+    anyhow::ensure!(!suite.is_empty(), "--only {only:?} matches no scenario");
+    let started = std::time::Instant::now();
+    let policies = [firmware::Config::default(), firmware::Config::bang_bang()];
+    let mut runs = Vec::new();
+    for scenario in &suite {
+        for config in policies {
+            for follower in [false, true] {
+                runs.push((scenario, config, follower));
+            }
+        }
+    }
+    use rayon::prelude::*;
+    let results: Vec<_> = runs
+        .par_iter()
+        .map(|(scenario, config, follower)| {
+            let plotted = PLOTTED.iter().any(|p| scenario.name.contains(p))
+                && !follower
+                && config.override_policy == firmware::OverridePolicy::Graded;
+            let mut trace = plotted.then(Trace::new);
+            let result = run(&table, bytes, *config, scenario, *follower, trace.as_mut());
+            (result, trace, scenario.name.clone())
+        })
+        .collect();
+    println!(
+        "| scenario | source | follower | policy | start gap [m] (source's) | jerk/limit | decel/limit | accel/limit | mode switches | override periods | emergency periods | min gap [m] | own check | result |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let mut failed_graded = 0;
+    let mut failed_bang = 0;
+    let mut report = Vec::new();
+    for (k, (result, trace, name)) in results.into_iter().enumerate() {
+        let r = result.context("the default table is not a split table")?;
+        let pass = r.passed();
+        if !pass {
+            if r.policy == "graded" {
+                failed_graded += 1;
+            } else {
+                failed_bang += 1;
+            }
+        }
+        let gap = match (r.start_gap_m, r.source_gap_m) {
+            (Some(s), Some(g)) if (s - g).abs() > 0.01 => format!("{s:.1} ({g:.0})"),
+            (Some(s), _) => format!("{s:.1}"),
+            _ => "-".into(),
+        };
+        let check = match r.check {
+            host_tests::scenarios::Check::None => "-".to_string(),
+            c => format!(
+                "{c:?} {} {:?}",
+                if r.check_holds { "holds" } else { "FAILS" },
+                r.check_figures
+                    .iter()
+                    .map(|x| (x * 100.0).round() / 100.0)
+                    .collect::<Vec<_>>()
+            ),
+        };
+        println!(
+            "| {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {:.1} | {} | {} |",
+            r.name,
+            if r.source.starts_with("openpilot") {
+                "openpilot"
+            } else if r.source.starts_with("Euro") {
+                "Euro NCAP"
+            } else {
+                "issue 21"
+            },
+            if r.follower { "IDM" } else { "none" },
+            r.policy,
+            gap,
+            r.iso.jerk,
+            r.iso.deceleration,
+            r.iso.acceleration,
+            r.mode_switches,
+            r.override_periods,
+            r.emergency_periods,
+            r.min_gap_leader_m.min(999.0),
+            check,
+            if pass {
+                "pass"
+            } else if r.comfort_scope || r.collided || r.certificate_lost {
+                "FAIL"
+            } else {
+                "fail (outside comfort scope)"
+            },
+        );
+        if let Some(trace) = trace {
+            let file = out.join(format!("trace-{k:02}.png"));
+            plot_trace(&file, &name, &trace)?;
+            println!("  trace: {}", file.display());
+        }
+        report.push(r);
+    }
+    let json = serde_json::to_string_pretty(&report)?;
+    std::fs::write(out.join("scenarios.json"), json)?;
+    println!(
+        "{} runs in {:.1} s; graded: {} failed, bang-bang: {} failed (the paper's policy breaks ISO 15622's jerk limit by design); {}",
+        report.len(),
+        started.elapsed().as_secs_f32(),
+        failed_graded,
+        failed_bang,
+        out.join("scenarios.json").display()
+    );
+    anyhow::ensure!(
+        failed_graded == 0,
+        "{failed_graded} runs of the graded policy failed (a collision, a loss, ISO 15622 in scope, or their own check)"
+    );
+    Ok(())
+}
+
+fn gap_policy(out: &std::path::Path) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let bytes = firmware::DEFAULT_TABLE;
+    let configs = [
+        (
+            "no ramp (before issue 21)",
+            firmware::Config {
+                brake_jerk: f32::INFINITY,
+                ..firmware::Config::default()
+            },
+        ),
+        (
+            "ramp at 5 m/s^3",
+            firmware::Config {
+                brake_jerk: 5.0,
+                ..firmware::Config::default()
+            },
+        ),
+        ("ramp at 2.5 m/s^3 (default)", firmware::Config::default()),
+    ];
+    let speeds: Vec<f32> = (0..=70).map(|k| k as f32 * 0.5).collect();
+    let mut rows = Vec::new();
+    println!("| speed [m/s] | certified steady gap, no ramp [m] | with a ramp at 5 m/s^3 [m] | at 2.5 m/s^3 (default) [m] | gap policy at 1.0 / 1.4 / 1.8 / 2.2 s [m] |");
+    println!("|---|---|---|---|---|");
+    let mut series: Vec<(String, Vec<(f32, f32)>)> = Vec::new();
+    for (name, config) in configs {
+        let c = firmware::Controller::new(bytes, config);
+        anyhow::ensure!(c.table().is_some(), "the default table is refused");
+        series.push((
+            format!("certified, {name}"),
+            speeds.iter().map(|&v| (v, c.steady_gap(v))).collect(),
+        ));
+    }
+    let mut policies = Vec::new();
+    for setting in 0..firmware::controller::TIME_GAP_SETTINGS as u8 {
+        let config = firmware::Config {
+            time_gap_setting: setting,
+            ..firmware::Config::default()
+        };
+        let c = firmware::Controller::new(bytes, config);
+        policies.push((
+            config.time_gap(setting),
+            speeds
+                .iter()
+                .map(|&v| (v, c.desired_gap(v)))
+                .collect::<Vec<_>>(),
+        ));
+    }
+    for (k, &v) in speeds.iter().enumerate() {
+        if k % 10 == 0 {
+            println!(
+                "| {v:.0} | {:.1} | {:.1} | {:.1} | {} |",
+                series[0].1[k].1,
+                series[1].1[k].1,
+                series[2].1[k].1,
+                policies
+                    .iter()
+                    .map(|p| format!("{:.1}", p.1[k].1))
+                    .collect::<Vec<_>>()
+                    .join(" / ")
+            );
+        }
+        rows.push(serde_json::json!({
+            "speed_m_s": v,
+            "certified_gap_no_ramp_m": series[0].1[k].1,
+            "certified_gap_ramp_5_m": series[1].1[k].1,
+            "certified_gap_ramp_2_5_m": series[2].1[k].1,
+            "gap_policy_m": policies.iter().map(|p| serde_json::json!({"time_gap_s": p.0, "gap_m": p.1[k].1})).collect::<Vec<_>>(),
+        }));
+    }
+    std::fs::write(
+        out.join("gap-policy.json"),
+        serde_json::to_string_pretty(&rows)?,
+    )?;
+    let file = out.join("gap-policy.png");
+    let root = BitMapBackend::new(&file, (1000, 650)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let g_max = policies
+        .iter()
+        .flat_map(|p| p.1.iter().map(|x| x.1))
+        .fold(0.0f32, f32::max)
+        * 1.05;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "Gap policy (driver's settings) beside the certificate's steady-following gap",
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(35)
+        .y_label_area_size(55)
+        .build_cartesian_2d(0f32..35f32, 0f32..g_max)?;
+    chart
+        .configure_mesh()
+        .x_desc("speed, ego and leader alike [m/s]")
+        .y_desc("gap to the leader [m]")
+        .draw()?;
+    // Okabe-Ito, colour-blind safe.
+    let certified_colours = [
+        RGBColor(153, 153, 153),
+        RGBColor(230, 159, 0),
+        RGBColor(213, 94, 0),
+    ];
+    let policy_colours = [
+        RGBColor(86, 180, 233),
+        RGBColor(0, 158, 115),
+        RGBColor(0, 114, 178),
+        RGBColor(204, 121, 167),
+    ];
+    for ((name, points), colour) in series.iter().zip(certified_colours) {
+        chart
+            .draw_series(LineSeries::new(
+                points.iter().copied(),
+                colour.stroke_width(3),
+            ))?
+            .label(name.clone())
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 14, y)], colour.stroke_width(3))
+            });
+    }
+    for ((time_gap, points), colour) in policies.iter().zip(policy_colours) {
+        chart
+            .draw_series(LineSeries::new(
+                points.iter().copied(),
+                colour.stroke_width(2),
+            ))?
+            .label(format!("gap policy, time gap {time_gap} s"))
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 14, y)], colour.stroke_width(2))
+            });
+    }
+    chart
+        .configure_series_labels()
+        .border_style(BLACK)
+        .background_style(WHITE)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()?;
+    root.present()?;
+    println!("{}", file.display());
     Ok(())
 }

@@ -311,6 +311,9 @@ pub struct World<'t> {
     cut_in: Option<(u64, Option<u64>)>,
     /// ISO 15622's checks on the ego's realised motion, from 1 s after engagement.
     iso: crate::iso::IsoCheck,
+    /// The road's grade under the ego (rise over run; positive uphill). Outside the model:
+    /// the certificate assumes an actuator that tracks the acceleration over ground.
+    grade: f32,
 }
 
 impl<'t> World<'t> {
@@ -342,6 +345,7 @@ impl<'t> World<'t> {
             score: Score::new(),
             cut_in: None,
             iso: crate::iso::IsoCheck::new(1.0),
+            grade: 0.0,
         }
     }
 
@@ -417,6 +421,27 @@ impl<'t> World<'t> {
         {
             score.beta_periods = Some(since);
         }
+    }
+
+    /// The road's grade under the ego from now on (rise over run, positive uphill): gravity's
+    /// share along the road, `-g sin(atan(grade))`, adds to the actuator's acceleration, which
+    /// is then no longer what the firmware commanded (outside the certificate's model, for
+    /// the speed law's tests).
+    pub fn set_grade(&mut self, grade: f32) {
+        self.grade = grade;
+    }
+
+    /// A request from the driver's controls, through the firmware's API.
+    pub fn request(
+        &mut self,
+        request: firmware::DriverRequest,
+    ) -> Result<(), firmware::DriverError> {
+        self.controller.request(request)
+    }
+
+    /// The firmware's controller.
+    pub fn controller(&self) -> &Controller<'t> {
+        &self.controller
     }
 
     /// The true cars: leader, ego, follower.
@@ -542,7 +567,8 @@ impl<'t> World<'t> {
         }
         self.last_command = Some(command.acceleration);
         self.last = Some((command, certificate));
-        let ego_acceleration = self.actuator.acceleration();
+        let gravity = -9.81 * self.grade / (1.0 + self.grade * self.grade).sqrt();
+        let ego_acceleration = self.actuator.acceleration() + gravity;
         // The realised acceleration (none at a standstill held by the brakes).
         let realised = if self.cars[1].v <= 0.0 {
             ego_acceleration.max(0.0)
@@ -558,7 +584,7 @@ impl<'t> World<'t> {
         let dt = dt_us as f32 * 1e-6;
         let mut collided = false;
         for j in 0..SUB_STEPS {
-            let a_ego = self.actuator.advance(now_us + j * dt_us, dt_us);
+            let a_ego = self.actuator.advance(now_us + j * dt_us, dt_us) + gravity;
             let front = lowest_gap(leader, a_leader, ego, a_ego, dt);
             let rear = lowest_gap(ego, a_ego, follower, a_follower, dt);
             s.min_gap_leader = s.min_gap_leader.min(front);

@@ -171,6 +171,7 @@ fn sensors_within_their_declared_bounds_keep_the_certificate_and_beyond_them_are
         range_rate: 3.0 * bounds.range_rate,
         ego_speed: 3.0 * bounds.ego_speed,
         ego_speed_relative: 3.0 * bounds.ego_speed_relative,
+        acceleration: 3.0 * bounds.acceleration,
     };
     let beyond = SensorModel {
         noise: Noise::WorstCorner,

@@ -314,9 +314,11 @@ impl Controller<'_> {
     /// width); before the first command, what the actuator may be doing
     /// ([`Controller::unknown_acceleration`]).
     pub(super) fn pending(&self, t_0: u64, model: &Model) -> f32 {
-        self.issued
-            .largest_since(t_0, self.command_span_us(), self.unknown_acceleration(model))
-            + self.lag_tail(model)
+        self.issued.largest_since(
+            t_0,
+            self.command_span_us(),
+            self.unknown_acceleration(model),
+        ) + self.lag_tail(model)
     }
 
     /// What commands older than five lag time constants can still add through the lag, at
@@ -440,7 +442,13 @@ impl Controller<'_> {
         };
         let peak_of = |u: f32| {
             let (response, from) = profile(t_e, after(u), dead_us, lag, jerk);
-            ego_now + speed_rise(math::max(math::max(pending, u + tail), from), response, from, jerk)
+            ego_now
+                + speed_rise(
+                    math::max(math::max(pending, u + tail), from),
+                    response,
+                    from,
+                    jerk,
+                )
         };
         let ahead = |u: f32| {
             let (response, from) = profile(t_m, after(u), dead_us, lag, jerk);
@@ -490,12 +498,28 @@ impl Controller<'_> {
             } else {
                 None
             };
+            // Nothing passes: the ramp, which keeps a certified state certified. A state whose
+            // worst corner is not certified gets the ramp too while its measured point is (the
+            // true state lies in the box: measurement noise moves the corner, not the truth, and
+            // the ramp keeps the truth certified); where even the measured point is not (a cut-in,
+            // a leader beyond its model), beta at once: an emergency, the best answer, not a
+            // promise.
+            let measured_point_certified = || {
+                let ego_at_m = 0.5 * (ego_low + ego_high);
+                let leader_speed = math::max(ego_at_m + leader.track.rel_speed, 0.0);
+                let hold = math::max(pending, ramp_from);
+                front_value(
+                    leader.track.gap,
+                    leader_speed,
+                    ego_at_m,
+                    &model.front(response, hold, ramp_from, jerk),
+                ) > margin_front
+            };
             match gentler {
                 Some(u) => u,
-                // Nothing passes: the ramp, which keeps a certified state certified; an
-                // uncertified one gets beta at once (an emergency: the best answer, not a
-                // promise).
-                None if certified => math::min(capped, floor),
+                None if certified || (headroom >= 0.0 && measured_point_certified()) => {
+                    math::min(capped, floor)
+                }
                 None => model.ego.min,
             }
         };

@@ -163,9 +163,15 @@ impl Config {
         ]
         .iter()
         .all(|x| math::is_finite(*x) && *x >= 0.0);
-        let gaps_ordered = self.time_gaps.windows(2).all(|w| w.iter().all(|g| math::is_finite(*g)) && w.first() <= w.last());
+        let gaps_ordered = self
+            .time_gaps
+            .windows(2)
+            .all(|w| w.iter().all(|g| math::is_finite(*g)) && w.first() <= w.last());
         let time_gaps = gaps_ordered
-            && self.time_gaps.first().is_some_and(|g| *g >= crate::iso15622::MIN_TIME_GAP)
+            && self
+                .time_gaps
+                .first()
+                .is_some_and(|g| *g >= crate::iso15622::MIN_TIME_GAP)
             && self.time_gaps.last().is_some_and(|g| *g <= 5.0)
             && usize::from(self.time_gap_setting) < TIME_GAP_SETTINGS;
         // A jerk of at least 0.5 m/s^3 (a ramp of 11 s to 3.5 m/s^2 at most), or no ramp.
@@ -207,8 +213,15 @@ impl Config {
 
     /// The time gap of `setting`, s (the last one for a setting past the end).
     pub fn time_gap(&self, setting: u8) -> f32 {
-        let last = self.time_gaps.last().copied().unwrap_or(crate::iso15622::MIN_TIME_GAP);
-        self.time_gaps.get(usize::from(setting)).copied().unwrap_or(last)
+        let last = self
+            .time_gaps
+            .last()
+            .copied()
+            .unwrap_or(crate::iso15622::MIN_TIME_GAP);
+        self.time_gaps
+            .get(usize::from(setting))
+            .copied()
+            .unwrap_or(last)
     }
 }
 
@@ -225,8 +238,8 @@ impl Default for Config {
             gap_room: 1.0,
             gap_gain: 0.23,
             rel_speed_gain: 0.7,
-            speed_gain: 0.4,
-            speed_integral_gain: 0.1,
+            speed_gain: 0.6,
+            speed_integral_gain: 0.25,
             feedforward_gain: 0.5,
             stop_deceleration: 1.0,
             auto_resume_us: 3_000_000,

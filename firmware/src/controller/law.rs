@@ -118,11 +118,13 @@ impl Law {
         let v = x.ego_speed;
         self.update_leader(x);
         let speed_error = x.set_speed - v;
+        // The proportional part within the comfort limits, then the integral on top: once it has
+        // learnt a grade, the acceleration over ground is the proportional part's.
         let speed_law = math::clamp(
-            c.speed_gain * speed_error + self.integral,
+            c.speed_gain * speed_error,
             SPEED_LAW_BRAKING,
             iso15622::acceleration_limit(v),
-        );
+        ) + self.integral;
         let leader_law = x
             .leader
             .filter(|(_, t)| math::is_finite(t.gap))

@@ -243,6 +243,10 @@ use crate::math;
 use crate::sensing::TrackState;
 
 use certificate::{model_of, Model, Ramp};
+
+/// How far below the domain's top (less the ego speed's error) the law's set speed is held,
+/// m/s: room for the speed law's overshoot under the speed headroom.
+const SET_SPEED_ROOM: f32 = 0.5;
 use history::{seconds, IssuedCommands};
 use law::{Law, LawInputs};
 use tracks::{LeaderMemo, RearMemo, EGO_HISTORY};
@@ -641,7 +645,15 @@ impl<'t> Controller<'t> {
                     ego_speed,
                     now_us: now,
                     period: seconds(u64::from(config.period_us)),
-                    set_speed: self.driver.set_speed,
+                    // Below the domain's top by the speed's error and a margin: the certificate
+                    // cannot certify an ego measured at the top (its speed headroom).
+                    set_speed: math::min(
+                        self.driver.set_speed,
+                        model.max_ego_speed
+                            - (self.config.sensors.ego_speed(model.max_ego_speed).1
+                                - model.max_ego_speed)
+                            - SET_SPEED_ROOM,
+                    ),
                     time_gap: config.time_gap(self.driver.time_gap_setting),
                     steady_gap: self.steady_gap(ego_speed),
                     last_command: self
