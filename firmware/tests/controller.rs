@@ -862,20 +862,26 @@ fn no_command_may_take_the_ego_past_the_speed_domain() {
     assert_eq!(cmd.mode, Mode::Override, "{cmd:?}");
     let cmd = Controller::new(DEFAULT_TABLE, config).step(&clear(30.0));
     assert_eq!(cmd.mode, Mode::Nominal, "{cmd:?}");
-    // With its own commands known, the cap is what the response and the braking ramp leave:
-    // at 34.9 m/s, 0.42 s of response and a ramp at j = 2.5 m/s^3, the largest `u` with
-    // `u 0.42 + u^2 / (2 j) <= 0.1` m/s.
+    // Once its own commands are known, the law's set speed stays below the domain's top by the
+    // speed's error (none here) and 0.5 m/s: from 34.9 m/s with a set speed of 40 the car
+    // settles at 34.5 m/s, so steady cruising never leans on the speed cap.
     let mut c = Controller::new(DEFAULT_TABLE, config);
-    let mut largest = c.step(&clear(34.9)).acceleration;
-    for k in 1..=150u64 {
-        largest = largest.max(c.step(&at(clear(34.9), NOW + k * 20_000)).acceleration);
+    let (mut v, h) = (34.9f32, 0.02f32);
+    let mut largest_speed = 0.0f32;
+    for k in 0..1_500u64 {
+        let cmd = c.step(&at(clear(v), NOW + k * 20_000));
+        // Until its own commands cover the dead time and the lag (1.6 s), the actuator is not
+        // known (its state not reported here): the band's top is assumed and the cap brakes;
+        // on the way back up the cap trims the law's acceleration; settled, it does not act.
+        if k > 1_000 {
+            assert_ne!(cmd.mode, Mode::Override, "{k}: {cmd:?}");
+        }
+        v += cmd.acceleration * h;
+        if k > 1_000 {
+            largest_speed = largest_speed.max(v);
+        }
     }
-    let (rho, j) = (0.42f32, 2.5f32);
-    let cap = j * (-rho + (rho * rho + 2.0 * 0.1 / j).sqrt());
-    assert!(
-        largest > 0.0 && largest <= cap + 1e-3,
-        "{largest} above {cap}"
-    );
+    assert!((largest_speed - 34.5).abs() < 0.05, "{largest_speed}");
 }
 
 /// Issue 19 (C): a follower at exactly 35 m/s, its track 60 ms older than the ego's speed,

@@ -487,6 +487,7 @@ impl Controller<'_> {
         let at_capped = ahead(capped);
         let passes = room && at_capped > margin_front;
         let certified = value > margin_front && headroom >= 0.0;
+        let mut jumped = false;
         let command = if passes {
             capped
         } else {
@@ -515,12 +516,16 @@ impl Controller<'_> {
                     &model.front(response, hold, ramp_from, jerk),
                 ) > margin_front
             };
+            // The noise rule needs a chain of certified steps behind it (`front_chain`): at an
+            // engagement or after a cut-in, an uncertified corner is an emergency.
+            let noise_only = self.front_chain && headroom >= 0.0 && measured_point_certified();
             match gentler {
                 Some(u) => u,
-                None if certified || (headroom >= 0.0 && measured_point_certified()) => {
-                    math::min(capped, floor)
+                None if certified || noise_only => math::min(capped, floor),
+                None => {
+                    jumped = true;
+                    model.ego.min
                 }
-                None => model.ego.min,
             }
         };
         let command = math::clamp(command, model.ego.min, model.ego.max);
@@ -529,6 +534,7 @@ impl Controller<'_> {
             overridden: !passes || capped < proposal,
             value,
             headroom,
+            jumped,
         }
     }
 }
@@ -543,6 +549,8 @@ pub(super) struct FrontCheck {
     pub(super) value: f32,
     /// The state's speed headroom, m/s.
     pub(super) headroom: f32,
+    /// Nothing passed and the state was not certified: beta at once (an emergency).
+    pub(super) jumped: bool,
 }
 
 /// The rear value over a box of rear states: the intervals of `gap_follower`, the follower's

@@ -53,6 +53,8 @@ pub(super) struct Law {
     stopped_since_us: Option<u64>,
     /// The last proposal was the speed law's, unclipped: `(proposal, speed error)`.
     speed_law: Option<(f32, f32)>,
+    /// The last proposal was the speed law's (clipped or not).
+    speed_law_proposal: Option<f32>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -86,6 +88,7 @@ impl Law {
             leader: None,
             stopped_since_us: None,
             speed_law: None,
+            speed_law_proposal: None,
         }
     }
 
@@ -120,11 +123,13 @@ impl Law {
         let speed_error = x.set_speed - v;
         // The proportional part within the comfort limits, then the integral on top: once it has
         // learnt a grade, the acceleration over ground is the proportional part's.
-        let speed_law = math::clamp(
-            c.speed_gain * speed_error,
+        let proportional = c.speed_gain * speed_error;
+        let bounded = math::clamp(
+            proportional,
             SPEED_LAW_BRAKING,
             iso15622::acceleration_limit(v),
-        ) + self.integral;
+        );
+        let speed_law = bounded + self.integral;
         let leader_law = x
             .leader
             .filter(|(_, t)| math::is_finite(t.gap))
@@ -140,23 +145,32 @@ impl Law {
         );
         let step = iso15622::jerk_limit(v) * x.period;
         let proposal = math::clamp(limited, x.last_command - step, x.last_command + step);
-        self.speed_law = (leader_law.is_none_or(|a| a >= speed_law) && proposal == speed_law)
+        // The integral learns only from the speed law's own, unsaturated command.
+        let speed_law_active = leader_law.is_none_or(|a| a >= speed_law);
+        self.speed_law = (speed_law_active && proposal == speed_law && bounded == proportional)
             .then_some((proposal, speed_error));
+        self.speed_law_proposal = speed_law_active.then_some(proposal);
         proposal
     }
 
     /// After the step: the integral moves only if the command issued was the speed law's own
     /// proposal (conditional integration).
     pub(super) fn settle(&mut self, config: &Config, issued: f32, period: f32) {
+        let mut integral = self.integral;
         if let Some((proposal, error)) = self.speed_law {
             if math::abs(issued - proposal) <= 1e-4 {
-                self.integral = math::clamp(
-                    self.integral + config.speed_integral_gain * error * period,
-                    -INTEGRAL_MAX,
-                    INTEGRAL_MAX,
-                );
+                integral += config.speed_integral_gain * error * period;
             }
         }
+        // Back-calculation: where the certificate (or its speed cap) trimmed the speed law's
+        // command, the integral gives back what it holds above the command issued, with a time
+        // constant of 1 s, so that it does not wind up against the cap.
+        if let Some(proposal) = self.speed_law_proposal {
+            if issued < proposal - 1e-4 && integral > 0.0 {
+                integral = math::max(integral - (proposal - issued) * period, 0.0);
+            }
+        }
+        self.integral = math::clamp(integral, -INTEGRAL_MAX, INTEGRAL_MAX);
     }
 
     fn update_leader(&mut self, x: &LawInputs) {

@@ -280,6 +280,10 @@ pub struct Controller<'t> {
     driver: DriverState,
     /// The nominal law's memory.
     law: Law,
+    /// Every step since the last engagement, cut-in or jump to beta kept a certified front
+    /// (measured, or its ramp after one): the true state is certified while the ramp is
+    /// followed, whatever the measurement noise does to the error box's corner.
+    front_chain: bool,
     /// The last plausible leader measurement, with the ego's speed interval at its time.
     leader: Option<LeaderMemo>,
     /// Since when (the ego measurement's time of the first of an unbroken run of steps) every
@@ -327,6 +331,7 @@ impl<'t> Controller<'t> {
             reported_acceleration: None,
             driver: DriverState::new(&config),
             law: Law::new(),
+            front_chain: false,
             leader: None,
             speed_kept_from_us: None,
             rear: None,
@@ -396,6 +401,7 @@ impl<'t> Controller<'t> {
 
     /// Forgets what the actuator was told: from here on it is what its reported state says.
     fn forget_commands(&mut self) {
+        self.front_chain = false;
         self.issued.forget();
         self.ramp = None;
         self.last_command = None;
@@ -472,7 +478,11 @@ impl<'t> Controller<'t> {
             ..command
         };
         // Braking faster than ISO 15622's jerk limit allows: an emergency (module docs).
-        if let (Some(last), true) = (self.last_command, command.mode != Mode::Standby) {
+        // Against the last command, or at engagement against the actuator's reported state.
+        let reference = self.last_command.or(self
+            .reported_acceleration
+            .map(|a| a - self.config.sensors.acceleration_error));
+        if let (Some(last), true) = (reference, command.mode != Mode::Standby) {
             let speed = self.ego_history.back().map_or(f32::NAN, |e| e.1);
             let allowed = iso15622::jerk_limit(speed) * seconds(u64::from(self.config.period_us));
             if last - command.acceleration > allowed * (1.0 + 1e-3) + 1e-4 {
@@ -621,6 +631,7 @@ impl<'t> Controller<'t> {
         };
         if leader_state == TrackState::New {
             self.law.forget_leader();
+            self.front_chain = false;
         }
         let Some(rear) = self.rear else {
             return with_tracks(self.minimum_risk(inputs, Fault::FollowerInvalid));
@@ -670,6 +681,8 @@ impl<'t> Controller<'t> {
         };
         let pending = self.pending(leader.at_us.min(t_e), &model);
         let front = self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, proposal);
+        self.front_chain = (front.value > self.config.front_margin && front.headroom >= 0.0)
+            || (self.front_chain && !front.jumped);
         self.speed_kept_from_us = if front.headroom >= 0.0 {
             self.speed_kept_from_us.or(Some(t_e))
         } else {
