@@ -391,3 +391,54 @@ fn malformed_frames_are_counted_and_a_bus_error_means_minimum_risk() {
         "the manoeuvre is still requested"
     );
 }
+
+/// Issue 21's frames: the actuator's state (0x131) reaches the inputs with its age, and the
+/// driver's requests (0x140) are delivered one per period, in order; a request code that does
+/// not exist is a malformed frame, counted and not used.
+#[test]
+fn the_actuator_state_and_the_drivers_requests_arrive() {
+    use firmware::DriverRequest;
+    let state =
+        can::decode_actuator_state(&can::encode_actuator_state(-1.234, true, 7, 3)).unwrap();
+    assert!((state.value + 1.234).abs() < 1e-3 && state.valid && state.age_ms == 7);
+    for request in [
+        DriverRequest::Engage,
+        DriverRequest::Cancel,
+        DriverRequest::Resume,
+        DriverRequest::SetSpeed(27.5),
+        DriverRequest::TimeGap(2),
+    ] {
+        let (back, counter) =
+            can::decode_driver_request(&can::encode_driver_request(&request, 9)).unwrap();
+        assert_eq!((back, counter), (request, 9));
+    }
+    let mut bogus = can::encode_driver_request(&DriverRequest::Cancel, 3);
+    bogus[0] = 9;
+    bogus[4] = can::frame_crc(can::DRIVER_REQUEST_ID, &bogus[..4]);
+    let mut bus = CanBus::new(MockBus::default());
+    let mut frames = healthy_frames();
+    frames.push(frame(
+        can::ACTUATOR_STATE_ID,
+        &can::encode_actuator_state(0.75, true, 20, 2),
+    ));
+    frames.push(frame(
+        can::DRIVER_REQUEST_ID,
+        &can::encode_driver_request(&DriverRequest::SetSpeed(22.0), 1),
+    ));
+    frames.push(frame(
+        can::DRIVER_REQUEST_ID,
+        &can::encode_driver_request(&DriverRequest::TimeGap(1), 2),
+    ));
+    frames.push(frame(can::DRIVER_REQUEST_ID, &bogus));
+    bus = push_all(&mut bus, frames);
+    let first = bus.read(100_000).unwrap();
+    assert!((first.ego_acceleration.value - 0.75).abs() < 1e-3);
+    assert_eq!(first.ego_acceleration.timestamp_us, 80_000);
+    assert_eq!(first.driver, Some(DriverRequest::SetSpeed(22.0)));
+    assert_eq!(
+        bus.read(120_000).unwrap().driver,
+        Some(DriverRequest::TimeGap(1))
+    );
+    assert_eq!(bus.read(140_000).unwrap().driver, None);
+    assert_eq!(bus.e2e().malformed, 1);
+}
