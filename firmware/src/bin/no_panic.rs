@@ -19,7 +19,9 @@ use cortex_m_rt::entry;
 // and the latched minimum-risk manoeuvre instead.
 #[cfg(feature = "defmt")]
 compile_error!("the no-panic proof is built without defmt: a defmt logger can panic (reentrancy)");
-use firmware::can::{decode_ego_speed, decode_track, encode_command};
+use firmware::can::{
+    decode_actuator_state, decode_driver_request, decode_ego_speed, decode_track, encode_command,
+};
 use firmware::{
     run_period, Actuator, Clock, Command, Config, Controller, Inputs, Measurement, Sensors, Track,
     Watchdog, DEFAULT_TABLE,
@@ -39,6 +41,11 @@ impl Sensors for Opaque {
         let follower = decode_track(black_box(0x121), black_box(&frame[..])).map_err(|_| ())?;
         let speed: [u8; 6] = black_box([0; 6]);
         let ego = decode_ego_speed(black_box(&speed[..])).map_err(|_| ())?;
+        let state = decode_actuator_state(black_box(&speed[..])).map_err(|_| ())?;
+        let request: [u8; 5] = black_box([0; 5]);
+        let driver = decode_driver_request(black_box(&request[..]))
+            .ok()
+            .map(|(d, _)| d);
         let (leader, leader_valid) = (leader.value, leader.valid);
         let (follower, follower_valid) = (follower.value, follower.valid);
         let (ego, ego_valid) = (ego.value, ego.valid);
@@ -59,6 +66,12 @@ impl Sensors for Opaque {
                 timestamp_us: black_box(stamp),
                 valid: ego_valid,
             },
+            ego_acceleration: Measurement {
+                value: state.value,
+                timestamp_us: black_box(stamp),
+                valid: state.valid,
+            },
+            driver,
             now_us: black_box(now_us),
         })
     }

@@ -202,7 +202,9 @@ fn main() -> ! {
     // A range read long by the declared error.
     let long = |g: f32| g + s.range_error + s.range_error_relative * g;
     let steps = 3000u32; // 60 s
-    let mut leader = Car { x: 120.0, v: 25.0 };
+    // At the gap policy's distance (the certificate's steady gap with the law's room).
+    let mut leader = Car { x: 140.0, v: 25.0 };
+    let mut last_command = 0.0f32;
     let mut ego = Car { x: 50.0, v: 25.0 };
     let mut follower = Car { x: 20.0, v: 25.0 };
     let (mut min_margin, mut misplaced_minimum_risk) = (f32::INFINITY, 0u32);
@@ -262,7 +264,7 @@ fn main() -> ! {
             Mode::Nominal => hjacc_mode_nominal(),
             Mode::Override => hjacc_mode_override(),
             Mode::MinimumRisk => hjacc_mode_minimum_risk(),
-            Mode::Uncertified => hjacc_mode_uncertified(),
+            Mode::Uncertified | Mode::Standby => hjacc_mode_uncertified(),
         }
         if (command.mode == Mode::MinimumRisk) != lost || (lost && command.margin.is_none()) {
             misplaced_minimum_risk += 1;
@@ -275,8 +277,10 @@ fn main() -> ! {
                 follower.v,
                 ego.v,
             ];
+            // The true certificate after the step: the ramp the controller is committed to,
+            // through this plant's actuator (none: the command is the acceleration).
             let margin = controller
-                .certificate(state)
+                .certificate_with_actuator(state, now_us, 0, 0.0, command.acceleration)
                 .map_or(f32::NEG_INFINITY, |c| c.margin());
             if margin < min_margin {
                 min_margin = margin;
@@ -285,8 +289,9 @@ fn main() -> ! {
         match command.mode {
             Mode::Nominal => nominal += 1,
             Mode::Override => overridden += 1,
-            Mode::MinimumRisk | Mode::Uncertified => minimum_risk += 1,
+            Mode::MinimumRisk | Mode::Uncertified | Mode::Standby => minimum_risk += 1,
         }
+        last_command = command.acceleration;
         if -command.acceleration > max_brake {
             max_brake = -command.acceleration;
         }
