@@ -202,7 +202,7 @@ fn main() -> ! {
     // A range read long by the declared error.
     let long = |g: f32| g + s.range_error + s.range_error_relative * g;
     let steps = 3000u32; // 60 s
-    // At the gap policy's distance (the certificate's steady gap with the law's room).
+                         // At the gap policy's distance (the certificate's steady gap with the law's room).
     let mut leader = Car { x: 140.0, v: 25.0 };
     let mut last_command = 0.0f32;
     let mut ego = Car { x: 50.0, v: 25.0 };

@@ -16,19 +16,43 @@
 //! # The law, and why it keeps a certified state certified
 //! Every command is in the band `[-beta, a_max]`, in every mode, so the rear half needs no
 //! decision: it is a property of the band, proven for the table itself, cell by cell, by
-//! `solver verify` (below). The front half decides the command. The nominal ACC law's command `u`
-//! is held for one period `h`; the look-ahead computes `front_value` with a *response* of `u`
-//! for `h` before the braking at `beta` (plus the delays, see below). That is the smallest
-//! front gap over every leader
-//! behaviour, the period included, and every state the period can reach has a front value at
-//! least as large (the reached state's worst case is one of the behaviours the look-ahead
-//! took the minimum over). So if the look-ahead exceeds `front_margin` the nominal command is
-//! applied ([`Mode::Nominal`]); otherwise ([`Mode::Override`]) a gentler braking the
-//! look-ahead passes (a secant step between the refused command and `beta`), or braking at
-//! `beta` itself, along which the front value never decreases (checked by property tests in
-//! `table_format::front`). Either way a certified state's front value stays above
-//! `front_margin`. No monotonicity of
-//! the table is used: the rear value is a property of the band, and the front value is exact.
+//! `solver verify` (below). The front half decides the command. The nominal ACC law
+//! (the `law` module, which knows nothing of the certificate but its steady-following gap) proposes `u`;
+//! the look-ahead computes `front_value` for `u` held one period `h`, then the **braking
+//! ramp** from `u` down to `beta` (plus the delays, see below). That is the smallest front gap
+//! over every leader behaviour, the period included, and every state the period can reach has
+//! a front value at least as large (the reached state's worst case is one of the behaviours the
+//! look-ahead took the minimum over). So if the look-ahead exceeds `front_margin` the law's
+//! command is applied ([`Mode::Nominal`]); otherwise ([`Mode::Override`]) the gentlest braking
+//! between the ramp's floor and the refused command that the look-ahead passes (a secant step,
+//! `least_braking` in the `certificate` module), or, when none does, the ramp itself. Either way a
+//! certified state's front value stays above `front_margin`. No monotonicity of the table is
+//! used: the rear value is a property of the band, and the front value is exact.
+//!
+//! # The braking ramp: the jerk limit inside the certificate
+//! ISO 15622 limits an ACC's braking jerk (2.5 m/s^3 at and above 20 m/s, [`crate::iso15622`]).
+//! A certificate that assumes braking at `beta` at once would have to jump there, the jab a
+//! driver feels. So the actuator model has the ramp in it: the controller never lowers its
+//! command faster than `brake_jerk` (default 2.5 m/s^3, so every certified command keeps
+//! ISO 15622's jerk limit at every speed), and the front value is evaluated with the ramp in
+//! closed form (`table_format::front`: a hold, then `max(r - j s, -beta)`). A **ramp** is a
+//! start `t_b` and a reference `r`: from `t_b` every command is at most `max(r - j (t - t_b +
+//! h), -beta)` (the staircase of held commands lies below the continuous ramp). The ramp is
+//! *committed*: once nothing passes the look-ahead, the ramp started where the last passing
+//! command's look-ahead said it would (at `now`, from the last command) and it keeps its start
+//! and reference while it runs, so that the argument below holds; a command that passes ends it.
+//! The price: the certificate's steady-following gap grows by about `v (u + beta) / (2 j)`, at
+//! 30 m/s from 76 m to 97 m (`host-tests gap-policy`, README); the override starts earlier, not
+//! harder. `Config::bang_bang()` is the paper's policy instead: no ramp (`brake_jerk =
+//! f32::INFINITY`) and braking at `beta` whenever the look-ahead refuses.
+//!
+//! **Emergencies.** A state whose front is not certified at the error box's worst corner gets
+//! the ramp too when every step since the last engagement or cut-in was certified and its
+//! measured point still is (measurement noise moves the corner, not the true state, which the
+//! ramp keeps certified); otherwise (an engagement into an uncertified state, a cut-in, a leader
+//! beyond its model) the command is `beta` at once: an emergency, flagged in
+//! [`Command::emergency`] with the takeover request whenever a command drops faster than
+//! ISO 15622's jerk limit.
 //!
 //! # Delays: the measurements' age, the actuator's dead time and lag
 //! The configuration declares the actuator's dead time `D` (a command acts `D` after it is
@@ -41,42 +65,50 @@
 //! ego can have had in between (the highest speed for the ego, the lowest for the leader).
 //!
 //! The ego's acceleration is bounded through the commands the controller has issued, which it
-//! keeps (a sliding-window maximum back to the oldest kept measurement, less `D` and `5 tau`).
-//! Until braking at
-//! beta takes full effect, the acceleration is at most `pending`: the largest command issued
-//! since `t_m - D - 5 tau`, plus what older commands can still pass through the lag (at most
-//! `e^-5` of the band's width); before the controller's first command it is the band's
-//! largest. A braking command issued at `t_b` takes full effect, in the sense that matters
-//! here, at `t_b + D + tau`: a first-order lag's speed never exceeds that of the step delayed
-//! by `tau` (see `table_format::front`). So the **certified front value** is
-//! `front_value` at the state of `t_m` with a response of `pending` until `t_b + D + tau`,
-//! where `t_b` is when the current run of commands at beta began, or now. The **look-ahead**
-//! of a command `u` uses a response of `max(pending, u + tail)` until `now + h + D + tau`, with
-//! `tail` the lag's `e^-5` of the band's width: the next step's `pending` is `u + tail` when `u`
-//! is the largest command (before issue 20's review the look-ahead took `max(pending, u)`,
-//! which under-stated it by up to the tail, 0.037 m/s^2). Why it is
-//! invariant: at the next step the certified value's response ends at the same instant (either
-//! the braking run goes on from the same `t_b`, or `u` was held and the run starts at
-//! `now + h`), with a `pending` no larger, from a later state that one of the behaviours the
-//! look-ahead took the minimum over has reached; so it is at least the look-ahead's value.
+//! keeps (a sliding-window maximum back to the oldest kept measurement, less `D` and `5 tau`):
+//! `pending` is the largest command issued since `t_m - D - 5 tau`, plus what older commands
+//! can still pass through the lag (at most `e^-5` of the band's width). Before the
+//! controller's first command (and after a cancel or a clock jump) it is the actuator's
+//! reported state plus its error ([`Inputs::ego_acceleration`]: the engagement knows what the
+//! car is doing), or the band's top when that is not reported. A ramp `(t_b, r)` seen from a
+//! time `t_0` through the delays is a hold of `max(pending, r_0)` for `max(t_b + D - t_0, 0) +
+//! tau`, then the ramp from `r_0 = r - j max(t_0 - t_b - D, 0)`: the commands form a
+//! non-increasing profile, whose speed is a concave function of time, and a first-order lag
+//! averages it over a delay of mean `tau` (Jensen's inequality; `table_format::front`, property
+//! test `bounds_a_ramp_through_the_delays`). So the **certified front value** is `front_value`
+//! at the state of `t_m` through the committed ramp: the one under way, or one starting now from
+//! the last command. The **look-ahead** of a command `u` is the ramp from `u` starting at `now +
+//! h`, with a hold of `max(pending, u + tail)`, `tail` the lag's `e^-5` of the band's width (the
+//! next step's `pending` is `u + tail` when `u` is the largest command; found in review for
+//! issue 20). Why it is invariant: at the next step the certified value's ramp is the one the
+//! look-ahead assumed (a new ramp from `u` at `now + h`), or the same ramp under way, with a
+//! `pending` no larger, from a later state that one of the behaviours the look-ahead took the
+//! minimum over has reached; so it is at least the look-ahead's value. The step is assumed to
+//! come every period: a late step holds a command longer than the look-ahead assumed (within
+//! [`MAX_STEP_GAP_PERIODS`] it is not a fault; a board's timer interrupt keeps the period).
 //!
 //! # The ego's speed: kept in the domain, not assumed
 //! The rear value is the rear game's value over speeds in `[0, max_speed]`, so a certified
 //! state must stay inside that range, and the ego's speed is the firmware's to keep there: no
 //! human model bounds it. The **speed headroom** of a state is `max_ego_speed` less the
-//! highest speed the ego can reach before braking at beta takes full effect: from its
-//! measurement at `t_e`, `ego_speed + max(pending, 0) (t_b + D + tau - t_e)` (the response's
-//! end as in the front value; a first-order lag's speed never exceeds the step's). A certified
-//! state has a headroom of zero or more ([`Certificate::is_certified`]). The look-ahead of a
-//! command `u` caps it so that `ego_speed + max(pending, u + tail, 0) (now + h + D + tau - t_e)`
-//! stays within `max_ego_speed` (`ego_speed` at its measurement's highest):
-//! the cap is `(max_ego_speed - ego_speed) / (now + h + D + tau - t_e) - tail`,
-//! and when even `pending` alone breaks it, nothing passes and the command is beta. Why it is
-//! invariant: braking at beta keeps the response's end where it was and `pending` no larger, as
-//! for the front value, and a capped command ends its response at `now + h + D + tau`, which the
-//! next step's headroom uses. Before (issue 19), the front value held the ego at `max_speed`
-//! during its response, which the dynamics do not: a start 0.05 m above the margin, engaged at
-//! 34.8 m/s and +0.8 m/s^2, collided.
+//! highest speed the ego can reach before the committed ramp takes its acceleration below zero:
+//! from its measurement at `t_e`, `ego_speed + max(hold, 0) response + max(r_0, 0)^2 / (2 j)`
+//! with the ramp's profile seen from `t_e`. A certified state has a headroom of zero or more
+//! ([`Certificate::is_certified`]). The look-ahead caps a command `u` to the largest whose ramp
+//! from `now + h` keeps that peak within `max_ego_speed` (a bisection: the peak is
+//! non-decreasing in `u`), and when even the ramp's floor breaks it, nothing passes and the
+//! ramp goes on. Why it is invariant: as for the front value. The law's set speed is held
+//! below the domain's top by the ego speed's error and 0.5 m/s, so that cruising never leans on
+//! the cap. Before (issue 19), the front value held the ego at `max_speed` during its response,
+//! which the dynamics do not: a start 0.05 m above the margin, engaged at 34.8 m/s and
+//! +0.8 m/s^2, collided.
+//!
+//! # The driver's controls
+//! Set speed, time-gap setting, engage (SET), cancel and resume arrive through
+//! [`Controller::request`] or [`Inputs::driver`] (CAN frame `0x140`, [`crate::can`]). They change
+//! the driver's state only: the command history stays, so a new set speed brings no jab. A
+//! cancel puts the controller in [`Mode::Standby`] (it keeps observing the tracks) and forgets
+//! the commands, which the actuator's reported state covers at the next engagement.
 //!
 //! # The domain
 //! The rear table covers `gap_follower` up to its last breakpoint, and speeds in
@@ -208,8 +240,11 @@
 //! declared error bounds ([`Config::sensors`]) and time-stamped on the controller's clock (a
 //! track of any age is argued from its time; the ego's speed at most `stale_periods` old; each
 //! channel may have its own age); the actuator is a
-//! dead time and a first-order lag no slower than the configuration declares, and brakes at
-//! beta when told to. Nothing is assumed of the ego's speed: the firmware keeps it in the
+//! dead time and a first-order lag no slower than the configuration declares, tracks the
+//! acceleration over ground (a grade is its business, not the certificate's), and brakes at
+//! beta when told to; its reported state ([`Inputs::ego_acceleration`]) bounds what it
+//! delivers before the controller's commands are known, within `sensors.acceleration_error`;
+//! the control step comes every period. Nothing is assumed of the ego's speed: the firmware keeps it in the
 //! domain (above). The front value is exact, and its look-ahead over the
 //! delays is argued above and checked by property tests; its `f32` evaluation is within about
 //! 1.4 mm (measured), inside [`CERTIFICATE_TOLERANCE`].
@@ -506,18 +541,21 @@ impl<'t> Controller<'t> {
         // Every command goes to the actuator: the look-ahead of later steps must know it.
         let keep_from = self.keep_commands_from(now);
         self.issued.push(now, command.acceleration, keep_from);
-        // The ramp (module docs): a command at or below the ramp's floor follows the committed
-        // ramp (one under way keeps its start; a new one starts now from the last command, or
-        // from beta for a command at beta); one above it passed the look-ahead.
+        // The ramp (module docs): a command at or below the ramp's floor follows a ramp. One under
+        // way keeps its start and reference; a new one starts now through the command itself
+        // (reference `c + j h`, the command being the ramp's first: below the committed ramp
+        // from the last command, since `c` is below its floor), or at beta for a command at
+        // beta. A command above the floor passed the look-ahead (or is not certified at all).
         let c = command.acceleration;
+        let jerk = self.config.brake_jerk;
+        let h = seconds(u64::from(self.config.period_us));
         self.ramp = match (model, floor) {
             (Some(m), Some(floor)) if c <= floor => Some(self.ramp.unwrap_or(Ramp {
                 start_us: now,
-                from: if c <= m.ego.min {
+                from: if c <= m.ego.min || !math::is_finite(jerk) {
                     m.ego.min
                 } else {
-                    self.last_command
-                        .unwrap_or_else(|| self.unknown_acceleration(&m))
+                    c + jerk * h
                 },
             })),
             _ => None,
