@@ -765,7 +765,7 @@ fn scenarios(out: &std::path::Path, only: Option<&str>) -> Result<()> {
         .par_iter()
         .map(|(scenario, config, follower)| {
             let plotted = PLOTTED.iter().any(|p| scenario.name.contains(p))
-                && !follower
+                && *follower
                 && config.override_policy == firmware::OverridePolicy::Graded;
             let mut trace = plotted.then(Trace::new);
             let result = run(&table, bytes, *config, scenario, *follower, trace.as_mut());

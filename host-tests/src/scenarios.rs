@@ -91,7 +91,8 @@ pub struct Scenario {
     pub lead: Option<Lead>,
     /// The road's grade in time, `(t, grade)` (rise over run), piecewise linear.
     pub grade: Vec<(f32, f32)>,
-    /// The driver's requests `(t, request)`.
+    /// The driver's requests `(t, request)` (a resume 1 s after a leader moves off from a stop
+    /// longer than the auto-resume window, as a driver would press it).
     #[serde(skip)]
     pub driver: Vec<(f32, DriverRequest)>,
     /// What the criteria check on this scenario, besides safety and comfort.
@@ -293,14 +294,17 @@ pub fn suite() -> Vec<Scenario> {
         (50.0, 0.0),
         (60.0, 10.0),
     ];
-    s.push(scenario(
+    let mut follow_stop_go = scenario(
         "following a car at 10mph, stop and go at 1m/s2 lead dece1 and accel",
         OPENPILOT,
         70.0,
         10.0,
         15.0,
         lead(20.0, &stop_go),
-    ));
+    );
+    // The driver resumes 1 s after the leader moves off (held longer than `auto_resume_us`).
+    follow_stop_go.driver = vec![(31.0, DriverRequest::Resume), (51.0, DriverRequest::Resume)];
+    s.push(follow_stop_go);
     s.push(scenario(
         "green light: stopped behind lead car, lead car accelerates at 1.5 m/s",
         OPENPILOT,
@@ -309,7 +313,7 @@ pub fn suite() -> Vec<Scenario> {
         15.0,
         lead(4.0, &[(0.0, 0.0), (10.0, 0.0), (40.0, 45.0)]),
     ));
-    s.push(scenario(
+    let mut full_stops = scenario(
         "stop and go with 1m/s2 lead decel and accel, with full stops",
         OPENPILOT,
         70.0,
@@ -326,8 +330,10 @@ pub fn suite() -> Vec<Scenario> {
                 (60.0, 0.0),
             ],
         ),
-    ));
-    s.push(scenario(
+    );
+    full_stops.driver = vec![(31.0, DriverRequest::Resume)];
+    s.push(full_stops);
+    let mut fast_stops = scenario(
         "stop and go with 1.5m/s2 lead accel and 3.3m/s^2 lead decel, with full stops",
         OPENPILOT,
         45.0,
@@ -344,7 +350,9 @@ pub fn suite() -> Vec<Scenario> {
                 (45.0, 0.0),
             ],
         ),
-    ));
+    );
+    fast_stops.driver = vec![(27.0, DriverRequest::Resume)];
+    s.push(fast_stops);
     s.push(scenario(
         "accelerate from 20 while lead vehicle decelerates from 40 to 20 at 1m/s2",
         OPENPILOT,

@@ -18,11 +18,14 @@
 //!   (conditional integration: no windup behind a leader, under the override, or at a limit),
 //!   and held within +-1.5 m/s^2 (a 15% grade). The speed law brakes at most 1.5 m/s^2: a lower
 //!   set speed is reached gently.
-//! - **Stop and go**: behind a stopped car (estimated speed below 0.5 m/s) the approach keeps
-//!   to `sqrt(2 b d)`, `d` the gap beyond the standstill gap and `b = stop_deceleration`, and
-//!   brakes at `v^2 / (2 d)` once that is at least `b`: a constant deceleration that ends at the
-//!   standstill gap, with no crawl (a proportional law converges exponentially: 9 s below 1 m/s
-//!   before). Stopped, the car holds at -1 m/s^2; it moves off when the leader does, within
+//! - **Stop and go**: behind a stopped car (estimated speed below 0.5 m/s) the law tracks the
+//!   stopping profile `v*(d) = sqrt(2 b d)`, `d` the gap beyond the standstill gap and
+//!   `b = stop_deceleration`: `a = -b v / v* + (v* - v)`, the profile's own deceleration along
+//!   the way fed forward and the speed error fed back (it decays as `e^-t`). On the profile the
+//!   car brakes at exactly `b` and stops at the standstill gap, from 1 m/s in `1 / b` seconds,
+//!   with no crawl (a proportional law converges exponentially: 9 s below 1 m/s before). The
+//!   distance is taken less what the actuator's dead time and lag cover at the present speed,
+//!   and the law accelerates towards a stopped car at 1 m/s^2 at most. Stopped, the car holds at -1 m/s^2; it moves off when the leader does, within
 //!   `auto_resume_us` of the stop by itself, later on the driver's resume.
 //! - **Comfort**: the command is held within ISO 15622's acceleration and deceleration limits at
 //!   the ego's speed, and moves from the last command by at most ISO 15622's jerk limit per
@@ -41,6 +44,10 @@ const STANDSTILL: f32 = 0.1;
 const HOLD: f32 = -1.0;
 /// The speed law's hardest braking, m/s^2.
 const SPEED_LAW_BRAKING: f32 = -1.5;
+/// The stopping profile's feedback gain, 1/s: the speed error decays as `e^(-t STOP_GAIN)`.
+const STOP_GAIN: f32 = 1.0;
+/// The most the law accelerates towards a stopped car, m/s^2.
+const STOP_APPROACH: f32 = 1.0;
 /// The speed integral's bound, m/s^2.
 const INTEGRAL_MAX: f32 = 1.5;
 
@@ -223,13 +230,18 @@ impl Law {
             }
         }
         if leader_speed < STOPPED {
-            let d = math::max(beyond, 0.0);
-            let needed = v * v / (2.0 * math::max(d, 0.05));
-            if needed >= c.stop_deceleration || d <= 0.0 {
-                return -needed;
-            }
-            let approach = math::sqrt(2.0 * c.stop_deceleration * d);
-            return c.speed_gain * (approach - v);
+            // The stopping profile `v*(d) = sqrt(2 b d)`: its own deceleration along the way,
+            // `-b v / v*`, fed forward, and the speed error fed back; on the profile the car
+            // brakes at exactly `b` and stops at the standstill gap in `v / b` seconds.
+            // The actuator's delays are anticipated: the distance left is what remains after
+            // the dead time and the lag at the present speed. Towards a stopped car the law
+            // accelerates gently at most.
+            let b = c.stop_deceleration;
+            let delay = (c.actuator_dead_time_us + c.actuator_lag_us) as f32 * 1e-6;
+            let d = math::max(beyond - v * delay, 0.0);
+            let profile = math::max(math::sqrt(2.0 * b * d), 0.05);
+            let a = -b * v / profile + STOP_GAIN * (profile - v);
+            return math::min(a, STOP_APPROACH);
         }
         let desired = Law::desired_gap(c, x.time_gap, x.steady_gap, v);
         let feedforward = c.feedforward_gain * math::clamp(leader_acceleration, -3.5, 1.0);
