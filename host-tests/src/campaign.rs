@@ -88,6 +88,14 @@ pub struct Outcome {
     pub max_jerk: f32,
     /// Times the leader came to a standstill.
     pub leader_stops: u32,
+    /// ISO 15622's checks on the realised motion, from 1 s after engagement.
+    pub iso: crate::iso::IsoWorst,
+    /// The leader's hardest braking, m/s^2.
+    pub leader_hardest_braking: f32,
+    /// Periods whose command broke the jerk limit because the certificate needed it.
+    pub emergency_periods: u64,
+    /// The engagement itself was an emergency ([`crate::world::Score::engaged_in_emergency`]).
+    pub engaged_in_emergency: bool,
     /// The initial state `(gap_leader, leader_speed, gap_follower, follower_speed, ego_speed)`.
     pub initial: [f32; 5],
     /// The certificate margin at the start, m.
@@ -127,6 +135,10 @@ impl Outcome {
             uncertified_share: s.periods_by_mode[3] as f32 / n,
             max_jerk: s.max_jerk,
             leader_stops: s.leader_stops,
+            iso: s.iso,
+            leader_hardest_braking: s.leader_hardest_braking,
+            emergency_periods: s.emergency_periods,
+            engaged_in_emergency: s.engaged_in_emergency,
             initial,
             initial_margin,
             uncertified_minimum_risk: s.uncertified_minimum_risk,
@@ -136,6 +148,12 @@ impl Outcome {
             cut_in_unavoidable: None,
         }
     }
+}
+
+/// Whether ISO 15622's limits are required of an episode: its leader braked no harder than the
+/// ACC's comfort braking, and its engagement was not an emergency.
+pub fn in_iso_scope(o: &Outcome) -> bool {
+    o.leader_hardest_braking <= crate::humans::COMFORT_BRAKING + 1e-3 && !o.engaged_in_emergency
 }
 
 /// Draws an initial state over the whole certified set (`margin > 0` for an actuator at rest
@@ -348,6 +366,17 @@ pub struct GroupSummary {
     pub mean_uncertified_share: f32,
     /// Largest |jerk|, m/s^3.
     pub max_jerk: f32,
+    /// Episodes whose leader braked no harder than 3.5 m/s^2 and whose engagement was not an
+    /// emergency (ISO 15622's scope), and of them those where every ISO 15622 check held from
+    /// 1 s after engagement.
+    pub iso_scope: (usize, usize),
+    /// Episodes whose engagement was an emergency (left out of the scope above).
+    pub engaged_in_emergency: usize,
+    /// The worst ISO 15622 ratio (to its limit) over the scope's episodes.
+    pub iso_worst_in_scope: f32,
+    /// Periods whose command broke the jerk limit because the certificate needed it
+    /// (emergencies), over the group.
+    pub emergency_periods: u64,
     /// Mean number of leader stops to standstill per episode.
     pub mean_leader_stops: f32,
     /// Starts at standstill (ego speed zero).
@@ -461,6 +490,17 @@ pub fn run_group(
         mean_minimum_risk_share: mean(&|o| o.minimum_risk_share),
         mean_uncertified_share: mean(&|o| o.uncertified_share),
         max_jerk: outcomes.iter().map(|(_, o)| o.max_jerk).fold(0.0, f32::max),
+        iso_scope: (
+            count(&|o| in_iso_scope(o)),
+            count(&|o| in_iso_scope(o) && o.iso.holds()),
+        ),
+        engaged_in_emergency: count(&|o| o.engaged_in_emergency),
+        iso_worst_in_scope: outcomes
+            .iter()
+            .filter(|(_, o)| in_iso_scope(o))
+            .map(|(_, o)| o.iso.worst())
+            .fold(0.0, f32::max),
+        emergency_periods: outcomes.iter().map(|(_, o)| o.emergency_periods).sum(),
         mean_leader_stops: mean(&|o| o.leader_stops as f32),
         standstill_starts: count(&|o| o.initial[4] == 0.0),
         worst_seed: worst,

@@ -21,7 +21,14 @@ pub enum Leader {
     StopAndGo,
     /// A new random acceleration within the bounds every second.
     Random,
+    /// A new random acceleration every second within `[-3.5, 2]` m/s^2, the ACC's comfort
+    /// braking at most: the campaign's group where ISO 15622's limits must hold.
+    Comfortable,
 }
+
+/// The ACC's comfort braking, m/s^2: ISO 15622's limits are required where the leader brakes
+/// no harder.
+pub const COMFORT_BRAKING: f32 = 3.5;
 
 /// What the follower does.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -213,9 +220,14 @@ impl<'t> Humans<'t> {
                 }
             }
             Leader::StopAndGo => self.stop_and_go(t, leader.v, rng),
-            Leader::Random => {
+            Leader::Random | Leader::Comfortable => {
                 if t >= self.next_random {
-                    self.random_accel = rng.random_range(lmin..=lmax);
+                    let low = if self.leader == Leader::Comfortable {
+                        lmin.max(-COMFORT_BRAKING)
+                    } else {
+                        lmin
+                    };
+                    self.random_accel = rng.random_range(low..=lmax);
                     self.next_random += 1.0;
                 }
                 self.random_accel

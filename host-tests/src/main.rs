@@ -91,7 +91,12 @@ enum Command {
     },
 }
 
-const LEADERS: [Leader; 3] = [Leader::HardBrake, Leader::StopAndGo, Leader::Random];
+const LEADERS: [Leader; 4] = [
+    Leader::HardBrake,
+    Leader::StopAndGo,
+    Leader::Random,
+    Leader::Comfortable,
+];
 const FOLLOWERS: [Follower; 5] = [
     Follower::IdmFixed,
     Follower::IdmRandom,
@@ -575,9 +580,9 @@ fn campaign(args: CampaignArgs) -> Result<()> {
     );
     let mut summaries = Vec::new();
     println!(
-        "| leader | follower | in model | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | min margin [m] (front, rear) | min gap front [m] | min gap rear [m] | override | uncertified min-risk periods | fallback periods (episodes) | oldest track [s] (front, rear) | leader stops | standstill starts | max jerk [m/s^3] |"
+        "| leader | follower | in model | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | min margin [m] (front, rear) | min gap front [m] | min gap rear [m] | override | uncertified min-risk periods | fallback periods (episodes) | oldest track [s] (front, rear) | leader stops | standstill starts | max jerk [m/s^3] | ISO 15622 held (episodes whose leader braked at most 3.5 m/s^2, engaged without an emergency) | worst ISO ratio there | emergency periods (engagements that were one) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (i, (leader, follower)) in groups.iter().enumerate() {
         let template = Episode {
             leader: *leader,
@@ -593,7 +598,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
         let l = summary.certificate_losses_by_mode;
         bar.suspend(|| {
             println!(
-                "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {} | {} ({}) | {:.2}, {:.2} | {:.1} | {} | {:.0} |",
+                "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {} | {} ({}) | {:.2}, {:.2} | {:.1} | {} | {:.0} | {} of {} | {:.2} | {} ({}) |",
                 summary.leader,
                 summary.follower,
                 summary.in_model,
@@ -622,7 +627,12 @@ fn campaign(args: CampaignArgs) -> Result<()> {
                 summary.max_track_age[1],
                 summary.mean_leader_stops,
                 summary.standstill_starts,
-                summary.max_jerk
+                summary.max_jerk,
+                summary.iso_scope.1,
+                summary.iso_scope.0,
+                summary.iso_worst_in_scope,
+                summary.emergency_periods,
+                summary.engaged_in_emergency
             )
         });
         let mut trace = Trace::new();

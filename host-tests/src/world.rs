@@ -158,6 +158,13 @@ pub struct Score {
     pub max_jerk: f32,
     /// Times the leader came to a standstill.
     pub leader_stops: u32,
+    /// The leader's hardest braking, m/s^2 (positive; ISO 15622's checks apply where it is
+    /// at most the ACC's comfort braking, 3.5 m/s^2).
+    pub leader_hardest_braking: f32,
+    /// The engagement itself was an emergency: the firmware could not certify its first
+    /// measured state (a true start at the certified set's edge, its error box past it) and
+    /// braked at beta at once.
+    pub engaged_in_emergency: bool,
     /// The largest ego speed, m/s.
     pub max_ego_speed: f32,
     /// Periods of the minimum-risk manoeuvre without a certificate (a fault the argument does
@@ -225,6 +232,8 @@ impl Score {
             periods: 0,
             max_jerk: 0.0,
             leader_stops: 0,
+            leader_hardest_braking: 0.0,
+            engaged_in_emergency: false,
             max_ego_speed: 0.0,
             uncertified_minimum_risk: 0,
             fallback_periods: 0,
@@ -518,6 +527,9 @@ impl<'t> World<'t> {
         {
             self.score.unavoidable_from = Some(t);
         }
+        if self.cars[0].v > 0.0 {
+            self.score.leader_hardest_braking = self.score.leader_hardest_braking.max(-a_leader);
+        }
         let actuator_state = self.actuator.response(now_us, self.model.band_min).1;
         let inputs = self
             .sensors
@@ -549,6 +561,9 @@ impl<'t> World<'t> {
         s.periods_by_mode[mode_index] += 1;
         if command.emergency {
             s.emergency_periods += 1;
+            if self.period == 0 {
+                s.engaged_in_emergency = true;
+            }
         }
         s.periods += 1;
         if command.mode == Mode::MinimumRisk {

@@ -10,9 +10,15 @@
 //!   certified set with that room to spare, so it never touches the override (before, from
 //!   27.5 m/s up the 1.8 s policy was shorter than the certified gap itself, and the override
 //!   threw the car back at full braking every 2 s).
-//! - **Following**: `gap_gain (gap - desired) + rel_speed_gain rel_speed + feedforward_gain
-//!   a_leader`, the leader's acceleration estimated from its speed (ego speed plus range rate),
-//!   filtered twice (0.3 s on the speed, 0.5 s on its derivative).
+//! - **Following**: `rel_speed_gain (rel_speed + closing(e)) + feedforward_gain a_leader`, `e`
+//!   the gap's error against the policy: `closing(e) = (gap_gain / rel_speed_gain) e` near the
+//!   policy (the classic `gap_gain e + rel_speed_gain rel_speed`), but never more than
+//!   `sqrt(2 b e)`, the closing speed a braking at `b = stop_deceleration` takes back over the
+//!   error (before, 150 m behind a car 19 m/s slower the linear law still accelerated at
+//!   2 m/s^2, and the override had to brake hard). Closing on a leader it accelerates at
+//!   1 m/s^2 at most, and not at all while the leader brakes harder than 1 m/s^2. The leader's acceleration is estimated from
+//!   its speed (ego speed plus range rate), filtered twice (0.3 s on the speed, 0.5 s on its
+//!   derivative).
 //! - **Speed**: `speed_gain (set_speed - v) + I`, the integral `I` of `speed_integral_gain
 //!   (set_speed - v)` updated only in periods whose command is the speed law's own, unclipped
 //!   (conditional integration: no windup behind a leader, under the override, or at a limit),
@@ -29,7 +35,8 @@
 //!   `auto_resume_us` of the stop by itself, later on the driver's resume.
 //! - **Comfort**: the command is held within ISO 15622's acceleration and deceleration limits at
 //!   the ego's speed, and moves from the last command by at most ISO 15622's jerk limit per
-//!   period, both ways ([`crate::iso15622`]).
+//!   period, both ways ([`crate::iso15622`]), the limit taken at the highest speed the last
+//!   second can have had (the measured speed's upper end plus the braking commanded).
 
 use super::Config;
 use crate::inputs::Track;
@@ -46,6 +53,8 @@ const HOLD: f32 = -1.0;
 const SPEED_LAW_BRAKING: f32 = -1.5;
 /// The stopping profile's feedback gain, 1/s: the speed error decays as `e^(-t STOP_GAIN)`.
 const STOP_GAIN: f32 = 1.0;
+/// The most the following law accelerates towards a leader, m/s^2 (before the feedforward).
+const CLOSING_ACCELERATION: f32 = 1.0;
 /// The most the law accelerates towards a stopped car, m/s^2.
 const STOP_APPROACH: f32 = 1.0;
 /// The speed integral's bound, m/s^2.
@@ -86,6 +95,8 @@ pub(super) struct LawInputs {
     pub(super) last_command: f32,
     /// The driver asked to resume.
     pub(super) resume: bool,
+    /// The ego speed's measurement error at this speed, m/s.
+    pub(super) speed_error: f32,
 }
 
 impl Law {
@@ -150,7 +161,10 @@ impl Law {
             -iso15622::deceleration_limit(v),
             iso15622::acceleration_limit(v),
         );
-        let step = iso15622::jerk_limit(v) * x.period;
+        // The jerk limit at the highest speed of the last second (the check's strictest), from
+        // the measured speed's upper end and the braking commanded.
+        let recent = v + x.speed_error + math::max(-x.last_command, 0.0);
+        let step = iso15622::jerk_limit(recent) * x.period;
         let proposal = math::clamp(limited, x.last_command - step, x.last_command + step);
         // The integral learns only from the speed law's own, unsaturated command.
         let speed_law_active = leader_law.is_none_or(|a| a >= speed_law);
@@ -245,6 +259,26 @@ impl Law {
         }
         let desired = Law::desired_gap(c, x.time_gap, x.steady_gap, v);
         let feedforward = c.feedforward_gain * math::clamp(leader_acceleration, -3.5, 1.0);
-        c.gap_gain * (track.gap - desired) + c.rel_speed_gain * track.rel_speed + feedforward
+        // The speed to close at: linear in the gap error near the policy (the classic law's
+        // `gap_gain e + rel_speed_gain rel_speed`), and no faster than a braking at
+        // `stop_deceleration` can take back over the error far from it (module docs).
+        let error = track.gap - desired;
+        let k = c.gap_gain / math::max(c.rel_speed_gain, 1e-3);
+        let closing = if error > 0.0 {
+            math::min(k * error, math::sqrt(2.0 * c.stop_deceleration * error))
+        } else {
+            k * error
+        };
+        // Closing on a leader the law accelerates gently (1 m/s^2 at most), and not at all
+        // while the leader brakes (its estimate below -1 m/s^2): a car closing on a braking
+        // leader would leave the override the whole of the braking.
+        let cap = if track.rel_speed >= 0.0 {
+            f32::INFINITY
+        } else if leader_acceleration < -1.0 {
+            0.0
+        } else {
+            CLOSING_ACCELERATION
+        };
+        math::min(c.rel_speed_gain * (track.rel_speed + closing), cap) + feedforward
     }
 }

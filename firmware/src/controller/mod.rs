@@ -709,6 +709,7 @@ impl<'t> Controller<'t> {
                         .last_command
                         .unwrap_or_else(|| self.unknown_acceleration(&model)),
                     resume: self.driver.resume_requested,
+                    speed_error: self.config.sensors.ego_speed(ego_speed).1 - ego_speed,
                 };
                 let a = self.law.propose(&config, &x);
                 if !self.law.is_holding() {
