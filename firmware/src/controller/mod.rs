@@ -279,6 +279,10 @@ use crate::sensing::TrackState;
 
 use certificate::{model_of, Model, Ramp};
 
+/// How long [`Mode::Override`] is still reported after the look-ahead's last trim of the law's
+/// command, microseconds: the label does not chatter while the law rides the look-ahead's edge.
+pub const OVERRIDE_HOLD_US: u64 = 500_000;
+
 /// How far below the domain's top (less the ego speed's error) the law's set speed is held,
 /// m/s: room for the speed law's overshoot under the speed headroom.
 const SET_SPEED_ROOM: f32 = 0.5;
@@ -315,6 +319,9 @@ pub struct Controller<'t> {
     driver: DriverState,
     /// The nominal law's memory.
     law: Law,
+    /// When the look-ahead last trimmed the law's command (the override's label is held after
+    /// it).
+    overridden_at_us: Option<u64>,
     /// Every step since the last engagement, cut-in or jump to beta kept a certified front
     /// (measured, or its ramp after one): the true state is certified while the ramp is
     /// followed, whatever the measurement noise does to the error box's corner.
@@ -367,6 +374,7 @@ impl<'t> Controller<'t> {
             driver: DriverState::new(&config),
             law: Law::new(),
             front_chain: false,
+            overridden_at_us: None,
             leader: None,
             speed_kept_from_us: None,
             rear: None,
@@ -727,7 +735,16 @@ impl<'t> Controller<'t> {
         } else {
             None
         };
-        let mode = match (lost, front.overridden) {
+        // The override's label is held for OVERRIDE_HOLD_US after its last trim, so that a law
+        // riding the look-ahead's edge (the command continuous) does not flip the mode every
+        // period.
+        if front.overridden {
+            self.overridden_at_us = Some(now);
+        }
+        let held = self
+            .overridden_at_us
+            .is_some_and(|at| now.saturating_sub(at) < OVERRIDE_HOLD_US);
+        let mode = match (lost, front.overridden || held) {
             (Some(_), _) => Mode::MinimumRisk,
             (None, true) => Mode::Override,
             (None, false) => Mode::Nominal,
