@@ -1248,3 +1248,18 @@ fn the_speed_cap_counts_what_the_lag_still_passes_on() {
         }
     }
 }
+
+/// Issue 21's campaign found it: a follower 1.6 cm behind, measured below zero within the
+/// declared range error (0.1 m), was refused as implausible, and the step ran an uncertified
+/// minimum-risk manoeuvre. Within the error the measurement is used (its box holds the truth);
+/// beyond it, it is refused.
+#[test]
+fn a_follower_measured_just_below_zero_within_its_error_is_used() {
+    let config = Config::default();
+    let state = |gap: f32| at(inputs((1e4, 0.0), (gap, 17.8), 17.8), NOW);
+    let cmd = Controller::new(DEFAULT_TABLE, config).step(&state(-0.05));
+    assert_ne!(cmd.fault, Some(Fault::FollowerInvalid), "{cmd:?}");
+    assert_ne!(cmd.mode, Mode::MinimumRisk, "{cmd:?}");
+    let cmd = Controller::new(DEFAULT_TABLE, config).step(&state(-0.2));
+    assert_eq!(fault_of(cmd), Fault::FollowerInvalid);
+}

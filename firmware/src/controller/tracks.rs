@@ -33,13 +33,16 @@ pub(super) struct RearMemo {
 }
 impl Controller<'_> {
     /// A track measurement the controller can use: flagged valid by the sensor, a gap that is
-    /// not NaN and not negative (`+inf`: no vehicle), a finite relative speed within 100 m/s,
-    /// taken no later than now.
+    /// not NaN and not below minus the range's absolute error (`+inf`: no vehicle; a vehicle a
+    /// few centimetres away can be measured below zero within the declared error, and its
+    /// error box still holds the truth), a finite relative speed within 100 m/s, taken no later
+    /// than now. (Found by the campaign for issue 21: a follower 1.6 cm behind, measured
+    /// negative, was refused, and the step ran an uncertified minimum-risk manoeuvre.)
     pub(super) fn is_plausible(&self, m: &Measurement<Track>, now_us: u64) -> bool {
         let t = m.value;
         m.valid
             && !t.gap.is_nan()
-            && t.gap >= 0.0
+            && t.gap >= -self.config.sensors.range_error
             && math::is_finite(t.rel_speed)
             && math::abs(t.rel_speed) <= 100.0
             && m.timestamp_us <= now_us
