@@ -162,8 +162,9 @@
 //!   computed once per follower measurement (below). Measured on the deployed table
 //!   (`solver verify`, `solver::robust`): 74.8% of the measured rear states pass with the
 //!   default error against 77.1% with exact sensors; every passing measurement's box lies in
-//!   cells the proof covers. Cost: the worst control step on the Cortex-M4F is 12,916
-//!   instructions (QEMU, README), against a budget of 20,000 (0.12 ms at one instruction per
+//!   cells the proof covers. Cost: the worst control step on the Cortex-M4F is 18,361
+//!   instructions with issue 21's braking ramp and gap policy (QEMU, README), against a budget
+//!   of 20,000 (0.12 ms at one instruction per
 //!   cycle, 0.71 ms at six: 3.6% of the 20 ms period at 168 MHz).
 //! - **Aging**: a measurement is argued from its own time, so its age is inside the argument.
 //!   The last plausible leader measurement is kept with the interval of the ego's speed at its
