@@ -500,25 +500,32 @@ impl Controller<'_> {
                 None
             };
             // Nothing passes: the ramp, which keeps a certified state certified. A state whose
-            // worst corner is not certified gets the ramp too while its measured point is (the
-            // true state lies in the box: measurement noise moves the corner, not the truth, and
-            // the ramp keeps the truth certified); where even the measured point is not (a cut-in,
-            // a leader beyond its model), beta at once: an emergency, the best answer, not a
-            // promise.
-            let measured_point_certified = || {
-                let ego_at_m = 0.5 * (ego_low + ego_high);
-                let leader_speed = math::max(ego_at_m + leader.track.rel_speed, 0.0);
+            // worst corner is not certified gets the ramp too after a chain of certified steps
+            // (a certified measurement certifies the truth, and the ramp keeps it certified:
+            // measurement noise moves the corner, not the truth), unless even the box's best
+            // corner is not certified (then the truth is not: a leader beyond its model);
+            // otherwise (an engagement or a cut-in into an uncertified state) beta at once: an
+            // emergency, the best answer, not a promise.
+            // The box's best corner (the longest gap, the fastest leader, the slowest ego): the
+            // true state is no better. Where even it is not certified, the truth is not either.
+            let truth_may_be_certified = || {
+                let gap_high = sensors.range(leader.track.gap).1;
+                let leader_high =
+                    math::max(ego_high + sensors.range_rate(leader.track.rel_speed).1, 0.0);
                 let hold = math::max(pending, ramp_from);
                 front_value(
-                    leader.track.gap,
-                    leader_speed,
-                    ego_at_m,
+                    gap_high,
+                    leader_high,
+                    ego_low,
                     &model.front(response, hold, ramp_from, jerk),
                 ) > margin_front
             };
             // The noise rule needs a chain of certified steps behind it (`front_chain`): at an
-            // engagement or after a cut-in, an uncertified corner is an emergency.
-            let noise_only = self.front_chain && headroom >= 0.0 && measured_point_certified();
+            // engagement or after a cut-in, an uncertified corner is an emergency. (With the
+            // measured point in place of the best corner, marginal engagements braked at beta
+            // within their first second in 2 of 8,300 campaign episodes whose true state
+            // stayed certified.)
+            let noise_only = self.front_chain && headroom >= 0.0 && truth_may_be_certified();
             match gentler {
                 Some(u) => u,
                 None if certified || noise_only => math::min(capped, floor),

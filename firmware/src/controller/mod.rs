@@ -47,9 +47,9 @@
 //! f32::INFINITY`) and braking at `beta` whenever the look-ahead refuses.
 //!
 //! **Emergencies.** A state whose front is not certified at the error box's worst corner gets
-//! the ramp too when every step since the last engagement or cut-in was certified and its
-//! measured point still is (measurement noise moves the corner, not the true state, which the
-//! ramp keeps certified); otherwise (an engagement into an uncertified state, a cut-in, a leader
+//! the ramp too when a step since the last engagement or cut-in was certified and the box's best
+//! corner still is (a certified measurement certifies the true state, and the ramp keeps it
+//! certified: measurement noise moves the corner, not the truth); otherwise (an engagement into an uncertified state, a cut-in, a leader
 //! beyond its model) the command is `beta` at once: an emergency, flagged in
 //! [`Command::emergency`] with the takeover request whenever a command drops faster than
 //! ISO 15622's jerk limit.
