@@ -162,7 +162,7 @@
 //!   computed once per follower measurement (below). Measured on the deployed table
 //!   (`solver verify`, `solver::robust`): 74.8% of the measured rear states pass with the
 //!   default error against 77.1% with exact sensors; every passing measurement's box lies in
-//!   cells the proof covers. Cost: the worst control step on the Cortex-M4F is 18,361
+//!   cells the proof covers. Cost: the worst control step on the Cortex-M4F is 18,374
 //!   instructions with issue 21's braking ramp and gap policy (QEMU, README), against a budget
 //!   of 20,000 (0.12 ms at one instruction per
 //!   cycle, 0.71 ms at six: 3.6% of the 20 ms period at 168 MHz).
