@@ -938,9 +938,40 @@ fn gap_policy(out: &std::path::Path) -> Result<()> {
             "gap_policy_m": policies.iter().map(|p| serde_json::json!({"time_gap_s": p.0, "gap_m": p.1[k].1})).collect::<Vec<_>>(),
         }));
     }
+    // The cost in certified volume: the share of front states (gap 0-150 m by 1 m, leader and
+    // ego 0-35 m/s by 0.5 m/s) certified for an ego at rest in its actuator with the declared
+    // delays, braking along each configuration's ramp.
+    let declared = firmware::Config::default();
+    let response = (declared.actuator_dead_time_us + declared.actuator_lag_us) as f32 * 1e-6;
+    let mut shares = Vec::new();
+    for (name, config) in configs {
+        let c = firmware::Controller::new(bytes, config);
+        let (mut certified, mut all) = (0u64, 0u64);
+        for g in 0..=150 {
+            for l in 0..=70 {
+                for e in 0..=70 {
+                    let state = [g as f32, l as f32 * 0.5, 1e4, 0.0, e as f32 * 0.5];
+                    all += 1;
+                    if c.certificate_with_response(state, response, 0.0)
+                        .is_some_and(|x| x.front > 0.0)
+                    {
+                        certified += 1;
+                    }
+                }
+            }
+        }
+        let share = 100.0 * certified as f64 / all as f64;
+        println!(
+            "front-certified share of (gap 0-150 m, leader and ego 0-35 m/s), {name}: {share:.2}%"
+        );
+        shares.push(
+            serde_json::json!({"configuration": name, "front_certified_share_percent": share}),
+        );
+    }
+    let report = serde_json::json!({"by_speed": rows, "front_certified_share": shares});
     std::fs::write(
         out.join("gap-policy.json"),
-        serde_json::to_string_pretty(&rows)?,
+        serde_json::to_string_pretty(&report)?,
     )?;
     let file = out.join("gap-policy.png");
     let root = BitMapBackend::new(&file, (1000, 650)).into_drawing_area();
