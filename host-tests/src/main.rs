@@ -759,7 +759,11 @@ fn scenarios(out: &std::path::Path, only: Option<&str>) -> Result<()> {
         .into_iter()
         .filter(|s| only.is_none_or(|o| s.name.contains(o)))
         .collect();
-    anyhow::ensure!(!suite.is_empty(), "--only {only:?} matches no scenario");
+    anyhow::ensure!(
+        !suite.is_empty(),
+        "--only {:?} matches no scenario (`scenarios` without it lists every run)",
+        only.unwrap_or_default()
+    );
     let started = std::time::Instant::now();
     let policies = [firmware::Config::default(), firmware::Config::bang_bang()];
     let mut runs = Vec::new();
