@@ -649,7 +649,7 @@ pub fn run(
                 w[1].0 - w[0].0,
                 w[1].1.min(max_speed) - w[0].1.min(max_speed),
             );
-            dv >= 0.0 || -dv <= (3.5 + 1e-3) * dt
+            dv >= 0.0 || -dv <= (crate::humans::COMFORT_BRAKING + 1e-3) * dt
         })
     });
     let (check_holds, check_figures) = match scenario.check {

@@ -337,10 +337,14 @@ impl Controller<'_> {
     pub(super) fn committed_ramp(&self, now: u64, model: &Model) -> Ramp {
         self.ramp.unwrap_or(Ramp {
             start_us: now,
-            from: self
-                .last_command
-                .unwrap_or_else(|| self.unknown_acceleration(model)),
+            from: self.last_command_or_unknown(model),
         })
+    }
+
+    /// The last command issued, or what the actuator may be doing when none is known.
+    pub(super) fn last_command_or_unknown(&self, model: &Model) -> f32 {
+        self.last_command
+            .unwrap_or_else(|| self.unknown_acceleration(model))
     }
 
     /// The hardest braking the ramp allows now: the committed ramp's command for the period
@@ -440,19 +444,21 @@ impl Controller<'_> {
             start_us: now.saturating_add(h_us),
             from: u,
         };
+        // `u`'s ramp seen from `t_0`: its response, hold and the ramp's value at the hold's end.
+        let seen_from = |t_0: u64, u: f32| {
+            let (response, from) = profile(t_0, after(u), dead_us, lag, jerk);
+            (
+                response,
+                math::max(math::max(pending, u + tail), from),
+                from,
+            )
+        };
         let peak_of = |u: f32| {
-            let (response, from) = profile(t_e, after(u), dead_us, lag, jerk);
-            ego_now
-                + speed_rise(
-                    math::max(math::max(pending, u + tail), from),
-                    response,
-                    from,
-                    jerk,
-                )
+            let (response, hold, from) = seen_from(t_e, u);
+            ego_now + speed_rise(hold, response, from, jerk)
         };
         let ahead = |u: f32| {
-            let (response, from) = profile(t_m, after(u), dead_us, lag, jerk);
-            let hold = math::max(math::max(pending, u + tail), from);
+            let (response, hold, from) = seen_from(t_m, u);
             front_value(
                 gap,
                 leader_at_m,

@@ -713,10 +713,13 @@ impl<'t> Controller<'t> {
                             - SET_SPEED_ROOM,
                     ),
                     time_gap: config.time_gap(self.driver.time_gap_setting),
-                    steady_gap: self.steady_gap(ego_speed),
-                    last_command: self
-                        .last_command
-                        .unwrap_or_else(|| self.unknown_acceleration(&model)),
+                    // Only a vehicle ahead needs the gap policy (one front evaluation).
+                    steady_gap: if math::is_finite(leader.track.gap) {
+                        self.steady_gap(ego_speed)
+                    } else {
+                        f32::INFINITY
+                    },
+                    last_command: self.last_command_or_unknown(&model),
                     resume: self.driver.resume_requested,
                     speed_error: self.config.sensors.ego_speed(ego_speed).1 - ego_speed,
                 };
