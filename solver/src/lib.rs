@@ -1,28 +1,34 @@
-//! hjacc's solver: Hamilton-Jacobi-Isaacs level-set solutions of the car-following games of
-//! Bahati, Gibson & Bayen (arXiv:2112.14344), compiled into firmware safety tables.
+//! hjacc's solver: Hamilton-Jacobi-Isaacs solutions of the car-following games of Bahati,
+//! Gibson & Bayen (arXiv:2112.14344), compiled into firmware safety tables and proven.
 //!
-//! Data flows one way: [`config`] (a TOML file) -> [`games`] (dynamics and optimal inputs) ->
-//! [`hji`] (the grid solve, with [`scheme`] for gradients on a [`grid`]) -> [`trusted`] (where
-//! the grid boundary does not matter) -> [`compile`] (the quantized table and its error bound)
-//! -> [`output`] (files and plots).
+//! # Architecture
+//! Data flows one way: a config -> a game -> a solve -> a table -> a proof. Each step has its
+//! own room:
+//!
+//! - [`engine`]: the numerics, knowing nothing of cars: the [`grid`], the level-set
+//!   [`scheme`]s, the HJI time stepping ([`hji`]) and the sampled-data value iteration on
+//!   breakpoint axes ([`semi_lagrangian`]).
+//! - [`games`]: one file per game (dynamics, constraint, Hamiltonian, optimal inputs), and
+//!   [`games::AnyGame`], the one place that lists them.
+//! - [`pipeline`]: a run from a config to files: the [`config`]s, the level-set [`run`], the
+//!   rear game's run ([`rear`]), the table [`compile`]r, and the files and plots ([`output`]).
+//! - [`proof`]: what is checked rather than computed: [`verify`] (an interval proof of the
+//!   rear table, cell by cell), the measurement error's cost ([`robust`]), the [`trusted`]
+//!   box of a level-set solve, and the [`exact`] values the schemes are tested against.
+//!
+//! The modules are re-exported at the crate's root (`solver::verify`, `solver::rear`, ...),
+//! the paths its users (host-tests, the Python module, the examples) name.
 #![warn(missing_docs)]
 // Index loops read best in the numerical kernels, where several arrays share one index.
 #![allow(clippy::needless_range_loop)]
 
-pub mod compile;
-pub mod config;
+pub mod engine;
 pub mod error;
-pub mod exact;
 pub mod games;
-pub mod grid;
-pub mod hji;
-pub mod output;
-pub mod rear;
-pub mod robust;
-pub mod run;
-pub mod scheme;
-pub mod semi_lagrangian;
-pub mod trusted;
-pub mod verify;
+pub mod pipeline;
+pub mod proof;
 
+pub use engine::{grid, hji, scheme, semi_lagrangian};
 pub use error::{ConfigError, SolverError};
+pub use pipeline::{compile, config, output, rear, run};
+pub use proof::{exact, robust, trusted, verify};

@@ -36,7 +36,7 @@
 //! # Two-car game, state `z = (x, v)`
 //! `x' = v`, `v' = u1 - u2`: `p . f = p1 v - p2 u2 + p2 u1`, so `u2* = a_max` if `p2 < 0`.
 
-use crate::grid::MAX_DIMS;
+use crate::engine::grid::MAX_DIMS;
 
 mod idm;
 mod rear_idm;
@@ -100,7 +100,7 @@ pub trait Dynamics: Sync {
         self.ego_switching(p) > 0.0
     }
     /// Whether `V` is non-decreasing along `axis`, so that the pessimistic and optimistic ghost
-    /// values of [`crate::hji::Boundary`] bound the true ones there. Axes where it is not (or
+    /// values of [`crate::engine::hji::Boundary`] bound the true ones there. Axes where it is not (or
     /// where nothing leaves the grid) take extrapolated ghosts. Default: every axis.
     fn monotone_axis(&self, _axis: usize) -> bool {
         true
@@ -243,6 +243,22 @@ fn three_car_row(
     }
 }
 
+/// Evaluates `$body` with `$g` bound to the concrete game inside `$game` (an [`AnyGame`]),
+/// so that generic engine code is monomorphised for each game. The one place, with
+/// [`AnyGame`] itself, that lists the games: a new game is added here and nowhere else.
+macro_rules! with_game {
+    ($game:expr, $g:ident => $body:expr) => {
+        match $game {
+            $crate::games::AnyGame::TwoCar($g) => $body,
+            $crate::games::AnyGame::Baseline($g) => $body,
+            $crate::games::AnyGame::Idm($g) => $body,
+            $crate::games::AnyGame::IdmSpeeds($g) => $body,
+            $crate::games::AnyGame::Rear($g) => $body,
+        }
+    };
+}
+pub(crate) use with_game;
+
 /// Builds the engine's dynamics from a table header's game description.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum AnyGame {
@@ -342,13 +358,7 @@ impl AnyGame {
 
     /// The dynamics as a trait object (for code off the hot path).
     pub fn dynamics(&self) -> &dyn Dynamics {
-        match self {
-            AnyGame::TwoCar(g) => g,
-            AnyGame::Baseline(g) => g,
-            AnyGame::Idm(g) => g,
-            AnyGame::IdmSpeeds(g) => g,
-            AnyGame::Rear(g) => g,
-        }
+        with_game!(self, g => g)
     }
 }
 

@@ -35,7 +35,7 @@
 //! `v_max` cannot speed up), so nothing leaves through a speed face.
 
 use super::{Accel, Dynamics, Idm, OptimalInputs, Vector};
-use crate::semi_lagrangian::SampledGame;
+use crate::engine::semi_lagrangian::SampledGame;
 
 /// The rear game of one braking level `beta` (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -142,7 +142,7 @@ impl Dynamics for RearIdm {
     /// the erosion is only a little slower (0.69 m at 170 s, 0.46 m at 290 s, measured the same
     /// way): the co-states in a WENO stencil near the rest point still straddle both inputs.
     /// Kept because it is the smaller consistent dissipation; the rear table comes from the
-    /// sampled-data iteration instead ([`crate::semi_lagrangian`]).
+    /// sampled-data iteration instead ([`crate::engine::semi_lagrangian`]).
     #[inline(always)]
     fn lax_friedrichs_row(
         &self,
@@ -305,7 +305,7 @@ mod tests {
         // Both stopped, the follower exactly s0 behind: the IDM asks for nothing, the ego at
         // rest cannot brake, so the state does not move under (0 acceleration, any T).
         let g = game();
-        let mut z = [0f32; crate::grid::MAX_DIMS];
+        let mut z = [0f32; crate::engine::grid::MAX_DIMS];
         z[0] = 2.0;
         for input in [1, 4] {
             assert_eq!(g.advance(&z, input, 0.5), z);
@@ -317,8 +317,8 @@ mod tests {
     #[test]
     fn the_hamiltonian_takes_the_least_rate_over_every_input() {
         let g = game();
-        let mut z = [0f32; crate::grid::MAX_DIMS];
-        let mut p = [0f32; crate::grid::MAX_DIMS];
+        let mut z = [0f32; crate::engine::grid::MAX_DIMS];
+        let mut p = [0f32; crate::engine::grid::MAX_DIMS];
         for (x, vf, ve) in [(5.0, 10.0, 8.0), (30.0, 20.0, 25.0), (3.0, 0.0, 0.0)] {
             z[..3].copy_from_slice(&[x, vf, ve]);
             for (p1, p2, p3) in [(1.0, -0.5, 0.3), (0.2, 0.7, -0.4), (0.0, 0.0, 1.0)] {

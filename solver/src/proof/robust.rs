@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use table_format::Table;
 
-use crate::verify::{Report, Verdict};
+use crate::proof::verify::{Report, Verdict};
 
 /// The declared measurement error (the firmware's `SensorBounds`; its defaults here).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -199,7 +199,7 @@ pub fn plot(
     dir: &std::path::Path,
     ego_speed: f64,
 ) -> Result<std::path::PathBuf, crate::error::SolverError> {
-    use crate::output::{draw_cell_map, CellMap, PlotAxis};
+    use crate::pipeline::output::{draw_cell_map, CellMap, PlotAxis};
     use plotters::style::RGBColor;
     let (nj, nk) = (axes[1].len(), axes[2].len());
     let k = axes[2].partition_point(|&b| b < ego_speed).min(nk - 1);

@@ -27,9 +27,9 @@
 
 use rayon::prelude::*;
 
+use crate::engine::grid::{Grid, MAX_DIMS};
 use crate::error::ConfigError;
 use crate::games::Vector;
-use crate::grid::{Grid, MAX_DIMS};
 
 /// A Cartesian grid whose axes are lists of breakpoints (strictly increasing, at least two),
 /// stored in C order (last axis fastest). Fine where the value needs it, coarse elsewhere.
@@ -298,7 +298,7 @@ impl Stencil {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::grid::GridAxis;
+    use crate::engine::grid::GridAxis;
 
     /// A car `x` metres from a wall at speed `v >= 0` towards it, braking at `b`: the smallest
     /// distance it ever has is `x - v^2 / (2 b)`, exactly.

@@ -32,9 +32,9 @@
 use rayon::prelude::*;
 use table_format::{Axis, Bounds, Horizon, Table, TableContents, ValueBits};
 
+use crate::engine::grid::{Grid, MAX_DIMS};
 use crate::error::SolverError;
-use crate::grid::{Grid, MAX_DIMS};
-use crate::trusted::IndexBox;
+use crate::proof::trusted::IndexBox;
 
 /// What the compiler measured.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -98,11 +98,11 @@ pub fn compile(input: &CompileInput<'_>) -> Result<(Vec<u8>, CompileReport), Sol
         .zip(&points)
         .map(|(s, p)| (s - 1) / (p - 1))
         .collect();
-    let table_axes: Vec<crate::grid::GridAxis> = grid
+    let table_axes: Vec<crate::engine::grid::GridAxis> = grid
         .axes()
         .iter()
         .zip(&points)
-        .map(|(a, &p)| crate::grid::GridAxis {
+        .map(|(a, &p)| crate::engine::grid::GridAxis {
             points: p,
             ..a.clone()
         })

@@ -1,334 +1,20 @@
-//! One run of a configuration: solve, find the trusted box, extract the policy, compile the
-//! table, measure, and write the run's folder.
+//! The plots of a level-set run: the constraint and safe sets, the ego's input over the safe
+//! set, and the compiled table as the firmware reads it, on 2-D slices of the grid.
+//!
+//! One responsibility: turn a solved run into PNG files. What is drawn where, and in which
+//! colour, is decided here; the drawing itself is [`crate::pipeline::output`]'s.
 
-use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::path::Path;
 
 use plotters::style::RGBColor;
-use serde::Serialize;
-use table_format::{Horizon, HorizonStatus};
 
-use crate::compile::{compile, CompileInput, CompileReport};
-use crate::config::{Config, GameKindConfig};
+use crate::engine::grid::Grid;
+use crate::engine::hji::Solution;
 use crate::error::SolverError;
-use crate::exact::{self, ExactComparison};
-use crate::games::{AnyGame, Vector, TIE_TOLERANCE};
-use crate::grid::{Grid, GridAxis, MAX_DIMS};
-use crate::hji::{self, Boundary, Numerics, Outcome, Solution, Stop};
-use crate::output::{self, CellMap, PlotAxis};
-use crate::trusted::{agreement_box, IndexBox};
-
-/// Progress events for the command line.
-pub enum Event<'a> {
-    /// A solve starts: label and backward time to reach.
-    SolveStarted(&'a str, f64),
-    /// A step finished: backward time and `max |dV/dt|`.
-    Step(f64, f64),
-    /// A solve finished.
-    SolveFinished,
-}
-
-/// The grid a config describes.
-pub fn grid_of(config: &Config) -> Result<Grid, SolverError> {
-    let axes = config
-        .axes()
-        .into_iter()
-        .map(|(name, a)| GridAxis::new(name, a.min, a.max, a.points))
-        .collect();
-    Ok(Grid::new(axes)?)
-}
-
-/// Solves with whichever concrete game `game` is (monomorphised engine).
-pub fn solve_any(
-    game: &AnyGame,
-    grid: &Grid,
-    numerics: Numerics,
-    stop: Stop,
-    progress: impl FnMut(f64, f64, &[f32]),
-) -> Result<Solution, SolverError> {
-    match game {
-        AnyGame::TwoCar(g) => hji::solve(g, grid, numerics, stop, progress),
-        AnyGame::Baseline(g) => hji::solve(g, grid, numerics, stop, progress),
-        AnyGame::Idm(g) => hji::solve(g, grid, numerics, stop, progress),
-        AnyGame::IdmSpeeds(g) => hji::solve(g, grid, numerics, stop, progress),
-        AnyGame::Rear(g) => hji::solve(g, grid, numerics, stop, progress),
-    }
-}
-
-/// The scheme's gradient with whichever concrete game `game` is.
-pub fn gradient_any(
-    game: &AnyGame,
-    grid: &Grid,
-    numerics: Numerics,
-    values: &[f32],
-) -> Vec<Vec<f32>> {
-    match game {
-        AnyGame::TwoCar(g) => hji::gradient(g, grid, numerics, values),
-        AnyGame::Baseline(g) => hji::gradient(g, grid, numerics, values),
-        AnyGame::Idm(g) => hji::gradient(g, grid, numerics, values),
-        AnyGame::IdmSpeeds(g) => hji::gradient(g, grid, numerics, values),
-        AnyGame::Rear(g) => hji::gradient(g, grid, numerics, values),
-    }
-}
-
-/// The run's summary, written as `summary.json`.
-#[derive(Debug, Clone, Serialize)]
-pub struct Summary {
-    /// Config name.
-    pub name: String,
-    /// Config description.
-    pub description: String,
-    /// The config as run.
-    pub config: Config,
-    /// Nodes per axis.
-    pub grid_shape: Vec<usize>,
-    /// Backward time reached, s.
-    pub time: f64,
-    /// Time steps.
-    pub steps: usize,
-    /// Time step, s.
-    pub dt: f64,
-    /// `fixed_horizon`, `converged` or `not_converged`.
-    pub convergence: String,
-    /// Last `max |dV/dt|`.
-    pub residual: f64,
-    /// Wall time of the main solve, s.
-    pub solve_seconds: f64,
-    /// Wall time of the whole run, s.
-    pub total_seconds: f64,
-    /// Share of all nodes with `V > 0`.
-    pub safe_fraction: f64,
-    /// Share of the trusted box's nodes with `V > 0`.
-    pub safe_fraction_trusted: f64,
-    /// Share of all nodes with `V > 1 mm` (hj_reachability's reference figure).
-    pub share_above_1mm: f64,
-    /// `(horizon s, share of nodes with V > 0)` along the solve.
-    pub safe_fraction_history: Vec<(f64, f64)>,
-    /// Trusted box per axis `(min, max)`, or `None` if empty.
-    pub trusted_box: Option<Vec<(f64, f64)>>,
-    /// The table compiler's figures.
-    pub table: Option<CompileReport>,
-    /// Two-car only: accuracy against the exact value.
-    pub exact: Option<ExactComparison>,
-}
-
-/// Solves `config` and writes its folder under `out`. Returns the summary.
-pub fn run(
-    config: &Config,
-    out: &Path,
-    events: &mut dyn FnMut(Event<'_>),
-) -> Result<Summary, SolverError> {
-    config.validate()?;
-    let started = Instant::now();
-    let grid = grid_of(config)?;
-    let game = AnyGame::from_description(&config.game_description(), config.game.min_gap as f32);
-    let numerics = config.numerics();
-    let stop = config.stop();
-    let limit = match stop {
-        Stop::Horizon(t) => t,
-        Stop::Converge { max_time, .. } => max_time,
-    };
-
-    // The main solve, recording the safe fraction every half second of horizon: V is
-    // non-increasing in the horizon, so this curve must be non-increasing too.
-    let constraint = constraint_any(&game, &grid);
-    let mut safe_fraction_history = vec![(0.0, share_positive(&constraint))];
-    let mut next_mark = 0.5;
-    events(Event::SolveStarted("solve", limit));
-    let t0 = Instant::now();
-    let solution = solve_any(&game, &grid, numerics, stop, |t, r, values| {
-        events(Event::Step(t, r));
-        if t + 1e-9 >= next_mark {
-            safe_fraction_history.push((t, share_positive(values)));
-            next_mark += 0.5;
-        }
-    })?;
-    let solve_seconds = t0.elapsed().as_secs_f64();
-    events(Event::SolveFinished);
-
-    // The trusted box: where the optimistic solve does not disagree (see `trusted`).
-    let trusted = if config.trusted_box.measure {
-        let optimistic = Numerics {
-            boundary: Boundary::Optimistic,
-            ..numerics
-        };
-        events(Event::SolveStarted("trusted box", solution.time));
-        let upper = solve_any(
-            &game,
-            &grid,
-            optimistic,
-            Stop::Horizon(solution.time),
-            |t, r, _| events(Event::Step(t, r)),
-        )?;
-        events(Event::SolveFinished);
-        agreement_box(
-            &grid,
-            &solution.values,
-            &upper.values,
-            config.trusted_box.tolerance,
-        )
-    } else {
-        Some(IndexBox::full(&grid))
-    };
-
-    let grads = gradient_any(&game, &grid, numerics, &solution.values);
-    let dynamics = game.dynamics();
-    let d = grid.dims();
-    let (accelerate, tie): (Vec<bool>, Vec<bool>) = (0..grid.len())
-        .map(|node| {
-            let mut p: Vector = [0.0; MAX_DIMS];
-            for k in 0..d {
-                p[k] = grads[k][node];
-            }
-            (
-                dynamics.ego_accelerates(&p),
-                dynamics.ego_switching(&p).abs() < TIE_TOLERANCE,
-            )
-        })
-        .unzip();
-
-    let horizon = Horizon {
-        seconds: solution.time as f32,
-        status: match (solution.outcome, config.horizon.converge_tolerance) {
-            (Outcome::Horizon, _) => HorizonStatus::Fixed,
-            (Outcome::Converged, tol) => HorizonStatus::Converged {
-                tolerance: tol.unwrap_or(0.0) as f32,
-                residual: solution.residual as f32,
-            },
-            (Outcome::NotConverged, tol) => HorizonStatus::NotConverged {
-                tolerance: tol.unwrap_or(0.0) as f32,
-                residual: solution.residual as f32,
-            },
-        },
-    };
-    let table = match &trusted {
-        Some(bx) => Some(compile(&CompileInput {
-            game: config.game_description(),
-            min_gap: config.game.min_gap as f32,
-            horizon,
-            grid: &grid,
-            values: &solution.values,
-            accelerate: &accelerate,
-            trusted: bx,
-            table_points: config.table.points.as_deref(),
-            bits: config.table.bits,
-            clip_below: constraint.iter().copied().fold(-1.0f32, f32::min),
-        })?),
-        None => None,
-    };
-
-    let dir = out.join(&config.name);
-    std::fs::create_dir_all(&dir).map_err(|e| SolverError::Io {
-        path: dir.display().to_string(),
-        source: e,
-    })?;
-    output::write_npy(&dir.join("value.npy"), &solution.values, &grid.shape())?;
-    let axes: Vec<output::AxisCoordinates> = grid
-        .axes()
-        .iter()
-        .map(|a| output::AxisCoordinates {
-            name: a.name.clone(),
-            unit: a.unit.clone(),
-            coordinates: (0..a.points).map(|i| a.coordinate(i)).collect(),
-        })
-        .collect();
-    output::write_axes(&dir.join("axes.json"), &axes)?;
-    if let Some((bytes, _)) = &table {
-        output::write_bytes(&dir.join("table.bin"), bytes)?;
-    }
-
-    let n = solution.values.len() as f64;
-    let safe_fraction = share_positive(&solution.values);
-    let share_above_1mm = solution.values.iter().filter(|&&v| v > 1e-3).count() as f64 / n;
-    let safe_fraction_trusted = match &trusted {
-        Some(bx) => {
-            use rayon::prelude::*;
-            let (inside, safe) = bx
-                .par_nodes(&grid)
-                .map(|(node, _)| (1usize, usize::from(solution.values[node] > 0.0)))
-                .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-            safe as f64 / inside.max(1) as f64
-        }
-        None => 0.0,
-    };
-    let exact = if config.game.kind == GameKindConfig::TwoCar {
-        trusted
-            .as_ref()
-            .map(|bx| two_car_comparison(config, &grid, &solution.values, solution.time, bx))
-    } else {
-        None
-    };
-
-    plots(
-        config,
-        &grid,
-        &solution,
-        &Policy {
-            accelerate: &accelerate,
-            tie: &tie,
-            table: table.as_ref().map(|(bytes, _)| bytes.as_slice()),
-        },
-        trusted.as_ref(),
-        &dir,
-        &safe_fraction_history,
-    )?;
-
-    let summary = Summary {
-        name: config.name.clone(),
-        description: config.description.clone(),
-        config: config.clone(),
-        grid_shape: grid.shape(),
-        time: solution.time,
-        steps: solution.steps,
-        dt: solution.dt,
-        convergence: match solution.outcome {
-            Outcome::Horizon => "fixed_horizon",
-            Outcome::Converged => "converged",
-            Outcome::NotConverged => "not_converged",
-        }
-        .into(),
-        residual: solution.residual,
-        solve_seconds,
-        total_seconds: started.elapsed().as_secs_f64(),
-        safe_fraction,
-        safe_fraction_trusted,
-        share_above_1mm,
-        safe_fraction_history,
-        trusted_box: trusted.as_ref().map(|b| b.bounds(&grid)),
-        table: table.map(|t| t.1),
-        exact,
-    };
-    output::write_json(&dir.join("summary.json"), &summary)?;
-    Ok(summary)
-}
-
-/// The share of values above zero.
-fn share_positive(values: &[f32]) -> f64 {
-    use rayon::prelude::*;
-    values.par_iter().filter(|&&v| v > 0.0).count() as f64 / values.len().max(1) as f64
-}
-
-/// The constraint at every node.
-fn constraint_any(game: &AnyGame, grid: &Grid) -> Vec<f32> {
-    match game {
-        AnyGame::TwoCar(g) => hji::constraint_values(g, grid),
-        AnyGame::Baseline(g) => hji::constraint_values(g, grid),
-        AnyGame::Idm(g) => hji::constraint_values(g, grid),
-        AnyGame::IdmSpeeds(g) => hji::constraint_values(g, grid),
-        AnyGame::Rear(g) => hji::constraint_values(g, grid),
-    }
-}
-
-fn two_car_comparison(
-    config: &Config,
-    grid: &Grid,
-    values: &[f32],
-    time: f64,
-    bx: &IndexBox,
-) -> ExactComparison {
-    let g = &config.game;
-    exact::two_car_errors(grid, values, time, g.ego.min, g.leader.min, g.min_gap, bx)
-}
+use crate::pipeline::config::{Config, GameKindConfig};
+use crate::pipeline::output::{self, CellMap, PlotAxis};
+use crate::proof::exact;
+use crate::proof::trusted::IndexBox;
 
 const GREEN: RGBColor = RGBColor(140, 210, 140);
 const BLUE: RGBColor = RGBColor(60, 110, 220);
@@ -406,10 +92,10 @@ fn table_category(
 
 /// The ego's policy per node (the table's bit, and whether it is a tie: either input), and the
 /// table compiled from it, if any.
-struct Policy<'a> {
-    accelerate: &'a [bool],
-    tie: &'a [bool],
-    table: Option<&'a [u8]>,
+pub(crate) struct Policy<'a> {
+    pub(crate) accelerate: &'a [bool],
+    pub(crate) tie: &'a [bool],
+    pub(crate) table: Option<&'a [u8]>,
 }
 
 /// A safe-set map's category: `None` outside the constraint set; 2 and 3 where untrusted.
@@ -438,7 +124,7 @@ fn policy_category(safe: bool, in_constraint: bool, accelerate: bool, tie: bool)
     }
 }
 
-fn plots(
+pub(crate) fn plots(
     config: &Config,
     grid: &Grid,
     solution: &Solution,
@@ -557,7 +243,7 @@ fn plots(
         }
     } else {
         let configured = if config.slices.is_empty() {
-            vec![crate::config::SliceConfig::default()]
+            vec![crate::pipeline::config::SliceConfig::default()]
         } else {
             config.slices.clone()
         };
@@ -565,7 +251,7 @@ fn plots(
         let five = grid.dims() == 5;
         // Besides the configured slices, the trusted slice with the most safe states, so that
         // a reader sees the set where it is not empty (when it is anywhere).
-        let mut slices: Vec<(crate::config::SliceConfig, bool)> =
+        let mut slices: Vec<(crate::pipeline::config::SliceConfig, bool)> =
             configured.into_iter().map(|s| (s, false)).collect();
         if let Some(widest) = widest_slice(grid, values, bounds.as_deref(), min_gap) {
             if !slices.iter().any(|(s, _)| s.tag(five) == widest.tag(five)) {
@@ -709,7 +395,7 @@ fn widest_slice(
     values: &[f32],
     trusted: Option<&[(f64, f64)]>,
     min_gap: f64,
-) -> Option<crate::config::SliceConfig> {
+) -> Option<crate::pipeline::config::SliceConfig> {
     let axes = grid.axes();
     let strides = grid.strides();
     let five = grid.dims() == 5;
@@ -753,14 +439,14 @@ fn widest_slice(
                 return best.map(|(_, idx)| {
                     let at = |n: usize| axes[speed_axes[n]].coordinate(idx[n]);
                     if five {
-                        crate::config::SliceConfig {
+                        crate::pipeline::config::SliceConfig {
                             leader_speed: Some(at(0)),
                             follower_speed: Some(at(1)),
                             ego_speed: Some(at(2)),
                             ..Default::default()
                         }
                     } else {
-                        crate::config::SliceConfig {
+                        crate::pipeline::config::SliceConfig {
                             rel_speed_leader: at(0),
                             rel_speed_follower: at(1),
                             ..Default::default()
@@ -778,14 +464,10 @@ fn widest_slice(
     }
 }
 
-/// The output folder of a config.
-pub fn folder(out: &Path, config: &Config) -> PathBuf {
-    out.join(&config.name)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::pipeline::run::run;
 
     #[test]
     fn untrusted_cells_take_the_pale_categories_and_policy_shows_only_where_safe() {
@@ -842,7 +524,7 @@ mod tests {
     /// inside the trusted box, and nowhere when nothing is safe.
     #[test]
     fn the_widest_slice_is_the_one_with_the_most_safe_states() {
-        use crate::grid::GridAxis;
+        use crate::engine::grid::GridAxis;
         let grid = Grid::new(vec![
             GridAxis::new("gap_leader", 0.0, 40.0, 5),
             GridAxis::new("rel_speed_leader", -10.0, 10.0, 5),

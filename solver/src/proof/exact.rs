@@ -53,13 +53,13 @@ pub struct ExactComparison {
 /// solver holds values at the grid's lowest constraint value `x_min - min_gap` (the game for
 /// `max(l, floor)`, same safe set), so the reference is clipped there too.
 pub fn two_car_errors(
-    grid: &crate::grid::Grid,
+    grid: &crate::engine::grid::Grid,
     values: &[f32],
     horizon: f64,
     ego_min: f64,
     leader_min: f64,
     min_gap: f64,
-    bx: &crate::trusted::IndexBox,
+    bx: &crate::proof::trusted::IndexBox,
 ) -> ExactComparison {
     let (xs, vs) = (&grid.axes()[0], &grid.axes()[1]);
     let floor = xs.min - min_gap;

@@ -16,7 +16,7 @@ fn io_err(path: &Path, source: std::io::Error) -> SolverError {
 
 /// The plots' font, DejaVu Sans, shipped with the build (`assets/fonts`): no system font and
 /// no fontconfig are needed.
-pub static PLOT_FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+pub static PLOT_FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
 
 /// Registers [`PLOT_FONT`] as plotters' `sans-serif` (once; every plot calls it first).
 pub fn register_plot_font() -> Result<(), SolverError> {

@@ -11,7 +11,7 @@
 //! inside the box or not; outside it they may call safe states unsafe, and the firmware treats
 //! such states as unknown.
 
-use crate::grid::{Grid, MAX_DIMS};
+use crate::engine::grid::{Grid, MAX_DIMS};
 
 /// An index box `lo[k] ..= hi[k]` per axis.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -165,7 +165,7 @@ pub fn agreement_box(grid: &Grid, lo: &[f32], hi: &[f32], tolerance: f64) -> Opt
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::grid::GridAxis;
+    use crate::engine::grid::GridAxis;
 
     fn grid() -> Grid {
         let axis = |name: &str| GridAxis::new(name, 0.0, 10.0, 11);

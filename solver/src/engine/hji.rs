@@ -17,7 +17,7 @@
 //! # The scheme
 //! `dV/dtau = min(0, H(z, (p- + p+)/2) + sum_i alpha_i(z) (p+_i - p-_i) / 2)`: the Lax-Friedrichs
 //! numerical Hamiltonian of `V_tau + (-H) = 0`, with `p-`, `p+` the one-sided derivatives from
-//! [`crate::scheme`] and `alpha_i >= max |dH/dp_i| = max_{u,d} |f_i|` (local: at each node;
+//! [`crate::engine::scheme`] and `alpha_i >= max |dH/dp_i| = max_{u,d} |f_i|` (local: at each node;
 //! global: over the grid). The sign of the dissipation is that of a viscosity `+ alpha dx/2
 //! V_xx` on the right-hand side, which is what keeps the scheme monotone (Crandall & Lions 1984).
 //! Time steps are `dt = CFL / max_z sum_i alpha_i(z) / dx_i`, constant here because `alpha`
@@ -29,7 +29,7 @@
 //! ToolboxLS's choice; it is optimistic where worst-case trajectories leave the grid (the value
 //! is concave across the low-speed faces, so a line overestimates it). [`Boundary::Pessimistic`]
 //! and [`Boundary::Optimistic`] put lower and upper bounds of the true ghost values there
-//! instead (see the `ghost` function); the two solves bracket the true value, [`crate::trusted`] keeps the
+//! instead (see the `ghost` function); the two solves bracket the true value, [`crate::proof::trusted`] keeps the
 //! box where the bracket is tight, and tables are compiled from the pessimistic solve.
 //!
 //! # The obstacle
@@ -46,10 +46,10 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::engine::grid::{Grid, MAX_DIMS};
+use crate::engine::scheme::{derivatives_row, derivatives_strided, Spatial};
 use crate::error::SolverError;
 use crate::games::{Dynamics, Vector};
-use crate::grid::{Grid, MAX_DIMS};
-use crate::scheme::{derivatives_row, derivatives_strided, Spatial};
 
 /// TVD Runge-Kutta order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

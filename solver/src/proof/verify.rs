@@ -948,7 +948,7 @@ pub fn plot(
     ego_speeds: &[f64],
     gap_limit: f64,
 ) -> Result<Vec<std::path::PathBuf>, SolverError> {
-    use crate::output::{draw_cell_map, CellMap, PlotAxis};
+    use crate::pipeline::output::{draw_cell_map, CellMap, PlotAxis};
     use plotters::style::RGBColor;
     let [ni, nj, nk] = table.cells();
     let centre =

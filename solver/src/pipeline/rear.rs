@@ -3,7 +3,7 @@
 //! summary and the verify report.
 //!
 //! One responsibility: turn a rear config into files. The game is [`crate::games::RearIdm`],
-//! the scheme [`crate::semi_lagrangian`]; why the split and why that scheme is written there.
+//! the scheme [`crate::engine::semi_lagrangian`]; why the split and why that scheme is written there.
 //!
 //! # The table is the solver's value, not an approximation of it
 //! The sampled-data iteration defines its value between nodes by multilinear interpolation, and
@@ -17,15 +17,15 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 use table_format::{Axis, Bounds, Game, Horizon, HorizonStatus, Spacing, TableContents, ValueBits};
 
-use crate::config::{
+use crate::engine::semi_lagrangian::{iterate, Breakpoints};
+use crate::error::{ConfigError, SolverError};
+use crate::games::{Accel, Idm, RearIdm};
+use crate::pipeline::config::{
     check, check_memory, check_name, idm_parameters, parse_toml, IdmConfig, Range,
     SAMPLED_BYTES_PER_NODE,
 };
-use crate::error::{ConfigError, SolverError};
-use crate::games::{Accel, Idm, RearIdm};
-use crate::output;
-use crate::semi_lagrangian::{iterate, Breakpoints};
-use crate::verify::{verify_bytes, Settings as VerifySettings};
+use crate::pipeline::output;
+use crate::proof::verify::{verify_bytes, Settings as VerifySettings};
 
 /// A breakpoint axis: from `start`, uniform pieces `[end, spacing]` in turn.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -8,9 +8,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::engine::hji::{Boundary, Dissipation, Numerics, Obstacle, RkOrder, Stop};
+use crate::engine::scheme::Spatial;
 use crate::error::ConfigError;
-use crate::hji::{Boundary, Dissipation, Numerics, Obstacle, RkOrder, Stop};
-use crate::scheme::Spatial;
 
 /// Bounds `[min, max]`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -844,26 +844,26 @@ pub(crate) fn idm_parameters(idm: IdmConfig) -> table_format::IdmParameters {
 /// files are under `solver/configs/`.
 pub fn builtin() -> Vec<(&'static str, &'static str)> {
     vec![
-        ("two-car.toml", include_str!("../configs/two-car.toml")),
+        ("two-car.toml", include_str!("../../configs/two-car.toml")),
         (
             "three-car-baseline.toml",
-            include_str!("../configs/three-car-baseline.toml"),
+            include_str!("../../configs/three-car-baseline.toml"),
         ),
         (
             "three-car-idm.toml",
-            include_str!("../configs/three-car-idm.toml"),
+            include_str!("../../configs/three-car-idm.toml"),
         ),
         (
             "three-car-idm-adversarial-speed.toml",
-            include_str!("../configs/three-car-idm-adversarial-speed.toml"),
+            include_str!("../../configs/three-car-idm-adversarial-speed.toml"),
         ),
         (
             "three-car-idm-speeds.toml",
-            include_str!("../configs/three-car-idm-speeds.toml"),
+            include_str!("../../configs/three-car-idm-speeds.toml"),
         ),
         (
             "three-car-idm-4d-table.toml",
-            include_str!("../configs/three-car-idm-4d-table.toml"),
+            include_str!("../../configs/three-car-idm-4d-table.toml"),
         ),
     ]
 }
@@ -873,6 +873,6 @@ pub fn builtin() -> Vec<(&'static str, &'static str)> {
 pub fn builtin_rear() -> Vec<(&'static str, &'static str)> {
     vec![(
         "rear/deployment.toml",
-        include_str!("../configs/rear/deployment.toml"),
+        include_str!("../../configs/rear/deployment.toml"),
     )]
 }

@@ -1,0 +1,15 @@
+//! The pipeline: from a config to the files a user reads and the table the firmware runs.
+//!
+//! - [`config`]: the level-set configs (TOML), validated with the key and line of each error;
+//! - [`run`]: one level-set run (solve, trusted box, policy, table, plots);
+//! - [`rear`]: one rear-game run (value iteration, table, proof);
+//! - [`compile`]: values to a quantized, interpolated table with its error bound;
+//! - `plots`: what a level-set run draws, and where;
+//! - [`output`]: the files (`.npy`, JSON, tables) and the plots' drawing.
+
+pub mod compile;
+pub mod config;
+pub mod output;
+mod plots;
+pub mod rear;
+pub mod run;
