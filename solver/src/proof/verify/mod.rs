@@ -91,9 +91,21 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use serde::Serialize;
-use table_format::{Game, Table};
+use table_format::Table;
 
 use crate::error::SolverError;
+
+mod interval;
+mod model;
+mod plot;
+mod table;
+
+use interval::widen_down;
+pub use interval::{Interval, StateBox};
+use model::least_difference;
+pub use model::{travel, Reach, RearModel};
+pub use plot::plot;
+pub use table::RearTable;
 
 /// The version of what `verify` proves, recorded in the tables it checks
 /// ([`table_format::Verification::verifier`]). Version 2 also bounds the value at every
@@ -104,459 +116,6 @@ pub const VERSION: u16 = table_format::REAR_SAMPLE_VERIFIER;
 /// Slack on both sides of the level, m: the firmware's `f32` interpolation is within about
 /// `1e-6` m of the exact one.
 pub const TOLERANCE: f64 = 1e-5;
-
-/// Outward widening of every computed bound (relative and absolute).
-const WIDEN: f64 = 1e-9;
-
-fn widen_down(x: f64) -> f64 {
-    x - WIDEN * (1.0 + x.abs())
-}
-
-fn widen_up(x: f64) -> f64 {
-    x + WIDEN * (1.0 + x.abs())
-}
-
-/// A closed interval.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Interval {
-    /// Lower end.
-    pub lo: f64,
-    /// Upper end.
-    pub hi: f64,
-}
-
-impl Interval {
-    fn new(lo: f64, hi: f64) -> Self {
-        Interval { lo, hi }
-    }
-
-    fn halves(&self) -> (Interval, Interval) {
-        let mid = 0.5 * (self.lo + self.hi);
-        (Interval::new(self.lo, mid), Interval::new(mid, self.hi))
-    }
-}
-
-/// A box of rear states: gap to the follower (m), the follower's and the ego's speeds (m/s).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct StateBox {
-    /// Gap to the follower, m.
-    pub gap: Interval,
-    /// The follower's speed, m/s.
-    pub follower_speed: Interval,
-    /// The ego's speed, m/s.
-    pub ego_speed: Interval,
-}
-
-impl StateBox {
-    fn axis(&self, k: usize) -> Interval {
-        match k {
-            0 => self.gap,
-            1 => self.follower_speed,
-            _ => self.ego_speed,
-        }
-    }
-
-    fn with_axis(mut self, k: usize, i: Interval) -> Self {
-        match k {
-            0 => self.gap = i,
-            1 => self.follower_speed = i,
-            _ => self.ego_speed = i,
-        }
-        self
-    }
-}
-
-/// The rear game's model as the table's header states it: the claim is checked against it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RearModel {
-    /// `-beta`, m/s^2.
-    pub ego_min: f64,
-    /// `a_max`, m/s^2.
-    pub ego_max: f64,
-    /// The follower's clip, m/s^2.
-    pub clip_min: f64,
-    /// The follower's clip, m/s^2.
-    pub clip_max: f64,
-    /// IDM `a`, m/s^2.
-    pub idm_a: f64,
-    /// IDM `b`, m/s^2.
-    pub idm_b: f64,
-    /// IDM `v0`, m/s.
-    pub idm_v0: f64,
-    /// IDM `delta`.
-    pub idm_delta: i32,
-    /// IDM `s0`, m.
-    pub idm_s0: f64,
-    /// The time gap's range, s.
-    pub time_gap: Interval,
-    /// Every speed lies in `[0, max_speed]`, m/s.
-    pub max_speed: f64,
-    /// A collision is a gap at or below this, m.
-    pub min_gap: f64,
-}
-
-impl RearModel {
-    /// The model of a split table's header; `None` for any other game.
-    pub fn from_game(game: &Game, min_gap: f32) -> Option<Self> {
-        match *game {
-            Game::ThreeCarSplit {
-                ego,
-                follower_clip,
-                idm,
-                time_gap,
-                max_speed,
-                ..
-            } => Some(RearModel {
-                ego_min: f64::from(ego.min),
-                ego_max: f64::from(ego.max),
-                clip_min: f64::from(follower_clip.min),
-                clip_max: f64::from(follower_clip.max),
-                idm_a: f64::from(idm.max_acceleration),
-                idm_b: f64::from(idm.comfortable_deceleration),
-                idm_v0: f64::from(idm.desired_speed),
-                idm_delta: i32::from(idm.exponent),
-                idm_s0: f64::from(idm.jam_distance),
-                time_gap: Interval::new(f64::from(time_gap.min), f64::from(time_gap.max)),
-                max_speed: f64::from(max_speed),
-                min_gap: f64::from(min_gap),
-            }),
-            _ => None,
-        }
-    }
-
-    /// Bounds of the follower's clipped IDM acceleration over a box of gaps and speeds and
-    /// every time gap in range (module docs).
-    pub fn follower_acceleration(&self, b: &StateBox) -> Interval {
-        let (p, q) = (b.follower_speed.lo.max(0.0), b.follower_speed.hi.max(0.0));
-        let (r, s) = (b.ego_speed.lo, b.ego_speed.hi);
-        let c = 2.0 * (self.idm_a * self.idm_b).sqrt();
-        // z(v) = v T + v (v - v_e) / c is non-increasing in v_e and non-decreasing in T
-        // (v >= 0), convex in v: its least value at T_min, v_e = s, at the vertex clamped into
-        // [p, q]; its largest at T_max, v_e = r, at an end.
-        let z = |v: f64, t: f64, ve: f64| v * t + v * (v - ve) / c;
-        let vertex = (0.5 * (s - c * self.time_gap.lo)).clamp(p, q);
-        let z_lo = z(p, self.time_gap.lo, s)
-            .min(z(q, self.time_gap.lo, s))
-            .min(z(vertex, self.time_gap.lo, s));
-        let z_hi = z(p, self.time_gap.hi, r).max(z(q, self.time_gap.hi, r));
-        let desired_lo = widen_down(self.idm_s0 + z_lo.max(0.0));
-        let desired_hi = widen_up(self.idm_s0 + z_hi.max(0.0));
-        let speed_term = |v: f64| (v / self.idm_v0).powi(self.idm_delta);
-        let (speed_lo, speed_hi) = (speed_term(p), speed_term(q));
-        // (s*/g)^2 with s* >= s0 > 0: decreasing in g > 0; infinite at g <= 0.
-        let (g1, g2) = (b.gap.lo, b.gap.hi);
-        let interaction_hi = if g1 > 0.0 {
-            (desired_hi / g1).powi(2)
-        } else {
-            f64::INFINITY
-        };
-        let interaction_lo = if g2 > 0.0 {
-            (desired_lo / g2).powi(2)
-        } else {
-            f64::INFINITY
-        };
-        let lo = widen_down(self.idm_a * (1.0 - speed_hi - interaction_hi));
-        let hi = widen_up(self.idm_a * (1.0 - speed_lo - interaction_lo));
-        let clamp = |x: f64| {
-            if x.is_nan() {
-                self.clip_min
-            } else {
-                x.clamp(self.clip_min, self.clip_max)
-            }
-        };
-        Interval::new(clamp(lo), clamp(hi))
-    }
-
-    /// Every state the box can reach over `[0, period]`, bounded (module docs).
-    pub fn reach(&self, b: &StateBox, period: f64) -> Reach {
-        let vm = self.max_speed;
-        let ve = b.ego_speed;
-        let ego_tube = Interval::new(
-            (ve.lo + self.ego_min * period).max(0.0),
-            (ve.hi + self.ego_max * period).min(vm),
-        );
-        let ego_far = travel(ve.hi, self.ego_max, period, vm).0;
-        let mut accel = Interval::new(self.clip_min, self.clip_max);
-        for _ in 0..3 {
-            let vf = b.follower_speed;
-            let follower_tube = Interval::new(
-                (vf.lo + accel.lo.min(0.0) * period).max(0.0),
-                (vf.hi + accel.hi.max(0.0) * period).min(vm),
-            );
-            let follower_far = travel(vf.hi, accel.hi, period, vm).0;
-            let gap_tube = Interval::new(
-                widen_down(b.gap.lo - follower_far),
-                widen_up(b.gap.hi + ego_far),
-            );
-            let tube = StateBox {
-                gap: gap_tube,
-                follower_speed: follower_tube,
-                ego_speed: ego_tube,
-            };
-            let next = self.follower_acceleration(&tube);
-            accel = Interval::new(next.lo.max(accel.lo), next.hi.min(accel.hi));
-        }
-        let vf = b.follower_speed;
-        let (ego_near, ego_end_lo) = travel(ve.lo, self.ego_min, period, vm);
-        let (ego_far, ego_end_hi) = travel(ve.hi, self.ego_max, period, vm);
-        let (follower_near, follower_end_lo) = travel(vf.lo, accel.lo, period, vm);
-        let (follower_far, follower_end_hi) = travel(vf.hi, accel.hi, period, vm);
-        let end = StateBox {
-            gap: Interval::new(
-                widen_down(b.gap.lo + ego_near - follower_far),
-                widen_up(b.gap.hi + ego_far - follower_near),
-            ),
-            follower_speed: Interval::new(
-                widen_down(follower_end_lo).max(0.0),
-                widen_up(follower_end_hi).min(vm),
-            ),
-            ego_speed: Interval::new(
-                widen_down(ego_end_lo).max(0.0),
-                widen_up(ego_end_hi).min(vm),
-            ),
-        };
-        let least_gap = widen_down(
-            b.gap.lo + least_difference(ve.lo, self.ego_min, vf.hi, accel.hi, period, vm),
-        );
-        Reach {
-            end,
-            least_gap,
-            follower_acceleration: accel,
-        }
-    }
-}
-
-/// What one period can do from a box.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Reach {
-    /// Every state at the end of the period lies in this box.
-    pub end: StateBox,
-    /// The gap stays at or above this throughout the period, m.
-    pub least_gap: f64,
-    /// The follower's acceleration throughout the period lies here, m/s^2.
-    pub follower_acceleration: Interval,
-}
-
-/// The distance a car at speed `v` covers in `t` at constant acceleration `a`, its speed held in
-/// `[0, v_max]`, and its speed at the end. Non-decreasing in `v` and in `a`.
-pub fn travel(v: f64, a: f64, t: f64, v_max: f64) -> (f64, f64) {
-    if a == 0.0 || t <= 0.0 {
-        return (v * t.max(0.0), v);
-    }
-    let limit = if a < 0.0 { 0.0 } else { v_max };
-    let t_hit = ((limit - v) / a).max(0.0);
-    if t_hit >= t {
-        (v * t + 0.5 * a * t * t, v + a * t)
-    } else {
-        (
-            v * t_hit + 0.5 * a * t_hit * t_hit + limit * (t - t_hit),
-            limit,
-        )
-    }
-}
-
-/// The least over `t` in `[0, period]` of `travel(ve, ae, t) - travel(vf, af, t)`: the gap's
-/// least change when the ego brakes from `ve` at `ae` and the follower goes from `vf` at `af`.
-/// The difference is continuous with a piecewise-linear derivative, so its least value is at an
-/// end, a kink (a car stopping or saturating) or a zero of the derivative on a piece.
-fn least_difference(ve: f64, ae: f64, vf: f64, af: f64, period: f64, v_max: f64) -> f64 {
-    let hit = |v: f64, a: f64| -> Option<f64> {
-        if a == 0.0 {
-            return None;
-        }
-        let limit = if a < 0.0 { 0.0 } else { v_max };
-        let t = (limit - v) / a;
-        (t > 0.0 && t < period).then_some(t)
-    };
-    let mut candidates = vec![0.0, period];
-    candidates.extend(hit(ve, ae));
-    candidates.extend(hit(vf, af));
-    // On each piece each speed is either moving (v + a t) or held (a constant); the
-    // derivative's zero for each combination.
-    let moving = |v: f64, a: f64| (v, a);
-    let held = |v: f64, a: f64| {
-        let limit = if a < 0.0 { 0.0 } else { v_max };
-        (if a == 0.0 { v } else { limit }, 0.0)
-    };
-    for (e0, e1) in [moving(ve, ae), held(ve, ae)] {
-        for (f0, f1) in [moving(vf, af), held(vf, af)] {
-            let slope = e1 - f1;
-            if slope != 0.0 {
-                let t = (f0 - e0) / slope;
-                if t > 0.0 && t < period {
-                    candidates.push(t);
-                }
-            }
-        }
-    }
-    candidates
-        .into_iter()
-        .map(|t| travel(ve, ae, t, v_max).0 - travel(vf, af, t, v_max).0)
-        .fold(f64::INFINITY, f64::min)
-}
-
-/// The rear table as `verify` reads it: breakpoints and dequantized node values in `f64`.
-#[derive(Debug, Clone)]
-pub struct RearTable {
-    axes: [Vec<f64>; 3],
-    values: Vec<f64>,
-    /// The value of a follower beyond the grid's last gap (the last face's least value).
-    pub beyond_grid: f64,
-    /// The header's error bound, m.
-    pub error_bound: f64,
-    /// The model.
-    pub model: RearModel,
-}
-
-impl RearTable {
-    /// Reads a split table; refuses any other game.
-    pub fn from_table(table: &Table<'_>) -> Result<Self, SolverError> {
-        let header = table.header();
-        let model = RearModel::from_game(&header.game, header.min_gap).ok_or_else(|| {
-            SolverError::Verify("the table is not a ThreeCarSplit (rear) table".into())
-        })?;
-        let mut axes: [Vec<f64>; 3] = Default::default();
-        for (k, axis) in axes.iter_mut().enumerate() {
-            let n = header.axes[k].points as usize;
-            *axis = (0..n)
-                .map(|i| table.breakpoint(k, i).map(f64::from))
-                .collect::<Option<Vec<f64>>>()
-                .ok_or_else(|| SolverError::Verify(format!("axis {k}: missing breakpoints")))?;
-        }
-        let values = (0..table.node_count())
-            .map(|n| table.value_at_node(n).map(f64::from))
-            .collect::<Option<Vec<f64>>>()
-            .ok_or_else(|| SolverError::Verify("missing node values".into()))?;
-        RearTable::new(model, axes, values, f64::from(header.error_bound.total()))
-            .ok_or_else(|| SolverError::Verify("the grid and the values disagree".into()))
-    }
-
-    /// A table from breakpoints and node values in C order (last axis fastest): hand-made
-    /// tables for tests. `None` if the sizes disagree or an axis has fewer than two points.
-    pub fn new(
-        model: RearModel,
-        axes: [Vec<f64>; 3],
-        values: Vec<f64>,
-        error_bound: f64,
-    ) -> Option<Self> {
-        let ok = axes
-            .iter()
-            .all(|a| a.len() >= 2 && a.windows(2).all(|w| w[0] < w[1]))
-            && values.len() == axes.iter().map(Vec::len).product::<usize>();
-        if !ok {
-            return None;
-        }
-        let face = axes[1].len() * axes[2].len();
-        let beyond_grid = values[values.len() - face..]
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, f64::min);
-        Some(RearTable {
-            axes,
-            values,
-            beyond_grid,
-            error_bound,
-            model,
-        })
-    }
-
-    /// The breakpoints of axis `k`.
-    pub fn axis(&self, k: usize) -> &[f64] {
-        &self.axes[k]
-    }
-
-    /// The node value at indices `(i, j, k)`.
-    pub fn node(&self, i: usize, j: usize, k: usize) -> f64 {
-        self.values[(i * self.axes[1].len() + j) * self.axes[2].len() + k]
-    }
-
-    /// Overwrites one node value (tests mutate tables this way).
-    pub fn set_node(&mut self, i: usize, j: usize, k: usize, value: f64) {
-        let n = (i * self.axes[1].len() + j) * self.axes[2].len() + k;
-        self.values[n] = value;
-    }
-
-    /// `W` at a state inside the grid's speed range, as the firmware reads it: interpolated
-    /// inside the grid, `beyond_grid` past its last gap, `-inf` below its first gap.
-    pub fn value_at(&self, x: [f64; 3]) -> f64 {
-        let gaps = &self.axes[0];
-        if x[0] < gaps[0] {
-            return f64::NEG_INFINITY;
-        }
-        if x[0] > gaps[gaps.len() - 1] {
-            return self.beyond_grid;
-        }
-        let mut base = [0usize; 3];
-        let mut frac = [0f64; 3];
-        for k in 0..3 {
-            let a = &self.axes[k];
-            let v = x[k].clamp(a[0], a[a.len() - 1]);
-            let i = a.partition_point(|&b| b <= v).clamp(1, a.len() - 1) - 1;
-            base[k] = i;
-            frac[k] = ((v - a[i]) / (a[i + 1] - a[i])).clamp(0.0, 1.0);
-        }
-        let mut w = 0.0;
-        for corner in 0..8 {
-            let mut weight = 1.0;
-            let mut idx = [0usize; 3];
-            for k in 0..3 {
-                let up = (corner >> k) & 1 == 1;
-                weight *= if up { frac[k] } else { 1.0 - frac[k] };
-                idx[k] = base[k] + usize::from(up);
-            }
-            if weight != 0.0 {
-                w += weight * self.node(idx[0], idx[1], idx[2]);
-            }
-        }
-        w
-    }
-
-    /// The least and largest `W` over a box (exact, module docs).
-    pub fn extremes(&self, b: &StateBox) -> Interval {
-        let mut candidates: [Vec<f64>; 3] = Default::default();
-        for k in 0..3 {
-            let i = b.axis(k);
-            let a = &self.axes[k];
-            let c = &mut candidates[k];
-            c.push(i.lo);
-            c.extend(a.iter().copied().filter(|&x| x > i.lo && x < i.hi));
-            c.push(i.hi);
-        }
-        let mut lo = f64::INFINITY;
-        let mut hi = f64::NEG_INFINITY;
-        for &g in &candidates[0] {
-            for &vf in &candidates[1] {
-                for &ve in &candidates[2] {
-                    let w = self.value_at([g, vf, ve]);
-                    lo = lo.min(w);
-                    hi = hi.max(w);
-                }
-            }
-        }
-        // Beyond the grid the value is the constant `beyond_grid`, already among the candidates
-        // when the box reaches past the last gap (its `hi` end).
-        Interval::new(lo, hi)
-    }
-
-    /// The cell between breakpoints `(i, i+1)`, `(j, j+1)`, `(k, k+1)`.
-    pub fn cell(&self, i: usize, j: usize, k: usize) -> StateBox {
-        let a = &self.axes;
-        StateBox {
-            gap: Interval::new(a[0][i], a[0][i + 1]),
-            follower_speed: Interval::new(a[1][j], a[1][j + 1]),
-            ego_speed: Interval::new(a[2][k], a[2][k + 1]),
-        }
-    }
-
-    /// Cells per axis.
-    pub fn cells(&self) -> [usize; 3] {
-        [
-            self.axes[0].len() - 1,
-            self.axes[1].len() - 1,
-            self.axes[2].len() - 1,
-        ]
-    }
-}
 
 /// Why a cell could not be proven.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -626,7 +185,10 @@ fn sample_dip(table: &RearTable, b: &StateBox, period: f64, sample: f64, level: 
     let mut k = 1u32;
     while f64::from(k) * sample < period - 1e-9 {
         let end = table.model.reach(b, f64::from(k) * sample).end;
-        dip = dip.max(level - table.extremes(&end).lo);
+        // The node bounds settle every sample at or above the level without interpolating.
+        if table.node_bounds(&end).lo < level {
+            dip = dip.max(level - table.extremes(&end).lo);
+        }
         k += 1;
     }
     dip
@@ -649,7 +211,17 @@ fn verify_cell_with(
     let mut worst: Option<(Reason, f64)> = None;
     let mut stack = vec![(*cell, 0u32)];
     while let Some((b, depth)) = stack.pop() {
-        let w = table.extremes(&b);
+        // Whether the box holds a certified state: the node bounds decide it unless the level
+        // lies between them.
+        let bounds = table.node_bounds(&b);
+        if bounds.hi <= level - TOLERANCE {
+            continue;
+        }
+        let w = if bounds.lo > level - TOLERANCE {
+            bounds
+        } else {
+            table.extremes(&b)
+        };
         if w.hi <= level - TOLERANCE {
             continue;
         }
@@ -660,7 +232,10 @@ fn verify_cell_with(
         for &period in &s.periods {
             let reach = table.model.reach(&b, period);
             let safe = reach.least_gap > table.model.min_gap;
-            let end = table.extremes(&reach.end).lo;
+            let end = match table.node_bounds(&reach.end).lo {
+                lo if lo > level + TOLERANCE => lo,
+                _ => table.extremes(&reach.end).lo,
+            };
             if safe && end > level + TOLERANCE {
                 let dip = sample_dip(table, &b, period, shortest, level);
                 if dip <= sample_limit {
@@ -712,7 +287,7 @@ fn verify_cell_with(
         }
         let reason = if !safe {
             Reason::Collision
-        } else if w.lo <= level + TOLERANCE {
+        } else if table.extremes(&b).lo <= level + TOLERANCE {
             Reason::Tangency
         } else {
             Reason::Resolution
@@ -937,118 +512,4 @@ pub fn verify(table: &RearTable, crc: u32, s: &Settings) -> Report {
         unproven,
         verdicts,
     }
-}
-
-/// Draws the verdicts on `(gap_follower, follower_speed)` cells: one slice per ego speed in
-/// `ego_speeds` (the cell holding it), and the worst verdict over every ego speed.
-pub fn plot(
-    table: &RearTable,
-    report: &Report,
-    dir: &std::path::Path,
-    ego_speeds: &[f64],
-    gap_limit: f64,
-) -> Result<Vec<std::path::PathBuf>, SolverError> {
-    use crate::pipeline::output::{draw_cell_map, CellMap, PlotAxis};
-    use plotters::style::RGBColor;
-    let [ni, nj, nk] = table.cells();
-    let centre =
-        |a: &[f64], n: usize| -> Vec<f64> { (0..n).map(|i| 0.5 * (a[i] + a[i + 1])).collect() };
-    let gaps: Vec<f64> = centre(table.axis(0), ni)
-        .into_iter()
-        .take_while(|&g| g <= gap_limit)
-        .collect();
-    let speeds = centre(table.axis(1), nj);
-    // Severity order: not certified, proven, tangency, resolution, collision.
-    let legend: [(&str, RGBColor); 5] = [
-        ("not certified", RGBColor(225, 225, 225)),
-        ("proven", RGBColor(90, 170, 90)),
-        ("unproven: tangency", RGBColor(245, 160, 40)),
-        ("unproven: resolution", RGBColor(200, 40, 40)),
-        ("unproven: collision", RGBColor(90, 0, 90)),
-    ];
-    let severity = |v: &Verdict| match v {
-        Verdict::NotCertified => 0,
-        Verdict::Proven | Verdict::ProvenAtStandstill => 1,
-        Verdict::Unproven { reason, .. } => match reason {
-            Reason::Tangency => 2,
-            Reason::Resolution => 3,
-            Reason::Collision => 4,
-        },
-    };
-    let at = |i: usize, j: usize, k: usize| severity(&report.verdicts[(i * nj + j) * nk + k]);
-    let mut written = Vec::new();
-    let x = PlotAxis {
-        label: "gap to the follower (m)",
-        coords: &gaps,
-    };
-    let y = PlotAxis {
-        label: "follower speed (m/s)",
-        coords: &speeds,
-    };
-    for &ve in ego_speeds {
-        let a = table.axis(2);
-        let k = a.partition_point(|&b| b <= ve).clamp(1, nk) - 1;
-        let title = format!(
-            "verify: rear cells at ego speeds {:.2}-{:.2} m/s",
-            a[k],
-            a[k + 1]
-        );
-        let path = dir.join(format!("verdicts-ego-{:.0}.png", a[k]));
-        let cell = |i: usize, j: usize| Some(at(i, j, k));
-        draw_cell_map(
-            &path,
-            &CellMap {
-                title: &title,
-                x: PlotAxis { ..x },
-                y: PlotAxis { ..y },
-                cell: &cell,
-                legend: &legend,
-                curves: &[],
-                frame: None,
-            },
-        )?;
-        written.push(path);
-    }
-    // Over every ego speed: an unproven cell at any ego speed shows its reason; otherwise the
-    // column says whether it is certified (and proven) at every ego speed, at some, or at none
-    // (issue 22: a "worst" map that left the uncertified cells out looked all proven).
-    let title = "verify: (gap, follower speed) columns over every ego speed".to_string();
-    let path = dir.join("verdicts-worst.png");
-    let over_speeds: [(&str, RGBColor); 6] = [
-        ("certified at no ego speed", RGBColor(225, 225, 225)),
-        (
-            "proven at some ego speeds, not certified at the others",
-            RGBColor(160, 205, 160),
-        ),
-        ("proven at every ego speed", RGBColor(40, 120, 40)),
-        legend[2],
-        legend[3],
-        legend[4],
-    ];
-    let cell = |i: usize, j: usize| {
-        let worst = (0..nk).map(|k| at(i, j, k)).max().unwrap_or(0);
-        if worst >= 2 {
-            return Some(worst + 1);
-        }
-        let proven = (0..nk).filter(|&k| at(i, j, k) == 1).count();
-        Some(match proven {
-            0 => 0,
-            p if p == nk => 2,
-            _ => 1,
-        })
-    };
-    draw_cell_map(
-        &path,
-        &CellMap {
-            title: &title,
-            x,
-            y,
-            cell: &cell,
-            legend: &over_speeds,
-            curves: &[],
-            frame: None,
-        },
-    )?;
-    written.push(path);
-    Ok(written)
 }

@@ -1,0 +1,119 @@
+//! The verdicts drawn on `(gap, follower speed)` slices.
+
+use super::table::RearTable;
+use super::{Reason, Report, Verdict};
+use crate::error::SolverError;
+
+/// Draws the verdicts on `(gap_follower, follower_speed)` cells: one slice per ego speed in
+/// `ego_speeds` (the cell holding it), and the worst verdict over every ego speed.
+pub fn plot(
+    table: &RearTable,
+    report: &Report,
+    dir: &std::path::Path,
+    ego_speeds: &[f64],
+    gap_limit: f64,
+) -> Result<Vec<std::path::PathBuf>, SolverError> {
+    use crate::pipeline::output::{draw_cell_map, CellMap, PlotAxis};
+    use plotters::style::RGBColor;
+    let [ni, nj, nk] = table.cells();
+    let centre =
+        |a: &[f64], n: usize| -> Vec<f64> { (0..n).map(|i| 0.5 * (a[i] + a[i + 1])).collect() };
+    let gaps: Vec<f64> = centre(table.axis(0), ni)
+        .into_iter()
+        .take_while(|&g| g <= gap_limit)
+        .collect();
+    let speeds = centre(table.axis(1), nj);
+    // Severity order: not certified, proven, tangency, resolution, collision.
+    let legend: [(&str, RGBColor); 5] = [
+        ("not certified", RGBColor(225, 225, 225)),
+        ("proven", RGBColor(90, 170, 90)),
+        ("unproven: tangency", RGBColor(245, 160, 40)),
+        ("unproven: resolution", RGBColor(200, 40, 40)),
+        ("unproven: collision", RGBColor(90, 0, 90)),
+    ];
+    let severity = |v: &Verdict| match v {
+        Verdict::NotCertified => 0,
+        Verdict::Proven | Verdict::ProvenAtStandstill => 1,
+        Verdict::Unproven { reason, .. } => match reason {
+            Reason::Tangency => 2,
+            Reason::Resolution => 3,
+            Reason::Collision => 4,
+        },
+    };
+    let at = |i: usize, j: usize, k: usize| severity(&report.verdicts[(i * nj + j) * nk + k]);
+    let mut written = Vec::new();
+    let x = PlotAxis {
+        label: "gap to the follower (m)",
+        coords: &gaps,
+    };
+    let y = PlotAxis {
+        label: "follower speed (m/s)",
+        coords: &speeds,
+    };
+    for &ve in ego_speeds {
+        let a = table.axis(2);
+        let k = a.partition_point(|&b| b <= ve).clamp(1, nk) - 1;
+        let title = format!(
+            "verify: rear cells at ego speeds {:.2}-{:.2} m/s",
+            a[k],
+            a[k + 1]
+        );
+        let path = dir.join(format!("verdicts-ego-{:.0}.png", a[k]));
+        let cell = |i: usize, j: usize| Some(at(i, j, k));
+        draw_cell_map(
+            &path,
+            &CellMap {
+                title: &title,
+                x: PlotAxis { ..x },
+                y: PlotAxis { ..y },
+                cell: &cell,
+                legend: &legend,
+                curves: &[],
+                frame: None,
+            },
+        )?;
+        written.push(path);
+    }
+    // Over every ego speed: an unproven cell at any ego speed shows its reason; otherwise the
+    // column says whether it is certified (and proven) at every ego speed, at some, or at none
+    // (issue 22: a "worst" map that left the uncertified cells out looked all proven).
+    let title = "verify: (gap, follower speed) columns over every ego speed".to_string();
+    let path = dir.join("verdicts-worst.png");
+    let over_speeds: [(&str, RGBColor); 6] = [
+        ("certified at no ego speed", RGBColor(225, 225, 225)),
+        (
+            "proven at some ego speeds, not certified at the others",
+            RGBColor(160, 205, 160),
+        ),
+        ("proven at every ego speed", RGBColor(40, 120, 40)),
+        legend[2],
+        legend[3],
+        legend[4],
+    ];
+    let cell = |i: usize, j: usize| {
+        let worst = (0..nk).map(|k| at(i, j, k)).max().unwrap_or(0);
+        if worst >= 2 {
+            return Some(worst + 1);
+        }
+        let proven = (0..nk).filter(|&k| at(i, j, k) == 1).count();
+        Some(match proven {
+            0 => 0,
+            p if p == nk => 2,
+            _ => 1,
+        })
+    };
+    draw_cell_map(
+        &path,
+        &CellMap {
+            title: &title,
+            x,
+            y,
+            cell: &cell,
+            legend: &over_speeds,
+            curves: &[],
+            frame: None,
+        },
+    )?;
+    written.push(path);
+    Ok(written)
+}
