@@ -249,12 +249,23 @@ mod tests {
         let dt = 1e-4;
         let (mut g, mut vl, mut ve, mut t) = (gap, vl, ve, 0.0);
         let mut least = g;
-        while vl > 0.0 || ve > 0.0 {
+        // Both cars at rest end it only once the ego's acceleration can no longer be positive:
+        // after the response, and after the ramp has fallen through zero (a ramp from a positive
+        // reference moves an ego at rest).
+        let ramp_up = if m.jerk.is_finite() {
+            f64::from(m.ramp_from.max(0.0)) / f64::from(m.jerk)
+        } else {
+            0.0
+        };
+        let moving_until = f64::from(m.response_time) + ramp_up;
+        while vl > 0.0 || ve > 0.0 || t <= moving_until {
             let beta = f64::from(m.ego_braking);
-            let ae = if t < f64::from(m.response_time) {
+            // The acceleration at the step's middle: exact over a step of the ramp.
+            let mid = t + 0.5 * dt;
+            let ae = if mid < f64::from(m.response_time) {
                 f64::from(m.response_acceleration)
             } else if m.jerk.is_finite() {
-                let s = t - f64::from(m.response_time);
+                let s = mid - f64::from(m.response_time);
                 (f64::from(m.ramp_from) - f64::from(m.jerk) * s).max(-beta)
             } else {
                 -beta
