@@ -89,7 +89,7 @@ class TableAgainstPurePython(unittest.TestCase):
         self.assertEqual(len(native), os.path.getsize(DEFAULT_TABLE))
         bound = header["error_bound"]
         self.assertEqual(bits(native.error_bound), bits(f32(bound["quantization"] + bound["interpolation"])))
-        self.assertEqual(hjacc.FORMAT_VERSION, 3)
+        self.assertEqual(hjacc.FORMAT_VERSION, 4)
 
     def test_corrupt_tables_and_bad_states_raise(self):
         with open(DEFAULT_TABLE, "rb") as f:

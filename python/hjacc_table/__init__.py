@@ -1,4 +1,4 @@
-"""Reads hjacc safety tables (``table.bin``, format version 3) in Python.
+"""Reads hjacc safety tables (``table.bin``, format version 4) in Python.
 
 The format is specified byte by byte in ``table-format/README.md``; this reader follows it
 and answers exactly as the Rust reader (``table_format::Table``) does, to the last bit:
@@ -22,7 +22,7 @@ import zlib
 __all__ = ["Table", "TableError", "MAGIC", "FORMAT_VERSION"]
 
 MAGIC = b"HJTB"
-FORMAT_VERSION = 3
+FORMAT_VERSION = 4
 _PREAMBLE = 8
 _CRC = 4
 
@@ -218,6 +218,14 @@ class Table:
                 "status": "Converged" if status == 1 else "NotConverged",
                 "tolerance": c.f32(),
                 "residual": c.f32(),
+            }
+        elif status == 3:
+            self.horizon = {
+                "seconds": seconds,
+                "status": "Proven",
+                "residual": c.f32(),
+                "drift": c.f32(),
+                "stretch": c.f32(),
             }
         else:
             raise TableError("unknown horizon status %d" % status)

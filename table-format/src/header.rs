@@ -403,6 +403,18 @@ pub enum HorizonStatus {
         /// The last `max |dV/dt|` measured.
         residual: f32,
     },
+    /// Stopped at the first iterate `solver verify` proved invariant (its record is in
+    /// [`Header::verification`]), before the value reached a fixed point: the value is a
+    /// certificate, not the stationary value, and it may lie above the latter. Since format
+    /// version 4.
+    Proven {
+        /// The largest change of a node value in the last iteration, value units.
+        residual: f32,
+        /// The largest change of a node value over the last stretch of the solve, value units.
+        drift: f32,
+        /// The stretch's length, s of horizon.
+        stretch: f32,
+    },
 }
 
 /// The time the value function was propagated for, and whether it converged.

@@ -402,11 +402,18 @@ fn specific_corruptions_name_their_cause() {
         Table::parse(&version_two).unwrap_err(),
         Error::UnsupportedVersion { found: 2 }
     );
+    // A version-3 table (no Proven horizon status) likewise.
+    let mut version_three = bytes.clone();
+    version_three[4] = 3;
+    assert_eq!(
+        Table::parse(&version_three).unwrap_err(),
+        Error::UnsupportedVersion { found: 3 }
+    );
     let mut future = bytes.clone();
-    future[4] = 4;
+    future[4] = 5;
     assert_eq!(
         Table::parse(&future).unwrap_err(),
-        Error::UnsupportedVersion { found: 4 }
+        Error::UnsupportedVersion { found: 5 }
     );
     let mut payload_flip = bytes.clone();
     let last = payload_flip.len() - 5;
