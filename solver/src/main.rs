@@ -12,7 +12,7 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use solver::config::{builtin, builtin_rear, Config};
-use solver::rear::{run_rear, RearConfig};
+use solver::rear::{run_rear_with, RearConfig, RearEvent, RearStopped};
 use solver::run::{run, Event};
 
 /// HJI safety analysis of car following, compiled into firmware tables.
@@ -57,6 +57,17 @@ struct VerifyArgs {
     /// How many times a cell may be halved (axes in turn).
     #[arg(long, default_value_t = 21)]
     depth: u32,
+    /// Stop after this many seconds; the cells not checked by then are reported and the
+    /// table's record is incomplete (0: no limit).
+    #[arg(long, default_value_t = 600.0)]
+    budget_seconds: f64,
+    /// Stop once this many certified cells are found unproven, naming them (0: no limit).
+    #[arg(long, default_value_t = 1000)]
+    max_unproven: usize,
+    /// Search every sub-box of an unproven cell for its largest deficit (slower on a table
+    /// with many unproven cells; the verdicts are the same).
+    #[arg(long)]
+    exhaustive: bool,
     /// Also write the table with the proof's record in its header to FILE (the firmware
     /// refuses a split table without a complete one).
     #[arg(long, value_name = "FILE")]
@@ -90,6 +101,65 @@ fn ensure_writable(out: &std::path::Path) -> Result<()> {
     Ok(())
 }
 
+/// A progress display that is never silent: a bar on a terminal, and otherwise (CI, a pipe, a
+/// notebook) a plain line on stderr at most every ten seconds, so that an hour-long run shows
+/// that it is alive.
+struct Progress {
+    bar: ProgressBar,
+    plain: Option<std::sync::Mutex<std::time::Instant>>,
+    label: String,
+}
+
+impl Progress {
+    fn new(quiet: bool, label: &str) -> Self {
+        use std::io::IsTerminal;
+        let terminal = std::io::stderr().is_terminal();
+        let bar = if quiet || !terminal {
+            ProgressBar::hidden()
+        } else {
+            ProgressBar::new(1000)
+        };
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{prefix:>12} [{bar:40}] {msg} ({elapsed_precise}, eta {eta})",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        bar.set_prefix(label.to_string());
+        Progress {
+            bar,
+            plain: (!quiet && !terminal).then(|| std::sync::Mutex::new(std::time::Instant::now())),
+            label: label.to_string(),
+        }
+    }
+
+    /// Starts over with a new label.
+    fn restart(&mut self, label: &str) {
+        self.bar.reset();
+        self.bar.set_prefix(label.to_string());
+        self.label = label.to_string();
+    }
+
+    /// `fraction` of the work is done; `message` says what.
+    fn set(&self, fraction: f64, message: &str) {
+        self.bar
+            .set_position((1000.0 * fraction.clamp(0.0, 1.0)) as u64);
+        self.bar.set_message(message.to_string());
+        if let Some(last) = &self.plain {
+            let mut last = last.lock().unwrap_or_else(|e| e.into_inner());
+            if last.elapsed().as_secs_f64() >= 10.0 {
+                *last = std::time::Instant::now();
+                eprintln!("{}: {:.0}% ({message})", self.label, 100.0 * fraction);
+            }
+        }
+    }
+
+    fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
 /// Runs [`real_main`]; a user error (a bad config, an unwritable folder, an unproven table) is
 /// one clean message on stderr and exit code 1, with or without `RUST_BACKTRACE` (anyhow's
 /// `Debug` output would print a backtrace of this function, which tells a user nothing).
@@ -107,7 +177,7 @@ fn real_main() -> Result<()> {
     let args = Args::parse();
     ensure_writable(&args.out)?;
     if let Some(Command::Verify(v)) = &args.command {
-        return run_verify(v, &args.out);
+        return run_verify(v, &args.out, args.quiet);
     }
     let defaults = args.rears.is_empty() && args.configs.is_empty();
     let mut rears: Vec<(String, String)> = args
@@ -139,36 +209,52 @@ fn real_main() -> Result<()> {
             anyhow::anyhow!("in {source}{hint}: {e}")
         })?;
         eprintln!("== {} ({source})", config.name);
-        let s = run_rear(&config, &args.out)?;
+        let mut progress = Progress::new(args.quiet, "rear");
+        let max = config.solve.max_iterations;
+        let s = run_rear_with(&config, &args.out, &mut |event| match event {
+            RearEvent::Iteration(k, residual) => progress.set(
+                k as f64 / max as f64,
+                &format!("iteration {k}, largest change {residual:.2e} m"),
+            ),
+            RearEvent::ProofStarted(k) => progress.restart(&format!("proof at {k}")),
+            RearEvent::ProofProgress(done, total) => progress.set(
+                done as f64 / total as f64,
+                &format!("{done} of {total} cells"),
+            ),
+            RearEvent::ProofFinished(_) => progress.restart("rear"),
+        })?;
+        progress.finish();
         println!(
-            "{}: {} x {} x {} breakpoints, {} iterations ({}), residual {:.1e} m, {:.1} s; \
-             over the last tenth at most {:.4} m per node, the safe set on at most {:.3}% of \
-             the nodes; plateau {:.3} m; beyond the grid {:.3} m; table {} bytes (quantization \
-             {:.4} m)",
+            "{}: {} x {} x {} breakpoints, {} iterations ({} s of horizon), stopped: {}; \
+             {:.1} s, {} attempts at the proof; over the last {} iterations the value moved \
+             {:.4} m at most (the plateau {:.4} m); plateau {:.3} m; beyond the grid {:.3} m; \
+             table {} bytes (quantization {:.4} m)",
             s.name,
             s.points[0],
             s.points[1],
             s.points[2],
             s.iterations,
-            if s.converged {
-                "converged"
-            } else {
-                "not converged"
+            s.horizon_s,
+            match s.stopped {
+                RearStopped::Proven => "proven",
+                RearStopped::Residual => "largest change below the tolerance",
+                RearStopped::MaxIterations => "max_iterations",
             },
-            s.residual,
-            s.solve_seconds,
-            s.change_over_last_tenth,
-            100.0 * s.safe_set_change_bound,
-            s.plateau,
-            s.top_face_min,
+            s.solve_s,
+            s.proof_attempts.len(),
+            s.drift.iterations,
+            s.drift.max_change_m,
+            s.drift.plateau_change_m,
+            s.plateau_m,
+            s.beyond_grid_m,
             s.table_bytes,
-            s.quantization_error
+            s.quantization_error_m
         );
         println!(
             "  verify: {} of {} certified cells proven ({:.1} s){}",
             s.verification.proven_cells,
             s.verification.certified_cells,
-            s.verify_seconds,
+            s.verify_s,
             if s.verification.is_complete() {
                 ""
             } else {
@@ -215,32 +301,20 @@ fn run_configs(args: &Args) -> Result<()> {
     };
     for (source, config) in &configs {
         eprintln!("== {} ({source})", config.name);
-        let bar = if args.quiet {
-            ProgressBar::hidden()
-        } else {
-            ProgressBar::new(1000)
-        };
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{prefix:>12} [{bar:40}] {msg} ({elapsed_precise}, eta {eta})",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
-        );
+        let mut progress = Progress::new(args.quiet, "solve");
         let mut limit = 1.0;
         let summary = run(config, &args.out, &mut |event| match event {
             Event::SolveStarted(label, until) => {
                 limit = until;
-                bar.reset();
-                bar.set_prefix(label.to_string());
+                progress.restart(label);
             }
-            Event::Step(t, residual) => {
-                bar.set_position((1000.0 * t / limit) as u64);
-                bar.set_message(format!("t = {t:6.2} s, max|dV/dt| = {residual:.2e}"));
-            }
+            Event::Step(t, residual) => progress.set(
+                t / limit,
+                &format!("t = {t:6.2} s of {limit} s, max|dV/dt| = {residual:.2e}"),
+            ),
             Event::SolveFinished => {}
         })?;
-        bar.finish_and_clear();
+        progress.finish();
         println!(
             "{}: {} steps to t = {:.2} s ({}), solve {:.1} s; safe share {:.3} (trusted box {:.3})",
             summary.name,
@@ -275,20 +349,39 @@ fn run_configs(args: &Args) -> Result<()> {
 
 /// `verify`: reads the table, checks every cell, writes the report, and fails (non-zero exit)
 /// when a certified cell is unproven.
-fn run_verify(v: &VerifyArgs, out: &std::path::Path) -> Result<()> {
+fn run_verify(v: &VerifyArgs, out: &std::path::Path, quiet: bool) -> Result<()> {
     use solver::verify::Settings;
     if v.period_ms.is_empty() || v.period_ms.iter().any(|p| !(p.is_finite() && *p > 0.0)) {
         anyhow::bail!("--period-ms: every period must be a positive number of milliseconds");
+    }
+    if !(v.budget_seconds.is_finite() && v.budget_seconds >= 0.0) {
+        anyhow::bail!(
+            "--budget-seconds: must be a finite number of seconds, 0 for no limit (got {})",
+            v.budget_seconds
+        );
     }
     let settings = Settings {
         periods: v.period_ms.iter().map(|p| p * 1e-3).collect(),
         rear_margin: v.rear_margin,
         max_depth: v.depth,
+        budget: solver::verify::Budget {
+            seconds: (v.budget_seconds > 0.0).then_some(v.budget_seconds),
+            unproven_cells: (v.max_unproven > 0).then_some(v.max_unproven),
+        },
+        exhaustive: v.exhaustive,
     };
     let bytes =
         std::fs::read(&v.table).with_context(|| format!("reading {}", v.table.display()))?;
-    let (rear, report, recorded) = solver::verify::verify_bytes(&bytes, &settings)
+    let progress = Progress::new(quiet, "verify");
+    let (rear, report, recorded) =
+        solver::verify::verify_bytes_with_progress(&bytes, &settings, &[], &mut |done, total| {
+            progress.set(
+                done as f64 / total as f64,
+                &format!("{done} of {total} cells"),
+            )
+        })
         .with_context(|| v.table.display().to_string())?;
+    progress.finish();
     let stem = v
         .table
         .file_stem()
@@ -300,7 +393,7 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path) -> Result<()> {
     solver::verify::plot(&rear, &report, &dir, &[0.1, 5.0, 15.0, 30.0], f64::INFINITY)?;
     println!(
         "{}: periods {:?} ms, level {:.4} m: {} of {} certified cells proven ({:.3}%; {} with the standstill lemma); \
-         unproven: {} tangency, {} resolution, {} collision; deficit at most {:.4} m; {:.1} s",
+         unproven: {} tangency, {} resolution, {} collision{}; deficit at most {:.4} m; {:.1} s",
         v.table.display(),
         v.period_ms,
         report.level,
@@ -311,6 +404,17 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path) -> Result<()> {
         report.unproven_by_reason.tangency,
         report.unproven_by_reason.resolution,
         report.unproven_by_reason.collision,
+        match report.stopped {
+            None => String::new(),
+            Some(why) => format!(
+                "; {} cells not checked: the budget ran out ({})",
+                report.unchecked,
+                match why {
+                    solver::verify::Stopped::Time => "--budget-seconds",
+                    solver::verify::Stopped::UnprovenCells => "--max-unproven",
+                }
+            ),
+        },
         report.dip,
         report.seconds
     );

@@ -1,7 +1,7 @@
-//! The rear-game pipeline: config -> sampled-data value -> version-2 table.
+//! The rear-game pipeline: config -> sampled-data value -> table -> proof.
 
-use solver::rear::{run_rear, RearConfig};
-use table_format::{Game, PolicyEncoding, Spacing, Table};
+use solver::rear::{run_rear, RearConfig, RearStopped};
+use table_format::{Game, HorizonStatus, PolicyEncoding, Spacing, Table};
 
 const SMALL: &str = r#"
 name = "rear-small"
@@ -21,16 +21,77 @@ ego_speed = { start = 0.0, pieces = [[1.0, 0.5], [10.0, 1.0]] }
 
 [solve]
 period = 0.2
+stop = "residual"
 tolerance = 1e-4
 max_iterations = 20000
 "#;
+
+/// The deployment's game and spacing, on speeds up to 10 m/s and gaps up to 30 m, with the
+/// follower pushed 0.2 m/s^2 beyond its model: a table `verify` proves after about 100
+/// iterations.
+const PROVABLE: &str = r#"
+name = "rear-provable"
+table_bits = 8
+
+[game]
+ego = { min = -3.5, max = 2.0 }
+leader = { min = -6.0, max = 2.0 }
+follower = { min = -6.0, max = 2.0 }
+time_gap = { min = 1.0, max = 2.0 }
+max_speed = 10.0
+follower_robustness = 0.2
+
+[grid]
+gap_follower = { start = -1.0, pieces = [[1.0, 0.25], [4.0, 0.25], [10.0, 0.5], [30.0, 1.0]] }
+follower_speed = { start = 0.0, pieces = [[1.0, 0.25], [10.0, 0.5]] }
+ego_speed = { start = 0.0, pieces = [[1.0, 0.25], [10.0, 0.5]] }
+
+[solve]
+period = 0.1
+tolerance = 1e-4
+max_iterations = 20000
+check_every = 20
+"#;
+
+/// The default stop: the first iterate `verify` proves is the table, its header says so, and
+/// every attempt before it failed.
+#[test]
+fn a_rear_run_stops_at_the_first_iterate_verify_proves() {
+    let config = RearConfig::from_toml(PROVABLE).unwrap();
+    let out = std::env::temp_dir().join(format!("hjacc-rear-proven-{}", std::process::id()));
+    let summary = run_rear(&config, &out).unwrap();
+    assert_eq!(summary.stopped, RearStopped::Proven, "{summary:?}");
+    let (last, before) = summary.proof_attempts.split_last().expect("attempts");
+    assert!(last.proven && last.iterations == summary.iterations);
+    assert!(
+        !before.is_empty() && before.iter().all(|a| !a.proven),
+        "{before:?}"
+    );
+    assert!(summary.verification.is_complete());
+    // The stop is not a fixed point, and the summary and the header say how far from one.
+    assert!(summary.drift.max_change_m > 0.0);
+    assert_eq!(summary.drift.iterations, 20);
+    let bytes = std::fs::read(out.join("rear-provable/table.bin")).unwrap();
+    let table = Table::parse(&bytes).unwrap();
+    let header = table.header();
+    assert_eq!(
+        header.horizon.status,
+        HorizonStatus::Proven {
+            residual: summary.residual_m,
+            drift: summary.drift.max_change_m,
+            stretch: summary.drift.horizon_s as f32,
+        }
+    );
+    assert_eq!(header.verification, Some(summary.verification));
+    std::fs::remove_dir_all(&out).ok();
+}
 
 #[test]
 fn a_rear_run_writes_a_table_that_reads_back_its_value() {
     let config = RearConfig::from_toml(SMALL).unwrap();
     let out = std::env::temp_dir().join(format!("hjacc-rear-{}", std::process::id()));
     let summary = run_rear(&config, &out).unwrap();
-    assert!(summary.converged, "{summary:?}");
+    assert_eq!(summary.stopped, RearStopped::Residual, "{summary:?}");
     let bytes = std::fs::read(out.join("rear-small/table.bin")).unwrap();
     let table = Table::parse(&bytes).unwrap();
     let h = table.header();
@@ -75,7 +136,11 @@ fn a_rear_run_writes_a_table_that_reads_back_its_value() {
         );
     }
     // The value never exceeds the constraint, and at rest the follower only closes to s0.
-    assert!(summary.plateau <= 2.0 + 1e-4, "plateau {}", summary.plateau);
+    assert!(
+        summary.plateau_m <= 2.0 + 1e-4,
+        "plateau {}",
+        summary.plateau_m
+    );
     std::fs::remove_dir_all(&out).ok();
 }
 
@@ -88,6 +153,8 @@ fn bad_rear_configs_name_the_key() {
         ("period = 0.2", "period = 0.0", "solve.period"),
         ("[[1.0, 0.5], [4.0, 0.5], [30.0, 1.0]]", "[[1.0, 0.5], [0.5, 0.5]]", "grid.gap_follower.pieces[1]"),
         ("table_bits = 16", "table_bits = 12", "table_bits"),
+        ("stop = \"residual\"", "stop = \"sometimes\"", "stop"),
+        ("max_iterations = 20000", "max_iterations = 20000\ncheck_every = 0", "solve.check_every"),
         ("max_speed = 10.0", "max_speed = 10.0\n[game.idm]\nmax_acceleration = 1.0\ncomfortable_deceleration = 1.5\ndesired_speed = 33.3\nexponent = 4\njam_distance = 0.0", "game.idm.jam_distance"),
     ];
     for (from, to, key) in cases {

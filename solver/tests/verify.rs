@@ -2,8 +2,8 @@
 //! and on the firmware's table.
 
 use solver::verify::{
-    travel, verify, verify_cell, Interval, RearModel, RearTable, Reason, Settings, StateBox,
-    Verdict,
+    travel, verify, verify_cell, verify_suspects_first, Budget, Interval, RearModel, RearTable,
+    Reason, Settings, StateBox, Stopped, Verdict,
 };
 
 /// A follower that always brakes at 6 m/s^2 (its clip is the single point -6) behind an ego
@@ -56,11 +56,15 @@ fn linear_table_with_gap_step(step: f64) -> RearTable {
     .expect("a valid table")
 }
 
+/// The checker on one period, searching every sub-box of an unproven cell (so that the
+/// reason reported is the worst one's, as these tests expect).
 fn settings(depth: u32) -> Settings {
     Settings {
         periods: vec![PERIOD],
         rear_margin: 0.0,
         max_depth: depth,
+        exhaustive: true,
+        ..Settings::default()
     }
 }
 
@@ -93,6 +97,7 @@ fn name(v: &Verdict) -> &'static str {
         Verdict::NotCertified => "not certified",
         Verdict::Proven | Verdict::ProvenAtStandstill => "proven",
         Verdict::Unproven { .. } => "unproven",
+        Verdict::Unchecked => "unchecked",
     }
 }
 
@@ -116,6 +121,101 @@ fn a_hand_made_table_is_proven_exactly_where_it_is_invariant() {
     }
     // Every kind occurs, so the comparison above means something.
     assert!(tally.iter().all(|&n| n > 0), "{tally:?}");
+}
+
+/// Stopping a cell's search at its first unproven sub-box (the default) gives every cell the
+/// verdict the exhaustive search gives.
+#[test]
+fn the_first_unproven_sub_box_decides_the_verdict() {
+    let table = linear_table();
+    let fast = Settings {
+        exhaustive: false,
+        ..settings(12)
+    };
+    let mut unproven = 0;
+    for i in 0..40 {
+        for j in 0..4 {
+            for k in 0..4 {
+                let cell = table.cell(i, j, k);
+                let a = verify_cell(&table, &cell, 0.0, &settings(12));
+                let b = verify_cell(&table, &cell, 0.0, &fast);
+                assert_eq!(name(&a), name(&b), "cell ({i}, {j}, {k})");
+                unproven += usize::from(name(&a) == "unproven");
+            }
+        }
+    }
+    assert!(unproven > 0);
+}
+
+/// A budget stops the check between chunks of cells: the cells not reached are unchecked,
+/// counted as certified and unproven, and the table's record is incomplete.
+#[test]
+fn a_budget_stops_the_check_and_leaves_the_record_incomplete() {
+    let table = linear_table();
+    let full = verify(&table, 0, &settings(12));
+    assert!(full.proven < full.certified && full.stopped.is_none() && full.unchecked == 0);
+    let after_one = verify(
+        &table,
+        0,
+        &Settings {
+            budget: Budget {
+                seconds: None,
+                unproven_cells: Some(1),
+            },
+            ..settings(12)
+        },
+    );
+    // The table is one chunk: the first unproven cell is found in it, and nothing is left.
+    assert_eq!(after_one.unchecked, 0);
+    let none = verify(
+        &table,
+        0,
+        &Settings {
+            budget: Budget {
+                seconds: Some(0.0),
+                unproven_cells: None,
+            },
+            ..settings(12)
+        },
+    );
+    assert_eq!(none.stopped, Some(Stopped::Time));
+    assert_eq!(none.unchecked, none.cells);
+    assert_eq!((none.certified, none.proven), (none.cells, 0));
+    assert!(!none.record().is_complete());
+    assert!(none
+        .verdicts
+        .iter()
+        .all(|v| matches!(v, Verdict::Unchecked)));
+}
+
+/// The suspects go first: the verdicts are the same, and a budget of one unproven cell is
+/// spent on a suspect that fails, before any other cell is checked.
+#[test]
+fn suspected_cells_are_checked_first() {
+    let table = linear_table();
+    let full = verify(&table, 0, &settings(12));
+    let [_, nj, nk] = table.cells();
+    let flat = |c: &solver::verify::UnprovenCell| (c.index[0] * nj + c.index[1]) * nk + c.index[2];
+    let last = flat(full.unproven.last().expect("an unproven cell"));
+    let all = verify_suspects_first(&table, 0, &settings(12), &[last], &mut |_, _| {});
+    assert_eq!(all.verdicts, full.verdicts);
+    let fast = verify_suspects_first(
+        &table,
+        0,
+        &Settings {
+            budget: Budget {
+                seconds: None,
+                unproven_cells: Some(1),
+            },
+            ..settings(12)
+        },
+        &[last],
+        &mut |_, _| {},
+    );
+    assert_eq!(fast.stopped, Some(Stopped::UnprovenCells));
+    assert_eq!(fast.unchecked, fast.cells - 1);
+    assert_eq!(fast.unproven.len(), 1);
+    assert_eq!(flat(&fast.unproven[0]), last);
 }
 
 #[test]
@@ -347,6 +447,42 @@ fn the_firmware_table_is_proven_in_every_certified_cell() {
     assert!(report.proven_at_standstill > 0);
 }
 
+/// A table that cannot be proven fails fast: with a budget of one unproven cell, the check
+/// stops after the chunk that holds it, names it, and leaves the rest unchecked.
+#[test]
+fn an_unprovable_table_fails_fast_naming_its_cells() {
+    let bytes = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../firmware/tables/default.bin"
+    ))
+    .expect("the committed table");
+    let table = table_format::Table::parse(&bytes).expect("it parses");
+    let mut rear = RearTable::from_table(&table).expect("a split table");
+    // Certify every state at the grid's smallest gaps: a collision is a period away.
+    for i in 0..6 {
+        for j in 0..rear.axis(1).len() {
+            for k in 0..rear.axis(2).len() {
+                rear.set_node(i, j, k, 1.0);
+            }
+        }
+    }
+    let report = verify(
+        &rear,
+        0,
+        &Settings {
+            budget: Budget {
+                seconds: None,
+                unproven_cells: Some(1),
+            },
+            ..Settings::default()
+        },
+    );
+    assert_eq!(report.stopped, Some(Stopped::UnprovenCells));
+    assert!(!report.unproven.is_empty());
+    assert!(report.unchecked > report.cells / 2, "{}", report.unchecked);
+    assert!(!report.record().is_complete());
+}
+
 #[test]
 fn the_standstill_lemma_proves_a_braking_follower_and_not_one_too_fast_to_stop() {
     // The hand-made table on gaps 0.125 m apart: the plane gap = 0.3 cuts the cell
@@ -382,6 +518,7 @@ fn the_command_writes_its_report_and_fails_cleanly_on_unproven_cells() {
     );
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_solver"))
         .args([
+            "--quiet",
             "--out",
             out.to_str().expect("utf-8"),
             "verify",
@@ -481,6 +618,7 @@ fn the_samples_between_the_proof_periods_are_bounded() {
         periods: vec![0.02, 1.0],
         rear_margin: 0.0,
         max_depth: 9,
+        ..Settings::default()
     };
     let slow = table.cell(4, 0, 0);
     assert_eq!(slow.gap, Interval { lo: 1.0, hi: 1.25 });

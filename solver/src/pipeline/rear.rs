@@ -17,7 +17,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 use table_format::{Axis, Bounds, Game, Horizon, HorizonStatus, Spacing, TableContents, ValueBits};
 
-use crate::engine::semi_lagrangian::{iterate, Breakpoints};
+use crate::engine::semi_lagrangian::{Breakpoints, Iteration};
 use crate::error::{ConfigError, SolverError};
 use crate::games::{Accel, Idm, RearIdm};
 use crate::pipeline::config::{
@@ -25,7 +25,7 @@ use crate::pipeline::config::{
     SAMPLED_BYTES_PER_NODE,
 };
 use crate::pipeline::output;
-use crate::proof::verify::{verify_bytes, Settings as VerifySettings};
+use crate::proof::verify::{verify_bytes_with_progress, Budget, Settings as VerifySettings};
 
 /// A breakpoint axis: from `start`, uniform pieces `[end, spacing]` in turn.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -84,10 +84,46 @@ pub struct RearGridConfig {
 pub struct RearSolveConfig {
     /// The period the inputs are held, s.
     pub period: f64,
-    /// Stop when no node changes by more than this in one iteration, m.
+    /// When the iteration stops (default [`RearStop::Proven`]).
+    #[serde(default)]
+    pub stop: RearStop,
+    /// With [`RearStop::Residual`]: stop when no node changes by more than this in one
+    /// iteration, m. With [`RearStop::Proven`]: give up when that happens and the table is
+    /// still not proven.
     pub tolerance: f64,
-    /// Give up after this many iterations (the table then says "not converged").
+    /// Give up after this many iterations.
     pub max_iterations: usize,
+    /// With [`RearStop::Proven`]: iterations between two attempts at the proof (default 25);
+    /// the gap grows to a tenth of the iterations done, so that an unprovable config costs a
+    /// few dozen failed attempts, each stopped at its first unproven cell.
+    #[serde(default = "default_check_every")]
+    pub check_every: usize,
+}
+
+fn default_check_every() -> usize {
+    25
+}
+
+/// When the rear iteration stops.
+///
+/// The iteration lowers the value monotonically from the constraint, `W_0 = l >= W_1 >= ...`,
+/// towards the sampled-data game's fixed point. On the deployed grid that fixed point is not
+/// reached in any useful time: the plateau `W ~ s0` hangs on the rest points, where
+/// interpolation erodes it by a fraction of a millimetre per iteration for thousands of
+/// iterations (`semi_lagrangian::Iteration`). What the firmware needs is not the fixed point
+/// but a table `verify` proves invariant, and every iterate is a candidate: the first one the
+/// proof closes on is also the highest one, so the one with the largest certified set.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RearStop {
+    /// Stop at the first iterate `verify` proves (every certified cell), attempted every
+    /// `check_every` iterations.
+    #[default]
+    Proven,
+    /// Stop when the largest change of one iteration is below `tolerance` (a stop that does
+    /// not bound the remaining change: the value may go on drifting by the same amount for
+    /// thousands of iterations).
+    Residual,
 }
 
 /// A rear-game run.
@@ -234,6 +270,7 @@ impl RearConfig {
         )?;
         check(s.tolerance > 0.0, "solve.tolerance", "must be > 0")?;
         check(s.max_iterations > 0, "solve.max_iterations", "must be > 0")?;
+        check(s.check_every > 0, "solve.check_every", "must be > 0")?;
         check(
             self.table_bits == 8 || self.table_bits == 16,
             "table_bits",
@@ -285,7 +322,8 @@ impl RearConfig {
     }
 }
 
-/// What a rear run measured.
+/// What a rear run measured, written as `summary.json`. Keys end in their unit (`_m`, `_s`,
+/// `_m_per_s`) where they have one.
 #[derive(Debug, Clone, Serialize)]
 pub struct RearSummary {
     /// The config's name.
@@ -294,61 +332,298 @@ pub struct RearSummary {
     pub config: RearConfig,
     /// Breakpoints per axis.
     pub points: [usize; 3],
-    /// Iterations done.
+    /// Iterations done (each one period of the game).
     pub iterations: usize,
-    /// Whether the largest change per iteration fell below the tolerance.
-    pub converged: bool,
-    /// The largest change in the last iteration, m.
-    pub residual: f32,
-    /// A bound on how much any node changed over the last tenth of the iterations: the sum of
-    /// the per-iteration largest changes, m.
-    pub change_over_last_tenth: f32,
-    /// A bound on how much the safe set changed over the last tenth of the iterations: the
-    /// share of nodes within `change_over_last_tenth` of zero (no other node can have changed
-    /// sign).
-    pub safe_set_change_bound: f64,
-    /// Wall time of the iteration, s.
-    pub solve_seconds: f64,
-    /// The value at rest with the follower 10 m back (the plateau `s0` is its exact value).
-    pub plateau: f32,
-    /// Per equal speed of both cars, the smallest gap with `W` above 0.5 m (m; `None`: none).
+    /// Why the iteration stopped.
+    pub stopped: RearStopped,
+    /// The horizon the iterations cover, `iterations x period`, s.
+    pub horizon_s: f64,
+    /// The largest change of a node in the last iteration, m.
+    pub residual_m: f32,
+    /// How far the value still moved over the last stretch of the solve.
+    pub drift: Drift,
+    /// The attempts at the proof on the way (with [`RearStop::Proven`]).
+    pub proof_attempts: Vec<ProofAttempt>,
+    /// Wall time of the iterations, the failed attempts at the proof included, s.
+    pub solve_s: f64,
+    /// The value at rest with the follower 10 m back, m (the exact value is the jam distance
+    /// `s0`).
+    pub plateau_m: f32,
+    /// Per equal speed of both cars (m/s), the smallest gap with `W` above 0.5 m (m; `None`:
+    /// none).
     pub smallest_gap_at_equal_speeds: Vec<(f32, Option<f32>)>,
-    /// The smallest value on the grid's top `gap_follower` face, m. A follower farther back
+    /// The smallest value on the grid's last `gap_follower` face, m. A follower farther back
     /// than the grid is safe until it crosses that face, where its value is at least this: the
     /// firmware takes it as the value of a follower beyond the grid (or of none).
-    pub top_face_min: f32,
+    pub beyond_grid_m: f32,
     /// Share of nodes with `W > 0`.
     pub safe_share: f64,
     /// Table size, bytes.
     pub table_bytes: usize,
     /// The table's quantization error bound, m.
-    pub quantization_error: f32,
+    pub quantization_error_m: f32,
     /// What `verify` proved of the table (default settings), recorded in its header.
     pub verification: table_format::Verification,
-    /// Wall time of `verify`, s.
-    pub verify_seconds: f64,
+    /// Wall time of the proof of the table written, s.
+    pub verify_s: f64,
 }
 
-/// Solves a rear config and writes `out/<name>/`: `table.bin`, `value.npy`, `summary.json`.
+/// Why the rear iteration stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RearStopped {
+    /// `verify` proved the iterate: every certified cell.
+    Proven,
+    /// The largest change of one iteration fell below the tolerance (with [`RearStop::Proven`]:
+    /// and the table was still not proven).
+    Residual,
+    /// `max_iterations` passed.
+    MaxIterations,
+}
+
+/// How much the value still moved at the end of the solve: between the iterate at the start of
+/// the last stretch (the last attempt at the proof before the stop, or a tenth of the
+/// iterations back) and the one written.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Drift {
+    /// Iterations in the stretch.
+    pub iterations: usize,
+    /// The stretch's length in horizon, s.
+    pub horizon_s: f64,
+    /// The largest change of any node over the stretch, m.
+    pub max_change_m: f32,
+    /// The plateau's change over the stretch, m.
+    pub plateau_change_m: f32,
+    /// The largest change of a node per second of horizon over the stretch, m/s.
+    pub max_rate_m_per_s: f64,
+    /// Nodes whose sign changed over the stretch (safe to unsafe).
+    pub safe_nodes_lost: usize,
+}
+
+/// One attempt at the proof during the solve.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ProofAttempt {
+    /// Iterations done at the attempt.
+    pub iterations: usize,
+    /// Whether `verify` proved every certified cell.
+    pub proven: bool,
+    /// Wall time of the attempt, s (an attempt that fails stops at its first unproven cell).
+    pub seconds: f64,
+}
+
+/// What a rear run reports while it runs.
+#[derive(Debug, Clone, Copy)]
+pub enum RearEvent {
+    /// An iteration finished: iterations done, the largest change in it (m).
+    Iteration(usize, f32),
+    /// An attempt at the proof starts after this many iterations.
+    ProofStarted(usize),
+    /// Progress of the proof: cells checked, cells.
+    ProofProgress(usize, usize),
+    /// An attempt at the proof finished.
+    ProofFinished(ProofAttempt),
+}
+
+/// Solves a rear config and writes `out/<name>/`: `table.bin`, `value.npy`, `axes.json`,
+/// `summary.json`, `verify.json`.
 pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverError> {
+    run_rear_with(config, out, &mut |_| {})
+}
+
+/// [`run_rear`], reporting what it does to `events`.
+pub fn run_rear_with(
+    config: &RearConfig,
+    out: &Path,
+    events: &mut dyn FnMut(RearEvent),
+) -> Result<RearSummary, SolverError> {
     config.validate()?;
     let grid = config.grid()?;
     let game = config.game();
     let s = config.solve;
+    let plateau_at = |values: &[f32]| grid.interpolate(values, &[10.0, 0.0, 0.0]);
     let t0 = Instant::now();
-    let mut history: Vec<f32> = Vec::new();
-    let result = iterate(
-        &game,
-        &grid,
-        s.period as f32,
-        s.tolerance as f32,
-        s.max_iterations,
-        |_, residual, _| history.push(residual),
-    );
-    let solve_seconds = t0.elapsed().as_secs_f64();
-    let tail = history.len() / 10;
-    let change_over_last_tenth = history[history.len() - tail.max(1)..].iter().copied().sum();
+    let mut iteration = Iteration::new(&game, &grid, s.period as f32);
+    let mut residual;
+    let mut attempts = Vec::new();
+    // The iterate at the start of the last stretch, for the drift: the one at the last attempt
+    // at the proof (or, with the residual stop, a tenth of the iterations back).
+    let mut stretch: (usize, Vec<f32>) = (0, iteration.values().to_vec());
+    let mut next_check = s.check_every;
+    let mut proven: Option<(Proof, Drift)> = None;
+    // The cells earlier attempts found unproven, checked first by the next attempt: a table
+    // that fails where an earlier one failed fails at once.
+    let mut suspects: Vec<usize> = Vec::new();
+    let stopped = loop {
+        residual = iteration.sweep();
+        let k = iteration.sweeps();
+        events(RearEvent::Iteration(k, residual));
+        let settled = residual < s.tolerance as f32;
+        let last = settled || k >= s.max_iterations;
+        if k >= next_check || last {
+            if s.stop == RearStop::Proven {
+                events(RearEvent::ProofStarted(k));
+                let drift = drift(&stretch, iteration.values(), k, s.period, &plateau_at);
+                let status = HorizonStatus::Proven {
+                    residual,
+                    drift: drift.max_change_m,
+                    stretch: drift.horizon_s as f32,
+                };
+                // An attempt stops at its first unproven cell; one that passes has checked
+                // every cell, as the full proof does, and is the proof.
+                let attempt = prove(
+                    config,
+                    &grid,
+                    iteration.values(),
+                    (k, status),
+                    &suspects,
+                    events,
+                    true,
+                )?;
+                let [_, nj, nk] = [0, grid.axis(1).len() - 1, grid.axis(2).len() - 1];
+                suspects.extend(
+                    attempt
+                        .report
+                        .unproven
+                        .iter()
+                        .map(|c| (c.index[0] * nj + c.index[1]) * nk + c.index[2]),
+                );
+                let done = attempt.report.proven == attempt.report.certified;
+                let summary = ProofAttempt {
+                    iterations: k,
+                    proven: done,
+                    seconds: attempt.report.seconds,
+                };
+                attempts.push(summary);
+                events(RearEvent::ProofFinished(summary));
+                if done {
+                    proven = Some((attempt, drift));
+                    break RearStopped::Proven;
+                }
+            }
+            if !last {
+                stretch = (k, iteration.values().to_vec());
+                next_check = k + s.check_every.max(k / 10);
+            }
+        }
+        if settled {
+            break RearStopped::Residual;
+        }
+        if k >= s.max_iterations {
+            break RearStopped::MaxIterations;
+        }
+    };
+    let k = iteration.sweeps();
+    let values = iteration.into_values();
+    let solve_s =
+        t0.elapsed().as_secs_f64() - proven.as_ref().map_or(0.0, |(p, _)| p.report.seconds);
+    // A table not proven on the way gets the full proof (within a budget) for its report.
+    let (proof, drift) = match proven {
+        Some(p) => p,
+        None => {
+            let status = if stopped == RearStopped::Residual {
+                HorizonStatus::Converged {
+                    tolerance: s.tolerance as f32,
+                    residual,
+                }
+            } else {
+                HorizonStatus::NotConverged {
+                    tolerance: s.tolerance as f32,
+                    residual,
+                }
+            };
+            let drift = drift(&stretch, &values, k, s.period, &plateau_at);
+            (
+                prove(
+                    config,
+                    &grid,
+                    &values,
+                    (k, status),
+                    &suspects,
+                    events,
+                    false,
+                )?,
+                drift,
+            )
+        }
+    };
 
+    let dir = out.join(&config.name);
+    std::fs::create_dir_all(&dir).map_err(|e| SolverError::Io {
+        path: dir.display().to_string(),
+        source: e,
+    })?;
+    output::write_bytes(&dir.join("table.bin"), &proof.bytes)?;
+    output::write_json(&dir.join("verify.json"), &proof.report)?;
+    let lists: Vec<Vec<f32>> = (0..3).map(|k| grid.axis(k).to_vec()).collect();
+    let points = [lists[0].len(), lists[1].len(), lists[2].len()];
+    output::write_npy(&dir.join("value.npy"), &values, &points)?;
+    let axes: Vec<output::AxisCoordinates> = (0..3)
+        .map(|k| output::AxisCoordinates {
+            name: grid.name(k).to_string(),
+            unit: if k == 0 { "m" } else { "m/s" }.to_string(),
+            coordinates: lists[k].iter().map(|&x| f64::from(x)).collect(),
+        })
+        .collect();
+    output::write_axes(&dir.join("axes.json"), &axes)?;
+
+    let at = |x: f32, vf: f32, ve: f32| grid.interpolate(&values, &[x, vf, ve]);
+    let vmax = config.game.max_speed as f32;
+    let smallest_gap_at_equal_speeds = [0.0f32, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0]
+        .into_iter()
+        .filter(|&v| v <= vmax)
+        .map(|v| {
+            let gap = lists[0].iter().copied().find(|&x| at(x, v, v) > 0.5);
+            (v, gap)
+        })
+        .collect();
+    let summary = RearSummary {
+        name: config.name.clone(),
+        config: config.clone(),
+        points,
+        iterations: k,
+        stopped,
+        horizon_s: k as f64 * s.period,
+        residual_m: residual,
+        drift,
+        proof_attempts: attempts,
+        solve_s,
+        plateau_m: plateau_at(&values),
+        smallest_gap_at_equal_speeds,
+        beyond_grid_m: values[values.len() - points[1] * points[2]..]
+            .iter()
+            .copied()
+            .fold(f32::INFINITY, f32::min),
+        safe_share: values.iter().filter(|&&w| w > 0.0).count() as f64 / values.len() as f64,
+        table_bytes: proof.bytes.len(),
+        quantization_error_m: proof.quantization_error,
+        verification: proof.report.record(),
+        verify_s: proof.report.seconds,
+    };
+    output::write_json(&dir.join("summary.json"), &summary)?;
+    Ok(summary)
+}
+
+/// A table and what `verify` found of it.
+struct Proof {
+    /// The table's bytes, with the proof's record in its header.
+    bytes: Vec<u8>,
+    report: crate::proof::verify::Report,
+    quantization_error: f32,
+}
+
+/// Compiles the iterate `values` after `iterations` into a table and proves it: failing fast
+/// (at the first unproven cell) on the way, or, for the table written without a proof, within
+/// the command line's default budget (600 s, 1,000 unproven cells named).
+fn prove(
+    config: &RearConfig,
+    grid: &Breakpoints,
+    values: &[f32],
+    (iterations, status): (usize, HorizonStatus),
+    suspects: &[usize],
+    events: &mut dyn FnMut(RearEvent),
+    fail_fast: bool,
+) -> Result<Proof, SolverError> {
+    let s = config.solve;
     let lists: Vec<Vec<f32>> = (0..3).map(|k| grid.axis(k).to_vec()).collect();
     let axes: Vec<Axis<'_>> = (0..3)
         .map(|k| Axis {
@@ -366,18 +641,8 @@ pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverEr
         game: config.game_description(),
         min_gap: config.game.min_gap as f32,
         horizon: Horizon {
-            seconds: (result.iterations as f64 * s.period) as f32,
-            status: if result.converged {
-                HorizonStatus::Converged {
-                    tolerance: s.tolerance as f32,
-                    residual: result.residual,
-                }
-            } else {
-                HorizonStatus::NotConverged {
-                    tolerance: s.tolerance as f32,
-                    residual: result.residual,
-                }
-            },
+            seconds: (iterations as f64 * s.period) as f32,
+            status,
         },
         axes: &axes,
         breakpoints: &breakpoints,
@@ -388,71 +653,61 @@ pub fn run_rear(config: &RearConfig, out: &Path) -> Result<RearSummary, SolverEr
         } else {
             ValueBits::Sixteen
         },
-        values: &result.values,
+        values,
         accelerate: &[],
     })?;
-    let table = table_format::Table::parse(&bytes)?;
-    let quantization_error = table.header().error_bound.quantization;
-    // The table the firmware may run carries what verify proved of it (the firmware refuses a
-    // split table without a complete record).
-    let (_, report, bytes) = verify_bytes(&bytes, &VerifySettings::default())?;
-
-    let dir = out.join(&config.name);
-    std::fs::create_dir_all(&dir).map_err(|e| SolverError::Io {
-        path: dir.display().to_string(),
-        source: e,
-    })?;
-    output::write_bytes(&dir.join("table.bin"), &bytes)?;
-    output::write_json(&dir.join("verify.json"), &report)?;
-    let points = [lists[0].len(), lists[1].len(), lists[2].len()];
-    output::write_npy(&dir.join("value.npy"), &result.values, &points)?;
-    let axes: Vec<output::AxisCoordinates> = (0..3)
-        .map(|k| output::AxisCoordinates {
-            name: grid.name(k).to_string(),
-            unit: if k == 0 { "m" } else { "m/s" }.to_string(),
-            coordinates: lists[k].iter().map(|&x| f64::from(x)).collect(),
-        })
-        .collect();
-    output::write_axes(&dir.join("axes.json"), &axes)?;
-
-    let at = |x: f32, vf: f32, ve: f32| grid.interpolate(&result.values, &[x, vf, ve]);
-    let vmax = config.game.max_speed as f32;
-    let smallest_gap_at_equal_speeds = [0.0f32, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0]
-        .into_iter()
-        .filter(|&v| v <= vmax)
-        .map(|v| {
-            let gap = lists[0].iter().copied().find(|&x| at(x, v, v) > 0.5);
-            (v, gap)
-        })
-        .collect();
-    let summary = RearSummary {
-        name: config.name.clone(),
-        config: config.clone(),
-        points,
-        iterations: result.iterations,
-        converged: result.converged,
-        residual: result.residual,
-        change_over_last_tenth,
-        safe_set_change_bound: result
-            .values
-            .iter()
-            .filter(|w| w.abs() <= change_over_last_tenth)
-            .count() as f64
-            / result.values.len() as f64,
-        solve_seconds,
-        plateau: at(10.0, 0.0, 0.0),
-        smallest_gap_at_equal_speeds,
-        top_face_min: result.values[result.values.len() - points[1] * points[2]..]
-            .iter()
-            .copied()
-            .fold(f32::INFINITY, f32::min),
-        safe_share: result.values.iter().filter(|&&w| w > 0.0).count() as f64
-            / result.values.len() as f64,
-        table_bytes: bytes.len(),
-        quantization_error,
-        verification: report.record(),
-        verify_seconds: report.seconds,
+    let quantization_error = table_format::Table::parse(&bytes)?
+        .header()
+        .error_bound
+        .quantization;
+    let settings = VerifySettings {
+        budget: if fail_fast {
+            Budget {
+                seconds: None,
+                unproven_cells: Some(1),
+            }
+        } else {
+            Budget {
+                seconds: Some(600.0),
+                unproven_cells: Some(1000),
+            }
+        },
+        ..VerifySettings::default()
     };
-    output::write_json(&dir.join("summary.json"), &summary)?;
-    Ok(summary)
+    let (_, report, bytes) =
+        verify_bytes_with_progress(&bytes, &settings, suspects, &mut |done, total| {
+            events(RearEvent::ProofProgress(done, total))
+        })?;
+    Ok(Proof {
+        bytes,
+        report,
+        quantization_error,
+    })
+}
+
+/// The drift from the iterate `stretch` (after `stretch.0` iterations) to `values` (after `k`).
+fn drift(
+    stretch: &(usize, Vec<f32>),
+    values: &[f32],
+    k: usize,
+    period: f64,
+    plateau_at: &dyn Fn(&[f32]) -> f32,
+) -> Drift {
+    let before = &stretch.1;
+    let mut max_change = 0f32;
+    let mut lost = 0usize;
+    for (now, was) in values.iter().zip(before) {
+        max_change = max_change.max((was - now).abs());
+        lost += usize::from(*was > 0.0 && *now <= 0.0);
+    }
+    let iterations = k - stretch.0;
+    let horizon_s = iterations as f64 * period;
+    Drift {
+        iterations,
+        horizon_s,
+        max_change_m: max_change,
+        plateau_change_m: plateau_at(before) - plateau_at(values),
+        max_rate_m_per_s: f64::from(max_change) / horizon_s.max(f64::MIN_POSITIVE),
+        safe_nodes_lost: lost,
+    }
 }

@@ -80,7 +80,7 @@ impl RearModel {
         let z_hi = z(p, self.time_gap.hi, r).max(z(q, self.time_gap.hi, r));
         let desired_lo = widen_down(self.idm_s0 + z_lo.max(0.0));
         let desired_hi = widen_up(self.idm_s0 + z_hi.max(0.0));
-        let speed_term = |v: f64| (v / self.idm_v0).powi(self.idm_delta);
+        let speed_term = |v: f64| power(v / self.idm_v0, self.idm_delta);
         let (speed_lo, speed_hi) = (speed_term(p), speed_term(q));
         // (s*/g)^2 with s* >= s0 > 0: decreasing in g > 0; infinite at g <= 0.
         let (g1, g2) = (b.gap.lo, b.gap.hi);
@@ -108,6 +108,13 @@ impl RearModel {
 
     /// Every state the box can reach over `[0, period]`, bounded (module docs).
     pub fn reach(&self, b: &StateBox, period: f64) -> Reach {
+        self.reach_within(b, period, Interval::new(self.clip_min, self.clip_max), 3)
+    }
+
+    /// [`RearModel::reach`] from a bound `accel` already known to hold for the follower's
+    /// acceleration over `[0, period]` (a longer period's holds for a shorter one), narrowed
+    /// `rounds` times.
+    pub fn reach_within(&self, b: &StateBox, period: f64, accel: Interval, rounds: u32) -> Reach {
         let vm = self.max_speed;
         let ve = b.ego_speed;
         let ego_tube = Interval::new(
@@ -115,8 +122,8 @@ impl RearModel {
             (ve.hi + self.ego_max * period).min(vm),
         );
         let ego_far = travel(ve.hi, self.ego_max, period, vm).0;
-        let mut accel = Interval::new(self.clip_min, self.clip_max);
-        for _ in 0..3 {
+        let mut accel = accel;
+        for _ in 0..rounds {
             let vf = b.follower_speed;
             let follower_tube = Interval::new(
                 (vf.lo + accel.lo.min(0.0) * period).max(0.0),
@@ -157,8 +164,20 @@ impl RearModel {
         let least_gap = widen_down(
             b.gap.lo + least_difference(ve.lo, self.ego_min, vf.hi, accel.hi, period, vm),
         );
+        // Throughout the period: the gap above its least value and below the box's largest
+        // plus the ego's farthest travel (the follower never goes backwards), each speed
+        // within its tube under the acceleration bound just found.
+        let tube = StateBox {
+            gap: Interval::new(least_gap, widen_up(b.gap.hi + ego_far)),
+            follower_speed: Interval::new(
+                widen_down(vf.lo + accel.lo.min(0.0) * period).max(0.0),
+                widen_up(vf.hi + accel.hi.max(0.0) * period).min(vm),
+            ),
+            ego_speed: ego_tube,
+        };
         Reach {
             end,
+            tube,
             least_gap,
             follower_acceleration: accel,
         }
@@ -170,6 +189,8 @@ impl RearModel {
 pub struct Reach {
     /// Every state at the end of the period lies in this box.
     pub end: StateBox,
+    /// Every state at every time of the period lies in this box.
+    pub tube: StateBox,
     /// The gap stays at or above this throughout the period, m.
     pub least_gap: f64,
     /// The follower's acceleration throughout the period lies here, m/s^2.
@@ -232,4 +253,24 @@ pub(super) fn least_difference(ve: f64, ae: f64, vf: f64, af: f64, period: f64, 
         .into_iter()
         .map(|t| travel(ve, ae, t, v_max).0 - travel(vf, af, t, v_max).0)
         .fold(f64::INFINITY, f64::min)
+}
+
+/// `x^n` by squaring, for the IDM's small integer exponent: `f64::powi` with an exponent known
+/// only at run time is a library call (`__powidf2`) on the proof's hottest path. The exponent
+/// is at least 1 (`Idm` refuses others); a bound computed from it is widened like any other.
+#[inline(always)]
+fn power(x: f64, n: i32) -> f64 {
+    let (mut base, mut e, mut out) = (x, n.unsigned_abs(), 1.0);
+    while e > 0 {
+        if e & 1 == 1 {
+            out *= base;
+        }
+        base *= base;
+        e >>= 1;
+    }
+    if n < 0 {
+        1.0 / out
+    } else {
+        out
+    }
 }

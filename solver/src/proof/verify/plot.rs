@@ -23,10 +23,11 @@ pub fn plot(
         .take_while(|&g| g <= gap_limit)
         .collect();
     let speeds = centre(table.axis(1), nj);
-    // Severity order: not certified, proven, tangency, resolution, collision.
-    let legend: [(&str, RGBColor); 5] = [
+    // Severity order: not certified, proven, not checked, tangency, resolution, collision.
+    let legend: [(&str, RGBColor); 6] = [
         ("not certified", RGBColor(225, 225, 225)),
         ("proven", RGBColor(90, 170, 90)),
+        ("not checked (the budget ran out)", RGBColor(120, 120, 120)),
         ("unproven: tangency", RGBColor(245, 160, 40)),
         ("unproven: resolution", RGBColor(200, 40, 40)),
         ("unproven: collision", RGBColor(90, 0, 90)),
@@ -34,10 +35,11 @@ pub fn plot(
     let severity = |v: &Verdict| match v {
         Verdict::NotCertified => 0,
         Verdict::Proven | Verdict::ProvenAtStandstill => 1,
+        Verdict::Unchecked => 2,
         Verdict::Unproven { reason, .. } => match reason {
-            Reason::Tangency => 2,
-            Reason::Resolution => 3,
-            Reason::Collision => 4,
+            Reason::Tangency => 3,
+            Reason::Resolution => 4,
+            Reason::Collision => 5,
         },
     };
     let at = |i: usize, j: usize, k: usize| severity(&report.verdicts[(i * nj + j) * nk + k]);
@@ -79,7 +81,7 @@ pub fn plot(
     // (issue 22: a "worst" map that left the uncertified cells out looked all proven).
     let title = "verify: (gap, follower speed) columns over every ego speed".to_string();
     let path = dir.join("verdicts-worst.png");
-    let over_speeds: [(&str, RGBColor); 6] = [
+    let over_speeds: [(&str, RGBColor); 7] = [
         ("certified at no ego speed", RGBColor(225, 225, 225)),
         (
             "proven at some ego speeds, not certified at the others",
@@ -89,6 +91,7 @@ pub fn plot(
         legend[2],
         legend[3],
         legend[4],
+        legend[5],
     ];
     let cell = |i: usize, j: usize| {
         let worst = (0..nk).map(|k| at(i, j, k)).max().unwrap_or(0);
