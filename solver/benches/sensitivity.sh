@@ -1,23 +1,13 @@
 #!/usr/bin/env bash
-# The certified volume's sensitivity to the model's bounds, beside the former 4-D table's:
-# solves the deployment config and the four sensitivity configs under solver/configs/rear/
-# (about 3.5 minutes each on two cores) and the 4-D table's config (seconds), then prints the
-# certified shares and plots them (out/sensitivity/split-volume.png).
+# The certified volume's sensitivity to the model's bounds, as a sweep: the deployment config
+# and one bound changed at a time (the ego's braking level, the follower's hardest braking),
+# each table solved and proven, each measured against three leaders
+# (solver/configs/sweeps/sensitivity.toml). Prints the sweep's table and its wall time; writes
+# out/sensitivity/ (sweep.json, sweep.csv, sweep.png, a folder per table).
 #   bash solver/benches/sensitivity.sh
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-out=out/sensitivity
-mkdir -p "$out"
-cargo build -q --release -p solver --example split_volume
-rears=()
-for name in deployment sensitivity-beta-2 sensitivity-beta-5 sensitivity-follower-8 sensitivity-follower-3p5; do
-  if [ ! -f "$out/$name/table.bin" ]; then
-    target/release/solver --quiet --rear "solver/configs/rear/$name.toml" --out "$out"
-  fi
-  rears+=("$out/$name/table.bin")
-done
-if [ ! -f "$out/three-car-idm-4d-table/table.bin" ]; then
-  target/release/solver --quiet --config solver/configs/three-car-idm-4d-table.toml --out "$out"
-fi
-target/release/examples/split_volume "$out/split-volume.png" \
-  "$out/three-car-idm-4d-table/table.bin" "${rears[@]}"
+cargo build -q --release -p solver
+start=$(date +%s.%N)
+target/release/solver --quiet --out out sweep solver/configs/sweeps/sensitivity.toml
+python3 -c "import time; print(f'wall {time.time() - $start:.1f} s')"

@@ -42,6 +42,13 @@ enum Command {
     /// (`solver::verify`); writes `DIR/verify/<table>/report.json` and a plot of the
     /// unproven cells.
     Verify(VerifyArgs),
+    /// Runs a sweep of rear configs made from one (`solver::sweep`; e.g.
+    /// solver/configs/sweeps/sensitivity.toml): each table solved, proven and measured, in
+    /// parallel; writes DIR/<name>/sweep.json, sweep.csv and sweep.png beside the tables.
+    Sweep {
+        /// The sweep file.
+        file: PathBuf,
+    },
 }
 
 #[derive(clap::Args, Debug)]
@@ -176,8 +183,10 @@ fn main() -> std::process::ExitCode {
 fn real_main() -> Result<()> {
     let args = Args::parse();
     ensure_writable(&args.out)?;
-    if let Some(Command::Verify(v)) = &args.command {
-        return run_verify(v, &args.out, args.quiet);
+    match &args.command {
+        Some(Command::Verify(v)) => return run_verify(v, &args.out, args.quiet),
+        Some(Command::Sweep { file }) => return run_sweep(file, &args.out, args.quiet),
+        None => {}
     }
     let defaults = args.rears.is_empty() && args.configs.is_empty();
     let mut rears: Vec<(String, String)> = args
@@ -483,5 +492,86 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path, quiet: bool) -> Result<()> 
             dir.join("robustness.json").display()
         );
     }
+    Ok(())
+}
+
+/// `sweep`: every task in parallel, a progress line, the summary table.
+fn run_sweep(file: &std::path::Path, out: &std::path::Path, quiet: bool) -> Result<()> {
+    use solver::sweep::{run_sweep, Sweep, SweepEvent};
+    let sweep = Sweep::open(file).with_context(|| format!("in {}", file.display()))?;
+    eprintln!(
+        "== sweep {} ({}): {} points, {} tables to solve and prove",
+        sweep.config.name,
+        file.display(),
+        sweep.points(),
+        sweep.tasks.len()
+    );
+    let progress = std::sync::Mutex::new((Progress::new(quiet, "sweep"), 0usize));
+    let tables = sweep.tasks.len();
+    let summary = run_sweep(&sweep, out, &|event| {
+        let mut guard = progress.lock().unwrap_or_else(|e| e.into_inner());
+        let (p, finished) = &mut *guard;
+        let fraction = *finished as f64 / tables as f64;
+        match event {
+            SweepEvent::Rear(k, RearEvent::Iteration(i, r)) => p.set(
+                fraction,
+                &format!("table {k}: iteration {i}, largest change {r:.2e} m"),
+            ),
+            SweepEvent::Rear(k, RearEvent::ProofProgress(done, total)) => p.set(
+                fraction,
+                &format!("table {k}: proof, {done} of {total} cells"),
+            ),
+            SweepEvent::TaskFinished(k, n, _) => {
+                *finished = n;
+                p.set(
+                    n as f64 / tables as f64,
+                    &format!("table {k} done, {n} of {tables} tables"),
+                )
+            }
+            SweepEvent::Rear(..) => {}
+        }
+    })?;
+    progress
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .0
+        .finish();
+    println!(
+        "| point | {} | table proven | certified, ego 0-35 m/s | ego 15-35 m/s | rear nodes, exact / declared error |",
+        summary.keys.join(" | ")
+    );
+    println!("|---|{}---|---|---|---|", "---|".repeat(summary.keys.len()));
+    for p in &summary.points {
+        let set: std::collections::BTreeMap<&str, String> = p
+            .point
+            .overrides
+            .iter()
+            .map(|(k, v)| (k.as_str(), solver::sweep::show_value(v)))
+            .collect();
+        let values: Vec<String> = summary
+            .keys
+            .iter()
+            .map(|k| set.get(k.as_str()).cloned().unwrap_or_default())
+            .collect();
+        println!(
+            "| {} | {} | {} of {}{} | {:.1}% | {:.1}% | {:.1}% / {:.1}% |",
+            p.point.index,
+            values.join(" | "),
+            p.table.proven_cells,
+            p.table.certified_cells,
+            if p.table.proven { "" } else { " (refused)" },
+            100.0 * p.volume.certified_ego_0_35,
+            100.0 * p.volume.certified_ego_15_35,
+            100.0 * p.measured_rear.exact_share,
+            100.0 * p.measured_rear.declared_share
+        );
+    }
+    println!(
+        "{} points, {} tables, {:.1} s; wrote {}",
+        summary.points.len(),
+        summary.tables,
+        summary.seconds,
+        out.join(&summary.name).display()
+    );
     Ok(())
 }

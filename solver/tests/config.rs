@@ -236,13 +236,20 @@ fn the_reference_configs_parse_and_name_every_field() {
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/reference");
     let level_set = std::fs::read_to_string(format!("{dir}/level-set.toml")).unwrap();
     let rear = std::fs::read_to_string(format!("{dir}/rear.toml")).unwrap();
+    let sweep = std::fs::read_to_string(format!("{dir}/sweep.toml")).unwrap();
     let a = Config::from_toml(&level_set).unwrap_or_else(|e| panic!("level-set.toml: {e}"));
     let b = solver::rear::RearConfig::from_toml(&rear).unwrap_or_else(|e| panic!("rear.toml: {e}"));
+    let c = solver::sweep::Sweep::open(std::path::Path::new(&format!("{dir}/sweep.toml")))
+        .unwrap_or_else(|e| panic!("sweep.toml: {e}"));
+    let mut c = serde_json::to_value(&c.config).unwrap();
+    // A listed point's keys are the rear config's, documented in rear.toml.
+    c["points"] = serde_json::json!([]);
     // The level-set file also documents the 5-D game's fields, commented out.
     let five_d = ["max_speed", "leader_speed", "follower_speed", "ego_speed"];
     for (text, value, extra) in [
         (&level_set, serde_json::to_value(&a).unwrap(), &five_d[..]),
         (&rear, serde_json::to_value(&b).unwrap(), &[][..]),
+        (&sweep, c, &[][..]),
     ] {
         let mut names: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
         keys(&value, &mut names);

@@ -3,6 +3,7 @@
 //! - [`config`]: the level-set configs (TOML), validated with the key and line of each error;
 //! - [`run`]: one level-set run (solve, trusted box, policy, table, plots);
 //! - [`rear`]: one rear-game run (value iteration, table, proof);
+//! - [`sweep`]: many rear configs made from one, solved, proven and compared;
 //! - [`compile`]: values to a quantized, interpolated table with its error bound;
 //! - `plots`: what a level-set run draws, and where;
 //! - [`output`]: the files (`.npy`, JSON, tables) and the plots' drawing.
@@ -13,3 +14,4 @@ pub mod output;
 mod plots;
 pub mod rear;
 pub mod run;
+pub mod sweep;

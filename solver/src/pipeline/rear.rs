@@ -25,7 +25,9 @@ use crate::pipeline::config::{
     SAMPLED_BYTES_PER_NODE,
 };
 use crate::pipeline::output;
-use crate::proof::verify::{verify_bytes_with_progress, Budget, Settings as VerifySettings};
+use crate::proof::verify::{
+    verify_bytes_with_progress, Budget, Report, Settings as VerifySettings,
+};
 
 /// A breakpoint axis: from `start`, uniform pieces `[end, spacing]` in turn.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -369,7 +371,7 @@ pub struct RearSummary {
 }
 
 /// Why the rear iteration stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RearStopped {
     /// `verify` proved the iterate: every certified cell.
@@ -436,6 +438,16 @@ pub fn run_rear_with(
     out: &Path,
     events: &mut dyn FnMut(RearEvent),
 ) -> Result<RearSummary, SolverError> {
+    run_rear_with_report(config, out, events).map(|(summary, _, _)| summary)
+}
+
+/// [`run_rear_with`], also returning `verify`'s report of the table written (with every cell's
+/// verdict) and the table's bytes.
+pub fn run_rear_with_report(
+    config: &RearConfig,
+    out: &Path,
+    events: &mut dyn FnMut(RearEvent),
+) -> Result<(RearSummary, Report, Vec<u8>), SolverError> {
     config.validate()?;
     let grid = config.grid()?;
     let game = config.game();
@@ -600,14 +612,14 @@ pub fn run_rear_with(
         verify_s: proof.report.seconds,
     };
     output::write_json(&dir.join("summary.json"), &summary)?;
-    Ok(summary)
+    Ok((summary, proof.report, proof.bytes))
 }
 
 /// A table and what `verify` found of it.
 struct Proof {
     /// The table's bytes, with the proof's record in its header.
     bytes: Vec<u8>,
-    report: crate::proof::verify::Report,
+    report: Report,
     quantization_error: f32,
 }
 

@@ -24,7 +24,8 @@ use table_format::Table;
 use crate::proof::verify::{Report, Verdict};
 
 /// The declared measurement error (the firmware's `SensorBounds`; its defaults here).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct MeasurementError {
     /// Range error, absolute part, m.
     pub range: f32,
