@@ -557,3 +557,263 @@ fn cut_in_summary(outcomes: &[(u64, Outcome)]) -> CutInSummary {
             .count(),
     }
 }
+
+/// The groups a campaign runs: every leader against every follower.
+pub const GROUPS: [(Leader, Follower); 20] = {
+    let leaders = [
+        Leader::HardBrake,
+        Leader::StopAndGo,
+        Leader::Random,
+        Leader::Comfortable,
+    ];
+    let followers = [
+        Follower::IdmFixed,
+        Follower::IdmRandom,
+        Follower::IdmSwitching,
+        Follower::IdmWorstCase,
+        Follower::Unbounded,
+    ];
+    let mut out = [(Leader::HardBrake, Follower::IdmFixed); 20];
+    let mut i = 0;
+    while i < 20 {
+        out[i] = (leaders[i / 5], followers[i % 5]);
+        i += 1;
+    }
+    out
+};
+
+/// A campaign's settings: every group ([`GROUPS`]) runs `episodes` episodes of `seconds`.
+#[derive(Debug, Clone, Copy)]
+pub struct CampaignSettings {
+    /// Episodes per group.
+    pub episodes: usize,
+    /// Simulated seconds per episode.
+    pub seconds: f32,
+    /// The first seed (group `i` starts at `seed + i * 1,000,000`).
+    pub seed: u64,
+    /// The sensors.
+    pub sensing: Sensing,
+    /// A cut-in in every episode, if any (outside the model).
+    pub cut_in: Option<CutInKind>,
+    /// The ego's actuator.
+    pub actuator: ActuatorModel,
+    /// The firmware's configuration.
+    pub config: Config,
+}
+
+/// A setting that means nothing: which one, and why (the command line and the Python module
+/// each name it their way).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Invalid {
+    /// The setting (`episodes`, `seconds`, `latency`, `dead_time_ms`, `lag`).
+    pub field: &'static str,
+    /// Why.
+    pub reason: String,
+}
+
+impl CampaignSettings {
+    /// Refuses settings that would test nothing or mean nothing: no episodes, a duration that
+    /// is not a positive number of seconds, a latency beyond the covered track age, an
+    /// actuator with a negative or non-finite delay.
+    pub fn check(&self) -> Result<(), Invalid> {
+        let fail = |field, reason: String| Err(Invalid { field, reason });
+        if self.episodes == 0 {
+            return fail(
+                "episodes",
+                "must be at least 1 (got 0): nothing would be tested".into(),
+            );
+        }
+        if !(self.seconds.is_finite() && self.seconds > 0.0) {
+            return fail(
+                "seconds",
+                format!(
+                    "must be a finite number of seconds above 0 (got {})",
+                    self.seconds
+                ),
+            );
+        }
+        if let Sensing::Fixed(s) = self.sensing {
+            let oldest = s.channels.iter().map(|c| c.latency_us).max().unwrap_or(0);
+            if oldest > 1_000_000 {
+                return fail(
+                    "latency",
+                    format!(
+                        "must be at most 50 periods (1 s, the covered track age; got {} ms)",
+                        oldest / 1000
+                    ),
+                );
+            }
+        }
+        let dead = self.actuator.dead_time * 1e3;
+        if !(dead.is_finite() && dead >= 0.0) {
+            return fail(
+                "dead_time_ms",
+                format!("must be a finite number of milliseconds of at least 0 (got {dead})"),
+            );
+        }
+        if !(self.actuator.lag.is_finite() && self.actuator.lag >= 0.0) {
+            return fail(
+                "lag",
+                format!(
+                    "must be a finite time constant of at least 0 s (got {})",
+                    self.actuator.lag
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    /// Whether the certificate covers the campaign: measurements within the declared error and
+    /// track age (both sensor settings), an actuator within the declared dead time and lag, no
+    /// cut-in.
+    pub fn covered(&self) -> bool {
+        self.cut_in.is_none()
+            && self.actuator.dead_time * 1e6 <= self.config.actuator_dead_time_us as f32 + 0.5
+            && self.actuator.lag * 1e6 <= self.config.actuator_lag_us as f32 + 0.5
+    }
+}
+
+/// The totals over a campaign's groups whose humans keep to the model.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct CampaignTotals {
+    /// Episodes in the model's groups.
+    pub in_model_episodes: usize,
+    /// Their collisions.
+    pub collisions: usize,
+    /// Of those, collisions the humans alone had made unavoidable.
+    pub collisions_unavoidable: usize,
+    /// Their certificate losses.
+    pub certificate_losses: usize,
+    /// Their periods of the minimum-risk manoeuvre without a certificate.
+    pub uncertified_minimum_risk_periods: u64,
+    /// Their periods of the certified fallback.
+    pub fallback_periods: u64,
+    /// Cut-ins over every group.
+    pub cut_ins: usize,
+    /// Cut-ins with an uncertified front not braked at beta within one period.
+    pub cut_ins_braked_late: usize,
+    /// Collisions after a cut-in that braking at beta from the first track would have avoided.
+    pub cut_in_collisions_avoidable: usize,
+}
+
+/// What a campaign found: `campaign.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct CampaignReport {
+    /// Episodes per group.
+    pub episodes_per_group: usize,
+    /// Simulated seconds per episode.
+    pub seconds: f32,
+    /// The sensors.
+    pub sensors: Sensing,
+    /// The firmware's declared sensor bounds.
+    pub declared_sensor_bounds: ErrorBounds,
+    /// The track age the firmware covers, s.
+    pub covered_track_age_s: f32,
+    /// The cut-in, if any.
+    pub cut_in: Option<CutInKind>,
+    /// The ego's actuator.
+    pub actuator: ActuatorModel,
+    /// Whether the certificate covers the campaign ([`CampaignSettings::covered`]).
+    pub covered_by_the_certificate: bool,
+    /// Every group.
+    pub groups: Vec<GroupSummary>,
+    /// The totals.
+    pub totals: CampaignTotals,
+    /// Wall time, s.
+    pub wall_s: f64,
+}
+
+impl CampaignReport {
+    /// Why the campaign fails, if it does: a group that drew no certified start (nothing was
+    /// tested), or, where the certificate covers the campaign, a collision, a certificate loss
+    /// or an uncertified minimum-risk period with humans within the model.
+    pub fn failure(&self) -> Option<String> {
+        let empty: Vec<String> = self
+            .groups
+            .iter()
+            .filter(|s| s.episodes == 0)
+            .map(|s| format!("{:?}/{:?}", s.leader, s.follower))
+            .collect();
+        if !empty.is_empty() {
+            return Some(format!(
+                "no certified start could be drawn for {}: nothing was tested",
+                empty.join(", ")
+            ));
+        }
+        let t = &self.totals;
+        (self.covered_by_the_certificate
+            && (t.collisions > 0
+                || t.certificate_losses > 0
+                || t.uncertified_minimum_risk_periods > 0))
+            .then(|| {
+                format!(
+                    "the certificate failed: {} collisions, {} certificate losses and {} \
+                     uncertified minimum-risk periods with humans within the model, sensors and \
+                     actuator within its limits",
+                    t.collisions, t.certificate_losses, t.uncertified_minimum_risk_periods
+                )
+            })
+    }
+}
+
+/// Runs a campaign on `table` (its `bytes`): every group of [`GROUPS`] in turn, its episodes
+/// in parallel. `group_done` sees each group's summary and the episode with its smallest
+/// margin as it finishes; `episode_done` is called after every episode.
+pub fn run_campaign(
+    table: &Table<'_>,
+    bytes: &[u8],
+    settings: &CampaignSettings,
+    group_done: &mut dyn FnMut(&GroupSummary, &Episode),
+    episode_done: &(dyn Fn() + Sync),
+) -> CampaignReport {
+    let t0 = std::time::Instant::now();
+    let mut groups = Vec::new();
+    for (i, (leader, follower)) in GROUPS.iter().enumerate() {
+        let template = Episode {
+            leader: *leader,
+            follower: *follower,
+            seconds: settings.seconds,
+            sensors: settings.sensing,
+            cut_in: settings.cut_in,
+            actuator: settings.actuator,
+            config: settings.config,
+            seed: settings.seed + (i as u64) * 1_000_000,
+        };
+        let (summary, _) = run_group(table, bytes, template, settings.episodes, episode_done);
+        group_done(
+            &summary,
+            &Episode {
+                seed: summary.worst_seed,
+                ..template
+            },
+        );
+        groups.push(summary);
+    }
+    let mut totals = CampaignTotals::default();
+    for s in groups.iter().filter(|s| s.in_model) {
+        totals.in_model_episodes += s.episodes;
+        totals.collisions += s.collisions;
+        totals.collisions_unavoidable += s.collisions_unavoidable;
+        totals.certificate_losses += s.certificate_losses;
+        totals.uncertified_minimum_risk_periods += s.uncertified_minimum_risk_periods;
+        totals.fallback_periods += s.fallback_periods;
+    }
+    for c in groups.iter().filter_map(|s| s.cut_ins) {
+        totals.cut_ins += c.episodes;
+        totals.cut_ins_braked_late += c.front_uncertified - c.beta_within_one_period;
+        totals.cut_in_collisions_avoidable += c.collisions - c.unavoidable;
+    }
+    CampaignReport {
+        episodes_per_group: settings.episodes,
+        seconds: settings.seconds,
+        sensors: settings.sensing,
+        declared_sensor_bounds: ErrorBounds::from(&settings.config.sensors),
+        covered_track_age_s: settings.config.sensors.max_track_age_us as f32 * 1e-6,
+        cut_in: settings.cut_in,
+        actuator: settings.actuator,
+        covered_by_the_certificate: settings.covered(),
+        groups,
+        totals,
+        wall_s: t0.elapsed().as_secs_f64(),
+    }
+}

@@ -16,9 +16,9 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use host_tests::campaign::{run_episode, run_group, CutInKind, Episode, ModeName, Sensing, Trace};
+use host_tests::campaign::{run_episode, CutInKind, ModeName, Sensing, Trace};
 use host_tests::sim::ActuatorModel;
-use host_tests::{Follower, Leader, SensorModel};
+use host_tests::SensorModel;
 use indicatif::{ProgressBar, ProgressStyle};
 use plotters::prelude::*;
 use table_format::Table;
@@ -31,11 +31,14 @@ struct Args {
 }
 
 #[derive(Subcommand)]
+// A negative number is a value (refused with a reason), not an unknown flag.
+#[command(allow_negative_numbers = true)]
 enum Command {
     /// Runs the safety campaign.
     Campaign(CampaignArgs),
     /// Runs the adversarial search: certified starts on the boundary and the domain's edges,
     /// humans chosen by search within the model.
+    #[command(allow_negative_numbers = true)]
     Falsify {
         /// Episodes over every method, about.
         #[arg(long, default_value_t = 5_000)]
@@ -90,20 +93,6 @@ enum Command {
         table: Option<PathBuf>,
     },
 }
-
-const LEADERS: [Leader; 4] = [
-    Leader::HardBrake,
-    Leader::StopAndGo,
-    Leader::Random,
-    Leader::Comfortable,
-];
-const FOLLOWERS: [Follower; 5] = [
-    Follower::IdmFixed,
-    Follower::IdmRandom,
-    Follower::IdmSwitching,
-    Follower::IdmWorstCase,
-    Follower::Unbounded,
-];
 
 fn plot_trace(path: &std::path::Path, title: &str, trace: &Trace) -> Result<()> {
     let root = BitMapBackend::new(path, (1000, 900)).into_drawing_area();
@@ -313,11 +302,28 @@ fn positive_seconds(name: &str, s: f32) -> Result<()> {
     Ok(())
 }
 
+/// Parses the command line; a mistake in it is one line naming the argument (clap's own
+/// message, without its usage block), and exit code 2. Help and version print as usual.
+fn parse_args() -> Args {
+    Args::try_parse().unwrap_or_else(|e| {
+        use clap::error::ErrorKind;
+        if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion)
+            || e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+        {
+            e.exit()
+        }
+        let text = e.to_string();
+        let first = text.lines().next().unwrap_or("error: bad arguments");
+        eprintln!("{first} (see --help)");
+        std::process::exit(2)
+    })
+}
+
 fn real_main() -> Result<()> {
     plotters::style::register_font("sans-serif", FontStyle::Normal, PLOT_FONT).map_err(|_| {
         anyhow::anyhow!("the bundled font assets/fonts/DejaVuSans.ttf does not parse")
     })?;
-    match Args::parse().command {
+    match parse_args().command {
         Command::Falsify {
             episodes,
             seconds,
@@ -482,6 +488,7 @@ enum CutInArg {
 
 /// The campaign's arguments.
 #[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
 struct CampaignArgs {
     /// Episodes per (leader, follower) group.
     #[arg(long, default_value_t = 500)]
@@ -517,6 +524,7 @@ struct CampaignArgs {
 }
 
 fn campaign(args: CampaignArgs) -> Result<()> {
+    use host_tests::campaign::{run_campaign, CampaignSettings};
     let CampaignArgs {
         episodes,
         seconds,
@@ -529,136 +537,118 @@ fn campaign(args: CampaignArgs) -> Result<()> {
         out,
         table,
     } = args;
-    positive_count("episodes", episodes)?;
-    positive_seconds("seconds", seconds)?;
-    anyhow::ensure!(
-        latency <= 50,
-        "--latency must be at most 50 periods (1 s, the covered track age; got {latency})"
-    );
     anyhow::ensure!(
         latency == 0 || sensors == SensorsArg::Exact,
         "--latency is for --sensors exact; the datasheet sensors draw their own"
     );
-    anyhow::ensure!(
-        dead_time_ms.is_finite() && dead_time_ms >= 0.0,
-        "--dead-time-ms must be a finite number of milliseconds of at least 0 (got {dead_time_ms})"
-    );
-    anyhow::ensure!(
-        lag.is_finite() && lag >= 0.0,
-        "--lag must be a finite time constant of at least 0 s (got {lag})"
-    );
+    let settings = CampaignSettings {
+        episodes,
+        seconds,
+        seed,
+        sensing: match sensors {
+            SensorsArg::Exact => Sensing::Fixed(SensorModel::exact_with_latency(latency)),
+            SensorsArg::Datasheet => Sensing::Datasheet,
+        },
+        cut_in: match cut_in {
+            CutInArg::None => None,
+            CutInArg::Leader => Some(CutInKind::Leader),
+            CutInArg::Follower => Some(CutInKind::Follower),
+        },
+        actuator: ActuatorModel {
+            dead_time: dead_time_ms * 1e-3,
+            lag,
+        },
+        config: firmware::Config::default(),
+    };
+    settings
+        .check()
+        .map_err(|e| anyhow::anyhow!("--{} {}", e.field.replace('_', "-"), e.reason))?;
     let bytes = table_bytes(&table)?;
     let (table, _) = split_table(bytes)?;
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    let sensing = match sensors {
-        SensorsArg::Exact => Sensing::Fixed(SensorModel::exact_with_latency(latency)),
-        SensorsArg::Datasheet => Sensing::Datasheet,
-    };
-    let cut_in = match cut_in {
-        CutInArg::None => None,
-        CutInArg::Leader => Some(CutInKind::Leader),
-        CutInArg::Follower => Some(CutInKind::Follower),
-    };
-    let actuator = ActuatorModel {
-        dead_time: dead_time_ms * 1e-3,
-        lag,
-    };
-    let config = firmware::Config::default();
-    // What the certificate covers: measurements within the declared error and track age
-    // (both sensor settings), an actuator within the declared dead time and lag, no cut-in.
-    let covered = cut_in.is_none()
-        && actuator.dead_time * 1e6 <= config.actuator_dead_time_us as f32 + 0.5
-        && actuator.lag * 1e6 <= config.actuator_lag_us as f32 + 0.5;
-    let groups: Vec<(Leader, Follower)> = LEADERS
-        .into_iter()
-        .flat_map(|l| FOLLOWERS.into_iter().map(move |f| (l, f)))
-        .collect();
-    let bar = ProgressBar::new((groups.len() * episodes) as u64);
+    let bar = ProgressBar::new((host_tests::campaign::GROUPS.len() * episodes) as u64);
     bar.set_style(
         ProgressStyle::with_template("[{bar:40}] {pos}/{len} episodes ({elapsed}, eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let mut summaries = Vec::new();
     println!(
         "| leader | follower | in model | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | min margin [m] (front, rear) | min gap front [m] | min gap rear [m] | override | uncertified min-risk periods | fallback periods (episodes) | oldest track [s] (front, rear) | leader stops | standstill starts | max jerk [m/s^3] | ISO 15622 held (episodes whose leader braked at most 3.5 m/s^2, engaged without an emergency) | worst ISO ratio there | emergency periods (engagements that were one) |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
-    for (i, (leader, follower)) in groups.iter().enumerate() {
-        let template = Episode {
-            leader: *leader,
-            follower: *follower,
-            seconds,
-            sensors: sensing,
-            cut_in,
-            actuator,
-            config,
-            seed: seed + (i as u64) * 1_000_000,
-        };
-        let (summary, _) = run_group(&table, bytes, template, episodes, &|| bar.inc(1));
-        let l = summary.certificate_losses_by_mode;
-        bar.suspend(|| {
-            println!(
-                "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {} | {} ({}) | {:.2}, {:.2} | {:.1} | {} | {:.0} | {} of {} | {:.2} | {} ({}) |",
-                summary.leader,
-                summary.follower,
-                summary.in_model,
-                summary.episodes,
-                summary.collisions,
-                summary.collisions_unavoidable,
-                summary.certificate_losses,
-                l.nominal,
-                l.r#override,
-                l.minimum_risk,
-                l.uncertified,
-                l.front,
-                l.rear,
-                l.speed,
-                l.domain,
-                summary.min_margin,
-                summary.min_front_margin,
-                summary.min_rear_margin,
-                summary.min_gap_leader,
-                summary.min_gap_follower,
-                summary.mean_override_share,
-                summary.uncertified_minimum_risk_periods,
-                summary.fallback_periods,
-                summary.fallback_episodes,
-                summary.max_track_age[0],
-                summary.max_track_age[1],
-                summary.mean_leader_stops,
-                summary.standstill_starts,
-                summary.max_jerk,
-                summary.iso_scope.1,
-                summary.iso_scope.0,
-                summary.iso_worst_in_scope,
-                summary.emergency_periods,
-                summary.engaged_in_emergency
-            )
-        });
-        let mut trace = Trace::new();
-        let worst = Episode {
-            seed: summary.worst_seed,
-            ..template
-        };
-        if summary.episodes > 0 && run_episode(&table, bytes, &worst, Some(&mut trace)).is_some() {
-            let name = format!("worst_{leader:?}_{follower:?}.png").to_lowercase();
-            plot_trace(
-                &out.join(name),
-                &format!(
-                    "smallest margin: {leader:?} leader, {follower:?} follower (seed {})",
-                    summary.worst_seed
-                ),
-                &trace,
-            )?;
-        }
-        summaries.push(summary);
-    }
+    let mut plotted: Result<()> = Ok(());
+    let report = run_campaign(
+        &table,
+        bytes,
+        &settings,
+        &mut |summary, worst| {
+            let l = summary.certificate_losses_by_mode;
+            bar.suspend(|| {
+                println!(
+                    "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {} | {} ({}) | {:.2}, {:.2} | {:.1} | {} | {:.0} | {} of {} | {:.2} | {} ({}) |",
+                    summary.leader,
+                    summary.follower,
+                    summary.in_model,
+                    summary.episodes,
+                    summary.collisions,
+                    summary.collisions_unavoidable,
+                    summary.certificate_losses,
+                    l.nominal,
+                    l.r#override,
+                    l.minimum_risk,
+                    l.uncertified,
+                    l.front,
+                    l.rear,
+                    l.speed,
+                    l.domain,
+                    summary.min_margin,
+                    summary.min_front_margin,
+                    summary.min_rear_margin,
+                    summary.min_gap_leader,
+                    summary.min_gap_follower,
+                    summary.mean_override_share,
+                    summary.uncertified_minimum_risk_periods,
+                    summary.fallback_periods,
+                    summary.fallback_episodes,
+                    summary.max_track_age[0],
+                    summary.max_track_age[1],
+                    summary.mean_leader_stops,
+                    summary.standstill_starts,
+                    summary.max_jerk,
+                    summary.iso_scope.1,
+                    summary.iso_scope.0,
+                    summary.iso_worst_in_scope,
+                    summary.emergency_periods,
+                    summary.engaged_in_emergency
+                )
+            });
+            // The group's episode with the smallest margin, plotted.
+            let mut trace = Trace::new();
+            if summary.episodes > 0 && run_episode(&table, bytes, worst, Some(&mut trace)).is_some()
+            {
+                let name =
+                    format!("worst_{:?}_{:?}.png", summary.leader, summary.follower).to_lowercase();
+                let drawn = plot_trace(
+                    &out.join(name),
+                    &format!(
+                        "smallest margin: {:?} leader, {:?} follower (seed {})",
+                        summary.leader, summary.follower, summary.worst_seed
+                    ),
+                    &trace,
+                );
+                if plotted.is_ok() {
+                    plotted = drawn;
+                }
+            }
+        },
+        &|| bar.inc(1),
+    );
     bar.finish_and_clear();
-    if cut_in.is_some() {
+    plotted?;
+    if settings.cut_in.is_some() {
         println!();
         println!("| leader | follower | cut-ins | first track after [s] (mean, max) | recognised at once | front uncertified | of those at beta within one period | mean hardest command [m/s^2] | collisions | of them unavoidable |");
         println!("|---|---|---|---|---|---|---|---|---|---|");
-        for summary in &summaries {
+        for summary in &report.groups {
             if let Some(c) = summary.cut_ins {
                 println!(
                     "| {:?} | {:?} | {} | {:.3}, {:.3} | {} | {} | {} | {:.2} | {} | {} |",
@@ -677,68 +667,35 @@ fn campaign(args: CampaignArgs) -> Result<()> {
             }
         }
     }
-    let json = serde_json::to_string_pretty(&serde_json::json!({
-        "episodes_per_group": episodes,
-        "seconds": seconds,
-        "sensors": sensing,
-        "declared_sensor_bounds": host_tests::sim::ErrorBounds::from(&config.sensors),
-        "covered_track_age_s": config.sensors.max_track_age_us as f32 * 1e-6,
-        "cut_in": cut_in,
-        "actuator": actuator,
-        "covered_by_the_certificate": covered,
-        "groups": summaries,
-    }))?;
-    std::fs::write(out.join("campaign.json"), json)?;
-    let model: Vec<_> = summaries.iter().filter(|s| s.in_model).collect();
-    let episodes_model: usize = model.iter().map(|s| s.episodes).sum();
-    let collisions_model: usize = model.iter().map(|s| s.collisions).sum();
-    let losses_model: usize = model.iter().map(|s| s.certificate_losses).sum();
-    let unavoidable_model: usize = model.iter().map(|s| s.collisions_unavoidable).sum();
-    let uncertified_mrm: u64 = model
-        .iter()
-        .map(|s| s.uncertified_minimum_risk_periods)
-        .sum();
-    let fallback: u64 = model.iter().map(|s| s.fallback_periods).sum();
+    std::fs::write(
+        out.join("campaign.json"),
+        serde_json::to_string_pretty(&report)?,
+    )?;
+    let t = &report.totals;
     println!(
-        "certified starts, humans within the model, {seconds} s: {collisions_model} collisions \
-         ({unavoidable_model} after the humans alone had made one unavoidable), \
-         {losses_model} certificate losses and {uncertified_mrm} uncertified minimum-risk \
-         periods ({fallback} periods of the certified fallback) in {episodes_model} episodes"
+        "certified starts, humans within the model, {seconds} s: {} collisions \
+         ({} after the humans alone had made one unavoidable), \
+         {} certificate losses and {} uncertified minimum-risk \
+         periods ({} periods of the certified fallback) in {} episodes",
+        t.collisions,
+        t.collisions_unavoidable,
+        t.certificate_losses,
+        t.uncertified_minimum_risk_periods,
+        t.fallback_periods,
+        t.in_model_episodes
     );
-    if cut_in.is_some() {
-        let (cuts, avoidable, late): (usize, usize, usize) = summaries
-            .iter()
-            .filter_map(|s| s.cut_ins)
-            .fold((0, 0, 0), |(n, a, l), c| {
-                (
-                    n + c.episodes,
-                    a + c.collisions - c.unavoidable,
-                    l + c.front_uncertified - c.beta_within_one_period,
-                )
-            });
+    if settings.cut_in.is_some() {
         println!(
-            "cut-ins: {cuts}; {late} not braked at beta within one period of the new track \
-             while the front was uncertified; {avoidable} collisions the humans had not made \
-             unavoidable"
+            "cut-ins: {}; {} not braked at beta within one period of the new track \
+             while the front was uncertified; {} collisions the humans had not made \
+             unavoidable",
+            t.cut_ins, t.cut_ins_braked_late, t.cut_in_collisions_avoidable
         );
     }
     println!("wrote {}", out.display());
-    let empty: Vec<String> = summaries
-        .iter()
-        .filter(|s| s.episodes == 0)
-        .map(|s| format!("{:?}/{:?}", s.leader, s.follower))
-        .collect();
-    anyhow::ensure!(
-        empty.is_empty(),
-        "no certified start could be drawn for {}: nothing was tested",
-        empty.join(", ")
-    );
-    anyhow::ensure!(
-        !covered || (collisions_model == 0 && losses_model == 0 && uncertified_mrm == 0),
-        "the certificate failed: {collisions_model} collisions, {losses_model} certificate \
-         losses and {uncertified_mrm} uncertified minimum-risk periods with humans within the \
-         model, sensors and actuator within its limits"
-    );
+    if let Some(failure) = report.failure() {
+        anyhow::bail!("{failure}");
+    }
     Ok(())
 }
 

@@ -14,6 +14,7 @@ fn refused(args: &[&str], names: &str) {
     assert!(!out.status.success(), "{args:?} was accepted: {stderr}");
     assert!(stderr.contains(names), "{args:?}: {stderr}");
     assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "{args:?}: {stderr}");
 }
 
 #[test]
@@ -43,4 +44,6 @@ fn the_search_refuses_them_too() {
     refused(&["falsify", "--episodes", "0"], "--episodes");
     refused(&["falsify", "--seconds", "0"], "--seconds");
     refused(&["falsify", "--seconds", "nan"], "--seconds");
+    refused(&["falsify", "--seconds", "-5"], "--seconds");
+    refused(&["campaign", "--seconds", "-5"], "--seconds");
 }

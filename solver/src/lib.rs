@@ -11,8 +11,9 @@
 //! - [`games`]: one file per game (dynamics, constraint, Hamiltonian, optimal inputs), and
 //!   [`games::AnyGame`], the one place that lists them.
 //! - [`pipeline`]: a run from a config to files: the [`config`]s, the level-set [`run`], the
-//!   rear game's run ([`rear`]), the [`sweep`] over many rear configs, the table [`compile`]r,
-//!   and the files and plots ([`output`]).
+//!   rear game's run ([`rear`]), the [`sweep`] over many rear configs, `solver verify` on a
+//!   table file ([`verify_table`]), the table [`compile`]r, and the files and plots
+//!   ([`output`]).
 //! - [`proof`]: what is checked rather than computed: [`verify`] (an interval proof of the
 //!   rear table, cell by cell), the measurement error's cost ([`robust`]), the [`trusted`]
 //!   box of a level-set solve, and the [`exact`] values the schemes are tested against.
@@ -31,5 +32,5 @@ pub mod proof;
 
 pub use engine::{grid, hji, scheme, semi_lagrangian};
 pub use error::{ConfigError, SolverError};
-pub use pipeline::{compile, config, output, rear, run, sweep};
+pub use pipeline::{compile, config, output, rear, run, sweep, verify_table};
 pub use proof::{exact, robust, trusted, verify};

@@ -39,7 +39,7 @@ struct Args {
 #[derive(clap::Subcommand, Debug)]
 enum Command {
     /// Proves, cell by cell, that a rear table's certificate survives one control period
-    /// (`solver::verify`); writes `DIR/verify/<table>/report.json` and a plot of the
+    /// (`solver::verify`); writes `DIR/verify/<table>/verify.json` and a plot of the
     /// unproven cells.
     Verify(VerifyArgs),
     /// Runs a sweep of rear configs made from one (`solver::sweep`; e.g.
@@ -52,6 +52,8 @@ enum Command {
 }
 
 #[derive(clap::Args, Debug)]
+// A negative number is a value (refused with a reason), not an unknown flag.
+#[command(allow_negative_numbers = true)]
 struct VerifyArgs {
     /// The table (a ThreeCarSplit table, e.g. firmware/tables/default.bin).
     table: PathBuf,
@@ -167,6 +169,23 @@ impl Progress {
     }
 }
 
+/// Parses the command line; a mistake in it is one line naming the argument (clap's own
+/// message, without its usage block), and exit code 2. Help and version print as usual.
+fn parse_args() -> Args {
+    Args::try_parse().unwrap_or_else(|e| {
+        use clap::error::ErrorKind;
+        if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion)
+            || e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+        {
+            e.exit()
+        }
+        let text = e.to_string();
+        let first = text.lines().next().unwrap_or("error: bad arguments");
+        eprintln!("{first} (see --help)");
+        std::process::exit(2)
+    })
+}
+
 /// Runs [`real_main`]; a user error (a bad config, an unwritable folder, an unproven table) is
 /// one clean message on stderr and exit code 1, with or without `RUST_BACKTRACE` (anyhow's
 /// `Debug` output would print a backtrace of this function, which tells a user nothing).
@@ -181,7 +200,7 @@ fn main() -> std::process::ExitCode {
 }
 
 fn real_main() -> Result<()> {
-    let args = Args::parse();
+    let args = parse_args();
     ensure_writable(&args.out)?;
     match &args.command {
         Some(Command::Verify(v)) => return run_verify(v, &args.out, args.quiet),
@@ -360,9 +379,6 @@ fn run_configs(args: &Args) -> Result<()> {
 /// when a certified cell is unproven.
 fn run_verify(v: &VerifyArgs, out: &std::path::Path, quiet: bool) -> Result<()> {
     use solver::verify::Settings;
-    if v.period_ms.is_empty() || v.period_ms.iter().any(|p| !(p.is_finite() && *p > 0.0)) {
-        anyhow::bail!("--period-ms: every period must be a positive number of milliseconds");
-    }
     if !(v.budget_seconds.is_finite() && v.budget_seconds >= 0.0) {
         anyhow::bail!(
             "--budget-seconds: must be a finite number of seconds, 0 for no limit (got {})",
@@ -379,11 +395,32 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path, quiet: bool) -> Result<()> 
         },
         exhaustive: v.exhaustive,
     };
-    let bytes =
-        std::fs::read(&v.table).with_context(|| format!("reading {}", v.table.display()))?;
+    let error = solver::robust::MeasurementError {
+        range: v.range_error,
+        range_relative: v.range_error_relative,
+        range_rate: v.range_rate_error,
+        ego_speed: v.ego_speed_error,
+        ego_speed_relative: v.ego_speed_error_relative,
+        ..solver::robust::MeasurementError::default()
+    };
+    // Every option is checked before anything runs, named as the command line names it.
+    solver::verify_table::check_settings(&settings, &error).map_err(|e| {
+        let flag = match e.field.as_str() {
+            "periods" => "--period-ms",
+            "budget seconds" => "--budget-seconds",
+            "rear margin" => "--rear-margin",
+            "range error" => "--range-error",
+            "relative range error" => "--range-error-relative",
+            "range-rate error" => "--range-rate-error",
+            "ego-speed error" => "--ego-speed-error",
+            "relative ego-speed error" => "--ego-speed-error-relative",
+            _ => "verify",
+        };
+        anyhow::anyhow!("{flag}: {}", e.reason)
+    })?;
     let progress = Progress::new(quiet, "verify");
-    let (rear, report, recorded) =
-        solver::verify::verify_bytes_with_progress(&bytes, &settings, &[], &mut |done, total| {
+    let run =
+        solver::verify_table::verify_table(&v.table, &settings, &error, out, &mut |done, total| {
             progress.set(
                 done as f64 / total as f64,
                 &format!("{done} of {total} cells"),
@@ -391,18 +428,10 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path, quiet: bool) -> Result<()> 
         })
         .with_context(|| v.table.display().to_string())?;
     progress.finish();
-    let stem = v
-        .table
-        .file_stem()
-        .map_or_else(|| "table".to_string(), |s| s.to_string_lossy().into_owned());
-    let dir = out.join("verify").join(stem);
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    solver::output::write_json(&dir.join("report.json"), &report)?;
-    // Over the table's whole extent of gaps (issue 22: the plots stopped at 60 m).
-    solver::verify::plot(&rear, &report, &dir, &[0.1, 5.0, 15.0, 30.0], f64::INFINITY)?;
+    let report = &run.report;
     println!(
         "{}: periods {:?} ms, level {:.4} m: {} of {} certified cells proven ({:.3}%; {} with the standstill lemma); \
-         unproven: {} tangency, {} resolution, {} collision{}; deficit at most {:.4} m; {:.1} s",
+         unproven: {} tangency, {} resolution, {} collision{}; largest deficit found {:.4} m; {:.1} s",
         v.table.display(),
         v.period_ms,
         report.level,
@@ -427,41 +456,7 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path, quiet: bool) -> Result<()> 
         report.dip,
         report.seconds
     );
-    // The measurement space (solver::robust): exact sensors against the declared error.
-    let error = solver::robust::MeasurementError {
-        range: v.range_error,
-        range_relative: v.range_error_relative,
-        range_rate: v.range_rate_error,
-        ego_speed: v.ego_speed_error,
-        ego_speed_relative: v.ego_speed_error_relative,
-        ..solver::robust::MeasurementError::default()
-    };
-    for (name, x) in [
-        ("--range-error", v.range_error),
-        ("--range-error-relative", v.range_error_relative),
-        ("--range-rate-error", v.range_rate_error),
-        ("--ego-speed-error", v.ego_speed_error),
-        ("--ego-speed-error-relative", v.ego_speed_error_relative),
-    ] {
-        if !(x.is_finite() && (0.0..1.0).contains(&x)) {
-            anyhow::bail!("{name}: an error bound must be a finite number in [0, 1) (got {x})");
-        }
-    }
-    let table = table_format::Table::parse(&bytes)?;
-    let axes = [rear.axis(0), rear.axis(1), rear.axis(2)];
-    let exact = solver::robust::robustness(
-        &table,
-        &report,
-        axes,
-        &solver::robust::MeasurementError::EXACT,
-    );
-    let declared = solver::robust::robustness(&table, &report, axes, &error);
-    solver::output::write_json(
-        &dir.join("robustness.json"),
-        &serde_json::json!({ "exact": exact, "declared": declared }),
-    )?;
-    solver::robust::plot(axes, &[&exact, &declared], &dir, 20.0)?;
-    for r in [&exact, &declared] {
+    for r in [&run.exact, &run.declared] {
         println!(
             "  measurement error {:?}: {} of {} measured rear states pass the firmware's test ({:.2}%), \
              {} of them with a box touching an unproven cell, {} too wide to evaluate",
@@ -473,24 +468,14 @@ fn run_verify(v: &VerifyArgs, out: &std::path::Path, quiet: bool) -> Result<()> 
             r.too_wide
         );
     }
-    println!("  wrote {}", dir.display());
+    println!("  wrote {}", run.dir.display());
     if let Some(path) = &v.write {
-        std::fs::write(path, &recorded).with_context(|| format!("writing {}", path.display()))?;
+        std::fs::write(path, &run.recorded)
+            .with_context(|| format!("writing {}", path.display()))?;
         println!("  wrote {} (with the record)", path.display());
     }
-    if report.proven < report.certified {
-        anyhow::bail!(
-            "{} certified cells are not proven (see {})",
-            report.certified - report.proven,
-            dir.join("report.json").display()
-        );
-    }
-    if declared.unproven > 0 || exact.unproven > 0 {
-        anyhow::bail!(
-            "{} passing measurements have a box that touches an unproven cell (see {})",
-            declared.unproven + exact.unproven,
-            dir.join("robustness.json").display()
-        );
+    if let Some(failure) = run.failure() {
+        anyhow::bail!("{failure}");
     }
     Ok(())
 }

@@ -538,7 +538,7 @@ fn the_command_writes_its_report_and_fails_cleanly_on_unproven_cells() {
         "{stderr}"
     );
     let report: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out.join("verify/default/report.json")).expect("the report"),
+        &std::fs::read_to_string(out.join("verify/default/verify.json")).expect("the report"),
     )
     .expect("JSON");
     assert!(report["certified"].as_u64() > Some(500_000));

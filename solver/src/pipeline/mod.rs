@@ -4,6 +4,7 @@
 //! - [`run`]: one level-set run (solve, trusted box, policy, table, plots);
 //! - [`rear`]: one rear-game run (value iteration, table, proof);
 //! - [`sweep`]: many rear configs made from one, solved, proven and compared;
+//! - [`verify_table`]: `solver verify` on a table file, its report and plots;
 //! - [`compile`]: values to a quantized, interpolated table with its error bound;
 //! - `plots`: what a level-set run draws, and where;
 //! - [`output`]: the files (`.npy`, JSON, tables) and the plots' drawing.
@@ -15,3 +16,4 @@ mod plots;
 pub mod rear;
 pub mod run;
 pub mod sweep;
+pub mod verify_table;
