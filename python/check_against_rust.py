@@ -18,7 +18,7 @@ from hjacc_table import Table, TableError  # noqa: E402
 
 def main(table_path, records_path):
     table = Table.open(table_path)
-    d = table.dims()
+    d = table.dims
     size = 4 * d + 5
     data = open(records_path, "rb").read()
     if len(data) % size:

@@ -1,14 +1,16 @@
-"""Tests of the native module `hjacc` (python/hjacc-native, built with maturin).
+"""Tests of the package `hjacc` (python/hjacc-native, built with maturin).
 
     python3 python/test_native.py
 
-Needs the module installed (`pip install target/wheels/hjacc-*.whl`, see python/README.md) and
-runs from the repository's root. Checks:
-- `hjacc.Table` against the pure-Python reader, to the last bit, on 10,000 random states of the
-  firmware's table (some outside the grid, where both refuse);
-- a corrupt table and a state of the wrong size raise ValueError;
-- `hjacc.run` solves a small two-car config, returns its summary, and writes a table that
-  `hjacc.Table` reads; a config with an unknown key raises ValueError naming the key and line.
+Needs the package installed (`pip install target/wheels/hjacc-*.whl "dask[distributed]"`, see
+python/README.md) and runs from anywhere. Checks:
+- `hjacc.Table` and the pure-Python `hjacc_table.Table` have one interface: the same public
+  names, the same header and attributes, the same answers to the last bit on 10,000 random
+  states of the firmware's table (some outside the grid, where both refuse), the same errors;
+- every door (run, run_rear, verify, campaign, falsify, sweep) runs, returns what it wrote,
+  and refuses nonsense with ValueError naming the argument;
+- a sweep runs on a dask.distributed.LocalCluster and gives what it gives on this machine
+  (HJACC_SKIP_DASK=1 skips it where dask is not installed; CI does not set it).
 """
 
 import math
@@ -49,7 +51,7 @@ def agree(case, path, n):
     (some outside the grid); returns how many policies the table answered."""
     native = hjacc.Table.open(path)
     python = PyTable.open(path)
-    case.assertEqual(native.dims, python.dims())
+    case.assertEqual(native.dims, python.dims)
     axes = native.header["axes"]
     rng = random.Random(13)
     outside = policies = 0
@@ -82,14 +84,28 @@ class TableAgainstPurePython(unittest.TestCase):
         # The firmware's table stores no policy bits: both readers refuse every policy.
         self.assertEqual(agree(self, DEFAULT_TABLE, 10_000), 0)
 
-    def test_header_and_error_bound(self):
+    def test_one_interface(self):
         native = hjacc.Table.open(DEFAULT_TABLE)
-        header = native.header
-        self.assertIn("ThreeCarSplit", header["game"])
+        python = PyTable.open(DEFAULT_TABLE)
+        public = lambda t: sorted(n for n in dir(t) if not n.startswith("_"))
+        self.assertEqual(public(native), public(python))
+        for name in public(python):
+            if not callable(getattr(python, name)):
+                self.assertEqual(getattr(native, name), getattr(python, name), name)
+        for k in range(python.dims):
+            self.assertEqual(native.coordinates(k), python.coordinates(k))
+        self.assertEqual(native.header["game"]["kind"], "ThreeCarSplit")
+        self.assertEqual(native.horizon["status"], "Proven")
         self.assertEqual(len(native), os.path.getsize(DEFAULT_TABLE))
-        bound = header["error_bound"]
-        self.assertEqual(bits(native.error_bound), bits(f32(bound["quantization"] + bound["interpolation"])))
+        self.assertEqual(len(python), len(native))
+        self.assertEqual(repr(native), repr(python))
+        parts = native.error_bound_parts
+        self.assertEqual(bits(native.error_bound), bits(f32(parts["quantization"] + parts["interpolation"])))
         self.assertEqual(hjacc.FORMAT_VERSION, 4)
+        for node in (0, 1234, native.nodes - 1):
+            self.assertEqual(bits(native.node_value(node)), bits(python.node_value(node)))
+        self.assertTrue(native.contains([10.0, 0.0, 0.0]) and python.contains([10.0, 0.0, 0.0]))
+        self.assertFalse(native.contains([1e6, 0.0, 0.0]) or python.contains([1e6, 0.0, 0.0]))
 
     def test_corrupt_tables_and_bad_states_raise(self):
         with open(DEFAULT_TABLE, "rb") as f:
@@ -107,13 +123,16 @@ class TableAgainstPurePython(unittest.TestCase):
                 hjacc.Table(whole[:cut])
             with self.assertRaisesRegex(TableError, "truncated"):
                 PyTable(whole[:cut])
-        native = hjacc.Table.open(DEFAULT_TABLE)
-        with self.assertRaisesRegex(ValueError, "coordinates"):
-            native.value_at([1.0, 2.0])
-        with self.assertRaisesRegex(ValueError, "not finite"):
-            native.value_at([math.nan, 2.0, 3.0])
-        with self.assertRaises(OSError):
-            hjacc.Table.open(os.path.join(ROOT, "no-such-table.bin"))
+        for reader in (hjacc.Table, PyTable):
+            table = reader.open(DEFAULT_TABLE)
+            with self.assertRaisesRegex(TableError if reader is PyTable else hjacc.TableError, "coordinates"):
+                table.value_at([1.0, 2.0])
+            with self.assertRaisesRegex(ValueError, "not finite"):
+                table.value_at([math.nan, 2.0, 3.0])
+            with self.assertRaises(ValueError):
+                table.lookup([10.0, 0.0, 0.0])  # no policy bits in this table
+            with self.assertRaises(OSError):
+                reader.open(os.path.join(ROOT, "no-such-table.bin"))
 
 
 class Run(unittest.TestCase):
@@ -152,6 +171,82 @@ class Run(unittest.TestCase):
             message = str(caught.exception)
             self.assertIn("wrong_key", message)
             self.assertIn("line", message)
+
+
+SMALL_REAR = os.path.join(ROOT, "solver", "tests", "sweep", "base.toml")
+
+
+class Doors(unittest.TestCase):
+    """Each door of the command line, from Python: what it writes, and what it refuses."""
+
+    def test_run_rear_then_verify_then_the_closed_loop(self):
+        with tempfile.TemporaryDirectory() as out:
+            summary = hjacc.run_rear(SMALL_REAR, out)
+            self.assertEqual(summary["stopped"], "proven")
+            table = os.path.join(out, "sweep-base", "table.bin")
+            report = hjacc.verify(table, out)
+            self.assertIsNone(report["failure"])
+            self.assertEqual(report["report"]["proven"], report["report"]["certified"])
+            self.assertTrue(os.path.exists(os.path.join(report["dir"], "verify.json")))
+            with self.assertRaisesRegex(ValueError, "range error"):
+                hjacc.verify(table, out, range_error=2.0)
+            with self.assertRaisesRegex(ValueError, "periods"):
+                hjacc.verify(table, out, periods_ms=[])
+            # The closed loop runs the firmware's default table unless given another.
+            loop = os.path.join(out, "campaign")
+            result = hjacc.campaign(episodes=2, seconds=5.0, out=loop)
+            self.assertIsNone(result["failure"])
+            self.assertEqual(len(result["groups"]), 20)
+            self.assertTrue(os.path.exists(os.path.join(loop, "campaign.json")))
+            for bad, name in [({"seconds": -5.0}, "seconds"), ({"episodes": 0}, "episodes"),
+                              ({"sensors": "perfect"}, "sensors"), ({"cut_in": "sideways"}, "cut_in"),
+                              ({"lag": math.nan}, "lag")]:
+                with self.assertRaisesRegex(ValueError, name):
+                    hjacc.campaign(out=loop, **bad)
+            search = hjacc.falsify(episodes=40, seconds=10.0, out=os.path.join(out, "falsify"))
+            self.assertEqual((search["collisions"], search["certificate_losses"]), (0, 0))
+            with self.assertRaisesRegex(ValueError, "episodes"):
+                hjacc.falsify(episodes=0, out=out)
+
+
+def sweep_file(folder):
+    """A sweep of two tables (the follower braking at 6 and at 8 m/s^2) and two leaders."""
+    path = os.path.join(folder, "sweep.toml")
+    with open(path, "w") as f:
+        f.write(
+            'name = "python-sweep"\n'
+            'base = "%s"\n'
+            "[[points]]\n"
+            "[[points]]\n"
+            "game.follower = { min = -8.0, max = 2.0 }\n"
+            "[[vary]]\n"
+            'key = "front.leader_braking"\n'
+            "values = [3.5, 8.0]\n"
+            "[volume]\n"
+            "samples = 20000\n" % SMALL_REAR.replace("\\", "/")
+        )
+    return path
+
+
+class Sweep(unittest.TestCase):
+    def test_a_sweep_here_and_on_a_dask_cluster_agree(self):
+        with tempfile.TemporaryDirectory() as folder:
+            path = sweep_file(folder)
+            here = hjacc.sweep(path, os.path.join(folder, "here"))
+            self.assertEqual((here["tables"], len(here["points"])), (2, 4))
+            self.assertTrue(os.path.exists(os.path.join(folder, "here", "python-sweep", "sweep.png")))
+            if os.environ.get("HJACC_SKIP_DASK") == "1":
+                self.skipTest("HJACC_SKIP_DASK=1")
+            from distributed import Client, LocalCluster
+
+            with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, Client(cluster) as client:
+                there = hjacc.sweep(path, os.path.join(folder, "dask"), client=client, progress=False)
+            self.assertEqual(len(there["points"]), 4)
+            for a, b in zip(here["points"], there["points"]):
+                self.assertEqual(a["point"], b["point"])
+                self.assertEqual(a["volume"], b["volume"])
+                self.assertEqual(a["table"]["certified_cells"], b["table"]["certified_cells"])
+            self.assertTrue(os.path.exists(os.path.join(folder, "dask", "python-sweep", "sweep.json")))
 
 
 if __name__ == "__main__":

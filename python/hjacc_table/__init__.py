@@ -197,10 +197,12 @@ class Table:
         self._strides = [1] * len(self.axes)
         for k in range(len(self.axes) - 2, -1, -1):
             self._strides[k] = self._strides[k + 1] * self.axes[k + 1]["points"]
+        self._inv_spacing, self._last = [], []
         for a in self.axes:
             spacing = _f32((a["max"] - a["min"]) / float(max(a["points"] - 1, 1)))
-            a["_inv_spacing"] = _f32(1.0 / spacing)
-            a["_last"] = float(a["points"] - 1)
+            self._inv_spacing.append(_f32(1.0 / spacing))
+            self._last.append(float(a["points"] - 1))
+        self._len = len(data)
 
     def _decode_header(self, data, header_len):
         """Decodes the postcard header into this object's fields (raises on a malformed one)."""
@@ -242,7 +244,11 @@ class Table:
         self.bits = c.u8()
         self.scale = c.f32()
         self.offset = c.f32()
-        self.error_bound = {"quantization": c.f32(), "interpolation": c.f32()}
+        self.error_bound_parts = {"quantization": c.f32(), "interpolation": c.f32()}
+        # The total as the Rust reader adds it, in single precision.
+        self.error_bound = _f32(
+            self.error_bound_parts["quantization"] + self.error_bound_parts["interpolation"]
+        )
         policy = c.varint()
         if policy not in (0, 1):
             raise TableError("unknown policy encoding %d" % policy)
@@ -268,6 +274,17 @@ class Table:
             raise TableError("invalid header")
         if any(a["points"] < 2 for a in self.axes):
             raise TableError("an axis has fewer than 2 points")
+        self.header = {
+            "game": self.game,
+            "min_gap": self.min_gap,
+            "horizon": self.horizon,
+            "axes": [dict(a) for a in self.axes],
+            "trusted_box": self.trusted_box,
+            "quantization": {"bits": self.bits, "scale": self.scale, "offset": self.offset},
+            "error_bound": self.error_bound_parts,
+            "policy": self.policy_encoding,
+            "verification": self.verification,
+        }
 
     @classmethod
     def open(cls, path):
@@ -275,9 +292,33 @@ class Table:
         with open(path, "rb") as f:
             return cls(f.read())
 
+    @property
     def dims(self):
         """The number of state axes."""
         return len(self.axes)
+
+    def lookup(self, state):
+        """``(value_at(state), policy_at(state))``."""
+        return self.value_at(state), self.policy_at(state)
+
+    def contains(self, state):
+        """Whether ``state`` lies on the table's grid."""
+        try:
+            self._cell(state)
+        except (TableError, TypeError, ValueError):
+            return False
+        return True
+
+    def __len__(self):
+        return self._len
+
+    def __repr__(self):
+        return "Table(%s, %d axes, %d nodes, %d bytes)" % (
+            self.game["kind"],
+            self.dims,
+            self.nodes,
+            len(self),
+        )
 
     def coordinates(self, k):
         """The node coordinates of axis ``k``, as floats."""
@@ -313,9 +354,9 @@ class Table:
                 raise TableError("axis %d: outside the grid" % k)
             last_cell = a["points"] - 2
             if a["spacing"] == "Uniform":
-                s = _f32(_f32(x - a["min"]) * a["_inv_spacing"])
+                s = _f32(_f32(x - a["min"]) * self._inv_spacing[k])
                 s = s if s > 0.0 else 0.0
-                s = s if s < a["_last"] else a["_last"]
+                s = s if s < self._last[k] else self._last[k]
                 i = min(int(s), last_cell)
                 t = _f32(s - float(i))
             else:
