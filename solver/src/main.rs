@@ -99,13 +99,34 @@ struct VerifyArgs {
 }
 
 /// Fails at once, naming the folder, if `out` cannot be written: a solve takes minutes, and
-/// its results must not be lost to a typo in `--out`.
+/// its results must not be lost to a typo in `--out`. Nothing is created here (issue 22: a run
+/// refused for a bad config must not leave an empty folder behind); the nearest existing
+/// folder on the path is probed instead, and the run creates `out` when it writes.
 fn ensure_writable(out: &std::path::Path) -> Result<()> {
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("--out {}: cannot create the folder", out.display()))?;
-    let probe = out.join(".hjacc-write-probe");
-    std::fs::write(&probe, b"")
-        .with_context(|| format!("--out {}: the folder is not writable", out.display()))?;
+    let mut existing = out;
+    while !existing.as_os_str().is_empty() && !existing.exists() {
+        existing = existing.parent().unwrap_or(std::path::Path::new(""));
+    }
+    let existing = if existing.as_os_str().is_empty() {
+        std::path::Path::new(".")
+    } else {
+        existing
+    };
+    if !existing.is_dir() {
+        anyhow::bail!(
+            "--out {}: {} is not a folder",
+            out.display(),
+            existing.display()
+        );
+    }
+    let probe = existing.join(format!(".hjacc-write-probe-{}", std::process::id()));
+    std::fs::write(&probe, b"").with_context(|| {
+        format!(
+            "--out {}: {} is not writable",
+            out.display(),
+            existing.display()
+        )
+    })?;
     std::fs::remove_file(&probe).ok();
     Ok(())
 }

@@ -27,6 +27,53 @@ fn a_config_given_to_the_wrong_door_names_the_right_one() {
     );
 }
 
+/// A refused run leaves nothing behind: the `--out` folder is probed, not created, before the
+/// configs are read (issue 22: a failed run created its folder).
+#[test]
+fn a_refused_run_creates_no_output_folder() {
+    let out = std::env::temp_dir().join(format!("hjacc-refused-{}/deeper", std::process::id()));
+    for args in [
+        vec!["--config", "configs/rear/deployment.toml"],
+        vec!["verify", "no/such/table.bin"],
+        vec![
+            "verify",
+            "../firmware/tables/default.bin",
+            "--period-ms",
+            "0",
+        ],
+    ] {
+        let status = std::process::Command::new(env!("CARGO_BIN_EXE_solver"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args(["--quiet", "--out"])
+            .arg(&out)
+            .args(&args)
+            .output()
+            .expect("the binary runs")
+            .status;
+        assert!(!status.success(), "{args:?}");
+        assert!(
+            !out.parent().unwrap().exists(),
+            "{args:?} created {}",
+            out.display()
+        );
+    }
+    // An --out below a file is refused, naming it.
+    let file = std::env::temp_dir().join(format!("hjacc-refused-file-{}", std::process::id()));
+    std::fs::write(&file, b"").unwrap();
+    let refusal = std::process::Command::new(env!("CARGO_BIN_EXE_solver"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["--quiet", "--config", "configs/two-car.toml", "--out"])
+        .arg(file.join("x"))
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&refusal.stderr);
+    assert!(
+        !refusal.status.success() && stderr.contains("is not a folder"),
+        "{stderr}"
+    );
+    std::fs::remove_file(&file).ok();
+}
+
 /// `verify` refuses options that mean nothing before it proves anything, whatever their
 /// order, naming the option; `--out` after the subcommand is taken.
 #[test]

@@ -187,6 +187,72 @@ fn unknown_keys_and_syntax_errors_are_refused_with_a_location() {
     assert_eq!(refused_field(&missing), "game.time_gap");
 }
 
+/// A value that parses but is refused by the checks after parsing (issue 22: these had the key
+/// but not the place) is located like a parse error: the line and the column of its key, or of
+/// the element of an array; a required field left out is located at the table that lacks it.
+#[test]
+fn refusals_after_parsing_carry_the_line_and_the_column() {
+    let line_of =
+        |text: &str, needle: &str| text.lines().position(|l| l.contains(needle)).unwrap() + 1;
+    let base = idm();
+    let text = base.replacen("min = 1.0, max = 2.0", "min = 2.0, max = 1.0", 1);
+    let err = Config::from_toml(&text).unwrap_err();
+    let line = line_of(&text, "min = 2.0, max = 1.0");
+    assert_eq!(err.field, "game.time_gap", "{err}");
+    assert!(
+        err.reason.ends_with(&format!("(line {line}, column 1)")),
+        "{err}"
+    );
+    // A grid axis' point count, below WENO5's five: located at the axis' key.
+    let at = base.find("points = ").unwrap();
+    let end = at
+        + "points = ".len()
+        + base[at + "points = ".len()..]
+            .find(|c: char| !c.is_ascii_digit())
+            .unwrap();
+    let text = format!("{}points = 3{}", &base[..at], &base[end..]);
+    let err = Config::from_toml(&text).unwrap_err();
+    assert!(
+        err.field.starts_with("grid.") && err.field.ends_with(".points"),
+        "{err}"
+    );
+    let line = line_of(&text, "points = 3");
+    assert!(
+        err.reason.contains(&format!("(line {line}, column ")),
+        "{err}"
+    );
+    // The rear schema: an element of an axis' pieces, at its own column.
+    let rear = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/configs/reference/rear.toml"
+    ))
+    .unwrap();
+    let text = rear.replacen("[[4.0, 0.25], [10.0, 0.5]", "[[4.0, 0.25], [3.0, 0.5]", 1);
+    let err = solver::rear::RearConfig::from_toml(&text).unwrap_err();
+    let line = line_of(&text, "[3.0, 0.5]");
+    let column = text
+        .lines()
+        .nth(line - 1)
+        .unwrap()
+        .find("[3.0, 0.5]")
+        .unwrap()
+        + 1;
+    assert_eq!(err.field, "grid.gap_follower.pieces[1]", "{err}");
+    assert!(
+        err.reason
+            .ends_with(&format!("(line {line}, column {column})")),
+        "{err}"
+    );
+    // A required field left out: where it belongs, the `[game]` table's key.
+    let missing = base.replace("time_gap = { min = 1.0, max = 2.0 }\n", "");
+    let err = Config::from_toml(&missing).unwrap_err();
+    let line = line_of(&missing, "[game]");
+    assert!(
+        err.reason.ends_with(&format!("(line {line}, column 2)")),
+        "{err}"
+    );
+}
+
 /// `base` with its first grid axis' point count made negative.
 fn with_negative_points(base: &str) -> String {
     let at = base.find("points = ").expect("a grid axis") + "points = ".len();

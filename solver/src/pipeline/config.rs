@@ -370,11 +370,9 @@ pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str) -> Result<T
         let Some(span) = e.span() else {
             return ConfigError::new("document", message);
         };
-        let start = span.start.min(text.len());
-        let before = &text[..start];
-        let line = before.matches('\n').count() + 1;
+        let (line, column) = line_column(text, span.start);
+        let before = &text[..span.start.min(text.len())];
         let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-        let column = before[line_start..].chars().count() + 1;
         // The enclosing table: the last `[header]` above the error.
         let table = before
             .lines()
@@ -411,6 +409,76 @@ pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str) -> Result<T
         };
         ConfigError::new(field, format!("{message} (line {line}, column {column})"))
     })
+}
+
+/// The line and the column (both from 1, the column in characters) of byte `offset` in `text`.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (
+        before.matches('\n').count() + 1,
+        before[line_start..].chars().count() + 1,
+    )
+}
+
+/// `error` (a refusal found after parsing, by `validate`) with the line and the column of its
+/// field in `text` appended, as the parser's own refusals have them (issue 22).
+///
+/// The field is a dotted path with array indices (`grid.gap_leader.points`,
+/// `vary[1].values`). The path is walked through the document with the parser's spans; where
+/// a segment is absent (a required field left out), the position is that of the deepest
+/// table that is present, which is where the field must be written. An error that already
+/// carries a position, or whose document does not parse, is returned as it is.
+pub(crate) fn locate(error: ConfigError, text: &str) -> ConfigError {
+    use toml::de::{DeTable, DeValue};
+    if error.reason.contains("(line ") {
+        return error;
+    }
+    let Ok(root) = DeTable::parse(text) else {
+        return error;
+    };
+    let mut span = None;
+    let mut table = Some(root.get_ref());
+    let mut here: Option<&toml::Spanned<DeValue<'_>>> = None;
+    'walk: for segment in error.field.split('.') {
+        // `name[3][1]`: a key, then indices into arrays.
+        let mut parts = segment.split('[');
+        let key = parts.next().unwrap_or("");
+        if !key.is_empty() {
+            let Some((name, value)) =
+                table.and_then(|t| t.iter().find(|(k, _)| k.get_ref().as_ref() == key))
+            else {
+                break;
+            };
+            span = Some(name.span());
+            here = Some(value);
+        }
+        for index in parts {
+            let Some(i) = index.trim_end_matches(']').parse::<usize>().ok() else {
+                break 'walk;
+            };
+            let Some(DeValue::Array(array)) = here.map(|h| h.get_ref()) else {
+                break 'walk;
+            };
+            let Some(item) = array.iter().nth(i) else {
+                break 'walk;
+            };
+            span = Some(item.span());
+            here = Some(item);
+        }
+        table = match here.map(|h| h.get_ref()) {
+            Some(DeValue::Table(t)) => Some(t),
+            _ => None,
+        };
+    }
+    let Some(span) = span else {
+        return error;
+    };
+    let (line, column) = line_column(text, span.start);
+    ConfigError::new(
+        error.field,
+        format!("{} (line {line}, column {column})", error.reason),
+    )
 }
 
 /// The most memory a config may ask for, bytes (8 GiB): checked before anything is allocated,
@@ -497,7 +565,7 @@ impl Config {
     /// Parses and validates a TOML document.
     pub fn from_toml(text: &str) -> Result<Self, ConfigError> {
         let config: Config = parse_toml(text)?;
-        config.validate()?;
+        config.validate().map_err(|e| locate(e, text))?;
         Ok(config)
     }
 

@@ -21,7 +21,7 @@ use crate::engine::semi_lagrangian::{Breakpoints, Iteration};
 use crate::error::{ConfigError, SolverError};
 use crate::games::{Accel, Idm, RearIdm};
 use crate::pipeline::config::{
-    check, check_memory, check_name, idm_parameters, parse_toml, IdmConfig, Range,
+    check, check_memory, check_name, idm_parameters, locate, parse_toml, IdmConfig, Range,
     SAMPLED_BYTES_PER_NODE,
 };
 use crate::pipeline::output;
@@ -196,7 +196,7 @@ impl RearConfig {
     /// Parses and validates a TOML document.
     pub fn from_toml(text: &str) -> Result<Self, ConfigError> {
         let config: RearConfig = parse_toml(text)?;
-        config.validate()?;
+        config.validate().map_err(|e| locate(e, text))?;
         Ok(config)
     }
 

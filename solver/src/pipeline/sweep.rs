@@ -51,7 +51,7 @@ use table_format::front::{front_value, FrontModel};
 use table_format::{Game, Table};
 
 use crate::error::{ConfigError, SolverError};
-use crate::pipeline::config::{check, check_name, parse_toml};
+use crate::pipeline::config::{check, check_name, locate, parse_toml};
 use crate::pipeline::output;
 use crate::pipeline::rear::{run_rear_with_report, RearConfig, RearEvent, RearStopped};
 use crate::proof::robust::{robustness, MeasurementError};
@@ -290,7 +290,10 @@ impl Sweep {
         let config: SweepConfig = parse_toml(&text)?;
         let dir = path.parent().map_or_else(PathBuf::new, Path::to_path_buf);
         let base = read(&dir.join(&config.base))?;
-        Sweep::from_parts(config, &base)
+        Sweep::from_parts(config, &base).map_err(|e| match e {
+            SolverError::Config(c) => SolverError::Config(locate(c, &text)),
+            e => e,
+        })
     }
 
     /// A sweep from its config and its base rear config's text.
