@@ -388,6 +388,12 @@ fn run_configs(args: &Args) -> Result<()> {
                 e.max_value_error, e.mean_value_error, e.max_boundary_error
             );
         }
+        if !summary.slices_not_drawn_untrusted.is_empty() {
+            println!(
+                "  slices not drawn (outside the trusted box, no claim there): {}",
+                summary.slices_not_drawn_untrusted.join(", ")
+            );
+        }
         println!(
             "  wrote {}",
             solver::run::folder(&args.out, config).display()

@@ -45,9 +45,11 @@ pub struct CompileReport {
     pub points: Vec<usize>,
     /// Bits per value.
     pub bits: u8,
-    /// Quantization error bound (largest rounding, value units).
+    /// Quantization error bound (largest rounding), m.
+    #[serde(rename = "quantization_error_m")]
     pub quantization_error: f32,
-    /// Interpolation error bound inside the trusted box.
+    /// Interpolation error bound inside the trusted box, m.
+    #[serde(rename = "interpolation_error_m")]
     pub interpolation_error: f32,
     /// Solver nodes inside the trusted box that the solver calls safe.
     pub solver_safe_nodes: usize,

@@ -7,6 +7,7 @@
 //! - [`verify_table`]: `solver verify` on a table file, its report and plots;
 //! - [`compile`]: values to a quantized, interpolated table with its error bound;
 //! - `plots`: what a level-set run draws, and where;
+//! - [`table_plots`]: what a split table certifies, and verify's verdicts over it;
 //! - [`output`]: the files (`.npy`, JSON, tables) and the plots' drawing.
 
 pub mod compile;
@@ -16,4 +17,5 @@ mod plots;
 pub mod rear;
 pub mod run;
 pub mod sweep;
+pub mod table_plots;
 pub mod verify_table;

@@ -16,37 +16,63 @@ use crate::pipeline::output::{self, CellMap, PlotAxis};
 use crate::proof::exact;
 use crate::proof::trusted::IndexBox;
 
-const GREEN: RGBColor = RGBColor(140, 210, 140);
-const BLUE: RGBColor = RGBColor(60, 110, 220);
-const RED: RGBColor = RGBColor(230, 120, 100);
-const ORANGE: RGBColor = RGBColor(245, 170, 60);
-const PURPLE: RGBColor = RGBColor(130, 90, 190);
-const GREY: RGBColor = RGBColor(215, 215, 215);
-const PALE_GREEN: RGBColor = RGBColor(205, 235, 205);
-const PALE_BLUE: RGBColor = RGBColor(175, 195, 240);
-const PALE_YELLOW: RGBColor = RGBColor(250, 230, 130);
+// Okabe and Ito's colour-blind-safe palette (issue 22), and two greys. Blue and vermillion
+// differ in hue and lightness for every common colour-vision deficiency; yellow is far lighter
+// than both; the reddish purple of the exact boundary differs from all three.
+/// Okabe-Ito blue: the safe set, and braking.
+pub(crate) const BLUE: RGBColor = RGBColor(0, 114, 178);
+/// Okabe-Ito vermillion: accelerating.
+pub(crate) const VERMILLION: RGBColor = RGBColor(213, 94, 0);
+/// Okabe-Ito yellow: a tie, either input.
+pub(crate) const YELLOW: RGBColor = RGBColor(240, 228, 66);
+/// Okabe-Ito reddish purple: the exact boundary.
+pub(crate) const PURPLE: RGBColor = RGBColor(204, 121, 167);
+/// Okabe-Ito bluish green: a second curve.
+pub(crate) const GREEN: RGBColor = RGBColor(0, 158, 115);
+/// Okabe-Ito orange: a third curve.
+pub(crate) const ORANGE: RGBColor = RGBColor(230, 159, 0);
+/// Light grey: in the constraint set, not safe (not certified).
+pub(crate) const LIGHT_GREY: RGBColor = RGBColor(222, 222, 222);
+/// Dark grey: outside the trusted box, where the solver's numbers carry no claim.
+pub(crate) const DARK_GREY: RGBColor = RGBColor(140, 140, 140);
 
-/// The categories of a safe-set map: inside the trusted box, then outside it (paler).
-const SET_LEGEND: [(&str, RGBColor); 4] = [
-    ("constraint set l >= 0", GREEN),
-    ("safe set V > 0", BLUE),
-    ("constraint set, untrusted", PALE_GREEN),
-    ("safe set, untrusted", PALE_BLUE),
+/// The label of the cells outside the trusted box, in every map: no colour there says "safe"
+/// or "certified" (issue 22).
+const UNTRUSTED: (&str, RGBColor) = (
+    "outside the trusted box: no claim (the solver's numbers disagree)",
+    DARK_GREY,
+);
+
+/// The categories of a safe-set map.
+const SET_LEGEND: [(&str, RGBColor); 3] = [
+    ("gaps above the minimum (l >= 0), not safe", LIGHT_GREY),
+    (
+        "safe: V > 0 (a safe input exists against every human input)",
+        BLUE,
+    ),
+    UNTRUSTED,
 ];
 
-/// The categories of a policy map: the policy where the state is safe, grey where it is not.
-const POLICY_LEGEND: [(&str, RGBColor); 4] = [
-    ("safe, u2* = a_max", ORANGE),
-    ("safe, u2* = a_min", PURPLE),
-    ("constraint set, not safe", GREY),
-    ("safe, either input (tie)", PALE_YELLOW),
+/// The categories of a policy map: the ego's input where the state is safe, grey where not.
+const POLICY_LEGEND: [(&str, RGBColor); 5] = [
+    ("safe; u2* accelerates (a_max)", VERMILLION),
+    ("safe; u2* brakes (a_min)", BLUE),
+    ("gaps above the minimum, not safe", LIGHT_GREY),
+    ("safe; either input keeps it safe (a tie)", YELLOW),
+    UNTRUSTED,
 ];
 
-/// The categories of the compiled table's map: what the firmware reads at a state.
-const TABLE_LEGEND: [(&str, RGBColor); 3] = [
-    ("certified, policy bit a_max", ORANGE),
-    ("certified, policy bit a_min", PURPLE),
-    ("constraint set, not certified", GREY),
+/// The categories of the compiled table's map: what the firmware reads at a state. Where the
+/// solver has a tie, the stored bit is arbitrary and is drawn as a tie.
+const TABLE_LEGEND: [(&str, RGBColor); 5] = [
+    ("certified, the bit says accelerate (a_max)", VERMILLION),
+    ("certified, the bit says brake (a_min)", BLUE),
+    ("gaps above the minimum, not certified", LIGHT_GREY),
+    (
+        "certified, either input (a tie; the bit is arbitrary)",
+        YELLOW,
+    ),
+    UNTRUSTED,
 ];
 
 /// A [`CellMap`] on `axes` (horizontal, vertical).
@@ -70,23 +96,29 @@ fn cell_map<'a>(
 }
 
 /// The firmware's reading of `table` at `state`: certified (the interpolated value above the
-/// table's error bound) with its policy bit, not certified, or `None` outside the table's grid
-/// or the constraint set.
+/// table's error bound) with its policy bit, or drawn as a tie where the solver has one (the
+/// stored bit is then arbitrary); not certified; the untrusted category outside the trusted
+/// box; `None` outside the table's grid or the constraint set.
 fn table_category(
     table: &table_format::Table<'_>,
     state: &[f32],
     in_constraint: bool,
+    tie: bool,
+    trusted: bool,
 ) -> Option<usize> {
     let lookup = table.lookup(state).ok()?;
-    if lookup.value > table.header().error_bound.total() {
-        Some(match lookup.action {
-            table_format::EgoAction::Accelerate => 0,
-            table_format::EgoAction::Brake => 1,
-        })
-    } else if in_constraint {
-        Some(2)
-    } else {
+    if !in_constraint {
         None
+    } else if !trusted {
+        Some(4)
+    } else if lookup.value > table.header().error_bound.total() {
+        Some(match (tie, lookup.action) {
+            (true, _) => 3,
+            (false, table_format::EgoAction::Accelerate) => 0,
+            (false, table_format::EgoAction::Brake) => 1,
+        })
+    } else {
+        Some(2)
     }
 }
 
@@ -98,32 +130,63 @@ pub(crate) struct Policy<'a> {
     pub(crate) table: Option<&'a [u8]>,
 }
 
-/// A safe-set map's category: `None` outside the constraint set; 2 and 3 where untrusted.
+/// A safe-set map's category: `None` outside the constraint set; the untrusted category
+/// outside the trusted box, whatever the value says.
 fn set_category(safe: bool, in_constraint: bool, trusted: bool) -> Option<usize> {
-    let base = if safe {
-        1
-    } else if in_constraint {
-        0
-    } else {
-        return None;
-    };
-    Some(if trusted { base } else { base + 2 })
-}
-
-/// A policy map's category: the policy where safe (a tie apart), grey in the rest of the
-/// constraint set.
-fn policy_category(safe: bool, in_constraint: bool, accelerate: bool, tie: bool) -> Option<usize> {
-    if safe && tie {
-        Some(3)
-    } else if safe {
-        Some(if accelerate { 0 } else { 1 })
-    } else if in_constraint {
+    if !in_constraint {
+        None
+    } else if !trusted {
         Some(2)
     } else {
-        None
+        Some(usize::from(safe))
     }
 }
 
+/// A policy map's category: the policy where safe (a tie apart), grey in the rest of the
+/// constraint set, the untrusted category outside the trusted box.
+fn policy_category(
+    safe: bool,
+    in_constraint: bool,
+    accelerate: bool,
+    tie: bool,
+    trusted: bool,
+) -> Option<usize> {
+    if !in_constraint {
+        None
+    } else if !trusted {
+        Some(4)
+    } else if !safe {
+        Some(2)
+    } else if tie {
+        Some(3)
+    } else {
+        Some(if accelerate { 0 } else { 1 })
+    }
+}
+
+/// A 4-D slice's held speeds in words: `rel_speed_leader = v_leader - v_ego` and
+/// `rel_speed_follower = v_ego - v_follower`.
+fn relative_speeds_text(rel_speed_leader: f64, rel_speed_follower: f64) -> String {
+    let say = |who: &str, faster_by: f64| {
+        if faster_by.abs() < 0.05 {
+            format!("{who} at the ego's speed")
+        } else if faster_by > 0.0 {
+            format!("{who} {faster_by:.1} m/s faster than the ego")
+        } else {
+            format!("{who} {:.1} m/s slower than the ego", -faster_by)
+        }
+    };
+    format!(
+        "{}, {}",
+        say("leader", rel_speed_leader),
+        say("follower", -rel_speed_follower)
+    )
+}
+
+/// Draws the level-set run's maps into `dir` and returns the names of the slices it left out
+/// (untrusted ones: nothing there may be drawn as safe), for the run to report.
+///
+/// `trusted` is the trusted box, `None` when it is empty (every node untrusted).
 pub(crate) fn plots(
     config: &Config,
     grid: &Grid,
@@ -132,13 +195,18 @@ pub(crate) fn plots(
     trusted: Option<&IndexBox>,
     dir: &Path,
     history: &[(f64, f64)],
-) -> Result<(), SolverError> {
+) -> Result<Vec<String>, SolverError> {
     let coords: Vec<Vec<f64>> = grid
         .axes()
         .iter()
         .map(|a| (0..a.points).map(|i| a.coordinate(i)).collect())
         .collect();
-    let bounds = trusted.map(|b| b.bounds(grid));
+    // An empty trusted box is an empty range on every axis: nothing is inside it.
+    let bounds: Vec<(f64, f64)> = trusted.map_or_else(
+        || vec![(f64::INFINITY, f64::NEG_INFINITY); grid.dims()],
+        |b| b.bounds(grid),
+    );
+    let inside = |k: usize, x: f64| (bounds[k].0..=bounds[k].1).contains(&x);
     let values = &solution.values;
     let table = match policy_bits.table.map(table_format::Table::parse) {
         Some(Ok(t)) => Some(t),
@@ -148,12 +216,13 @@ pub(crate) fn plots(
     let table_title = |what: &str| {
         table.as_ref().map_or_else(String::new, |t| {
             format!(
-                "{what}: the table as the firmware reads it (V > {:.4} m)",
+                "{what}: the compiled table as the firmware reads it (certified: V > {:.4} m)",
                 t.header().error_bound.total()
             )
         })
     };
-    let horizon_text = format!("{:.1} s", solution.time);
+    let horizon_text = format!("horizon {:.1} s", solution.time);
+    let mut left_out = Vec::new();
     if grid.dims() == 2 {
         let n1 = grid.axes()[1].points;
         let g = &config.game;
@@ -167,38 +236,34 @@ pub(crate) fn plots(
             })
             .filter(|(x, _)| *x >= coords[0][0] && *x <= *coords[0].last().unwrap_or(&0.0))
             .collect();
-        let frame = bounds.as_ref().map(|b| (b[0].0, b[0].1, b[1].0, b[1].1));
+        let frame = trusted.map(|_| (bounds[0].0, bounds[0].1, bounds[1].0, bounds[1].1));
         let axes = (
             PlotAxis {
-                label: "gap_leader [m]",
+                label: "gap to the leader [m]",
                 coords: &coords[0],
             },
             PlotAxis {
-                label: "rel_speed_leader = v_leader - v_ego [m/s]",
+                label: "leader's speed minus the ego's [m/s]",
                 coords: &coords[1],
             },
         );
-        let inside = |x: f64, y: f64| {
-            frame.is_none_or(|(a, b, c, d)| (a..=b).contains(&x) && (c..=d).contains(&y))
-        };
+        let trusted_at = |i: usize, j: usize| inside(0, coords[0][i]) && inside(1, coords[1][j]);
+        let in_constraint = |i: usize| coords[0][i] - g.min_gap >= 0.0;
         let sets = |i: usize, j: usize| {
-            set_category(
-                values[i * n1 + j] > 0.0,
-                coords[0][i] - g.min_gap >= 0.0,
-                inside(coords[0][i], coords[1][j]),
-            )
+            set_category(values[i * n1 + j] > 0.0, in_constraint(i), trusted_at(i, j))
         };
+        let curves = [("exact boundary of the safe set", PURPLE, boundary)];
         output::draw_cell_map(
             &dir.join("safe_set.png"),
             &cell_map(
                 axes,
                 &format!(
-                    "{}: constraint and safe sets, horizon {horizon_text}",
+                    "{}: where a safe input exists (V > 0), {horizon_text}",
                     config.name
                 ),
                 &sets,
                 &SET_LEGEND,
-                &[("exact safe-set boundary", RED, boundary.clone())],
+                &curves,
                 frame,
             ),
         )?;
@@ -206,37 +271,30 @@ pub(crate) fn plots(
             let node = i * n1 + j;
             policy_category(
                 values[node] > 0.0,
-                coords[0][i] - g.min_gap >= 0.0,
+                in_constraint(i),
                 policy_bits.accelerate[node],
                 policy_bits.tie[node],
+                trusted_at(i, j),
             )
         };
-        output::draw_cell_map(
-            &dir.join("policy.png"),
-            &cell_map(
-                axes,
-                &format!("{}: ego input u2* over the safe set", config.name),
-                &policy,
-                &POLICY_LEGEND,
-                &[("exact safe-set boundary", RED, boundary.clone())],
-                frame,
-            ),
-        )?;
+        let policy_title = format!("{}: the ego's safe input u2*", config.name);
+        let policy_map = cell_map(axes, &policy_title, &policy, &POLICY_LEGEND, &curves, frame);
+        output::draw_cell_map(&dir.join("policy.png"), &policy_map)?;
         if let Some(t) = &table {
             let firmware = |i: usize, j: usize| {
                 table_category(
                     t,
                     &[coords[0][i] as f32, coords[1][j] as f32],
-                    coords[0][i] - g.min_gap >= 0.0,
+                    in_constraint(i),
+                    policy_bits.tie[i * n1 + j],
+                    trusted_at(i, j),
                 )
             };
-            let solver_title = format!("{}: the solver's value and policy", config.name);
             let table_title = table_title(&config.name);
-            let curves = [("exact safe-set boundary", RED, boundary)];
             output::draw_cell_maps(
                 &dir.join("table_vs_solver.png"),
                 &[
-                    cell_map(axes, &solver_title, &policy, &POLICY_LEGEND, &curves, frame),
+                    policy_map,
                     cell_map(axes, &table_title, &firmware, &TABLE_LEGEND, &curves, frame),
                 ],
             )?;
@@ -249,25 +307,45 @@ pub(crate) fn plots(
         };
         let min_gap = config.game.min_gap;
         let five = grid.dims() == 5;
-        // Besides the configured slices, the trusted slice with the most safe states, so that
-        // a reader sees the set where it is not empty (when it is anywhere).
+        // Besides the configured slices, the trusted slice through the set's boundary (the
+        // most nodes on its rarer side), so that a reader sees where safe turns unsafe.
         let mut slices: Vec<(crate::pipeline::config::SliceConfig, bool)> =
             configured.into_iter().map(|s| (s, false)).collect();
-        if let Some(widest) = widest_slice(grid, values, bounds.as_deref(), min_gap) {
-            if !slices.iter().any(|(s, _)| s.tag(five) == widest.tag(five)) {
-                slices.push((widest, true));
+        if let Some(through) = boundary_slice(grid, values, trusted.map(|_| &bounds[..]), min_gap) {
+            if let Some(same) = slices
+                .iter_mut()
+                .find(|(s, _)| s.tag(five) == through.tag(five))
+            {
+                same.1 = true;
+            } else {
+                slices.push((through, true));
             }
         }
-        for (s, widest) in &slices {
+        for (s, through_boundary) in &slices {
+            let tag = s.tag(five);
+            let speeds = s.point(five, 0.0, 0.0);
+            // The slice is trusted where its held speeds lie inside the box; an untrusted
+            // slice carries no claim at all and is not drawn (issue 22).
+            let held_inside = [1, 3, 4]
+                .iter()
+                .all(|&k| speeds.get(k).is_none_or(|&x| inside(k, x)));
+            if !held_inside {
+                left_out.push(tag);
+                continue;
+            }
             let at = |i: usize, j: usize| -> f64 {
                 grid.interpolate(values, &s.point(five, coords[0][i], coords[2][j]))
             };
-            let speeds = s.point(five, 0.0, 0.0);
             let policy_at = |i: usize, j: usize| -> (bool, bool) {
                 // The policy of the nearest node in speed.
                 let nearest = |k: usize, x: f64| -> usize {
                     let a = &grid.axes()[k];
-                    (((x - a.min) / a.spacing()).round().max(0.0) as usize).min(a.points - 1)
+                    let i = ((x - a.min) / a.spacing()).round();
+                    if i.is_finite() && i > 0.0 {
+                        (i as usize).min(a.points - 1)
+                    } else {
+                        0
+                    }
                 };
                 let st = grid.strides();
                 let mut node = i * st[0] + j * st[2];
@@ -278,35 +356,19 @@ pub(crate) fn plots(
                 }
                 (policy_bits.accelerate[node], policy_bits.tie[node])
             };
-            // The trusted box on the slice: its gap extents, when the slice's held speeds lie
-            // inside it; otherwise the whole slice is untrusted.
-            let held_inside = bounds.as_ref().is_none_or(|b| {
-                [1, 3, 4].iter().all(|&k| {
-                    speeds
-                        .get(k)
-                        .is_none_or(|&x| k >= b.len() || (b[k].0..=b[k].1).contains(&x))
-                })
-            });
-            let frame = bounds
-                .as_ref()
-                .filter(|_| held_inside)
-                .map(|b| (b[0].0, b[0].1, b[2].0, b[2].1));
+            let frame = Some((bounds[0].0, bounds[0].1, bounds[2].0, bounds[2].1));
             let axes = (
                 PlotAxis {
-                    label: "gap_leader x_g1 [m]",
+                    label: "gap to the leader [m]",
                     coords: &coords[0],
                 },
                 PlotAxis {
-                    label: "gap_follower x_g2 [m]",
+                    label: "gap to the follower [m]",
                     coords: &coords[2],
                 },
             );
-            let trusted_at = |i: usize, j: usize| {
-                held_inside
-                    && frame.is_none_or(|(a, b, c, d)| {
-                        (a..=b).contains(&coords[0][i]) && (c..=d).contains(&coords[2][j])
-                    })
-            };
+            let trusted_at =
+                |i: usize, j: usize| inside(0, coords[0][i]) && inside(2, coords[2][j]);
             let in_constraint =
                 |i: usize, j: usize| coords[0][i].min(coords[2][j]) - min_gap >= 0.0;
             let sets = |i: usize, j: usize| {
@@ -314,34 +376,31 @@ pub(crate) fn plots(
             };
             let safe_nodes = (0..coords[0].len())
                 .flat_map(|i| (0..coords[2].len()).map(move |j| (i, j)))
-                .filter(|&(i, j)| at(i, j) > 0.0)
+                .filter(|&(i, j)| trusted_at(i, j) && at(i, j) > 0.0)
                 .count();
-            let notes = match (held_inside, safe_nodes, widest) {
-                (true, 0, _) => " (empty)".to_string(),
-                (true, _, true) => " (the slice with the most safe states)".to_string(),
-                (true, _, false) => String::new(),
-                (false, 0, _) => " (untrusted, empty)".to_string(),
-                (false, _, _) => " (untrusted slice)".to_string(),
-            };
-            let tag = s.tag(five);
             let speeds_text = if five {
                 format!(
-                    "v1 = {:.1}, v3 = {:.1}, v_ego = {:.1} m/s",
+                    "leader {:.1}, follower {:.1}, ego {:.1} m/s",
                     speeds[1], speeds[3], speeds[4]
                 )
             } else {
-                format!("v_g1 = {:.1}, v_g2 = {:.1} m/s", speeds[1], speeds[3])
+                relative_speeds_text(speeds[1], speeds[3])
             };
             let kind = match config.game.kind {
-                GameKindConfig::ThreeCarBaseline => "baseline",
-                _ => "IDM",
+                GameKindConfig::ThreeCarBaseline => "any bounded follower",
+                _ => "IDM follower",
+            };
+            let note = match (safe_nodes, through_boundary) {
+                (0, _) => ": EMPTY, no safe state on this slice",
+                (_, true) => " (the slice through the set's boundary)",
+                _ => "",
             };
             output::draw_cell_map(
                 &dir.join(format!("safe_set_{tag}.png")),
                 &cell_map(
                     axes,
                     &format!(
-                        "{} ({kind}): {speeds_text}, {horizon_text}{notes}",
+                        "{} ({kind}), {horizon_text}: V > 0 with {speeds_text}{note}",
                         config.name
                     ),
                     &sets,
@@ -350,11 +409,22 @@ pub(crate) fn plots(
                     frame,
                 ),
             )?;
+            // An empty slice's policy and table maps would be uniform grey: the safe-set map
+            // says it is empty, once.
+            if safe_nodes == 0 {
+                continue;
+            }
             let policy = |i: usize, j: usize| {
                 let (accelerate, tie) = policy_at(i, j);
-                policy_category(at(i, j) > 0.0, in_constraint(i, j), accelerate, tie)
+                policy_category(
+                    at(i, j) > 0.0,
+                    in_constraint(i, j),
+                    accelerate,
+                    tie,
+                    trusted_at(i, j),
+                )
             };
-            let policy_title = format!("{}: u2* where safe, {speeds_text}{notes}", config.name);
+            let policy_title = format!("{}: the ego's safe input u2*, {speeds_text}", config.name);
             let policy_map = cell_map(axes, &policy_title, &policy, &POLICY_LEGEND, &[], frame);
             output::draw_cell_map(&dir.join(format!("policy_{tag}.png")), &policy_map)?;
             if let Some(t) = &table {
@@ -364,9 +434,15 @@ pub(crate) fn plots(
                         .iter()
                         .map(|&x| x as f32)
                         .collect();
-                    table_category(t, &state, in_constraint(i, j))
+                    table_category(
+                        t,
+                        &state,
+                        in_constraint(i, j),
+                        policy_at(i, j).1,
+                        trusted_at(i, j),
+                    )
                 };
-                let title = table_title(&format!("{}, {speeds_text}", config.name));
+                let title = table_title(&config.name);
                 let table_map = cell_map(axes, &title, &firmware, &TABLE_LEGEND, &[], frame);
                 output::draw_cell_maps(
                     &dir.join(format!("table_vs_solver_{tag}.png")),
@@ -378,19 +454,22 @@ pub(crate) fn plots(
     if history.len() > 1 {
         output::draw_curves(
             &dir.join("safe_fraction.png"),
-            "Share of grid nodes with V > 0 against the horizon",
+            "Share of all grid nodes with V > 0 against the horizon (trusted or not)",
             "horizon [s]",
             "share of nodes",
             &[("V > 0", BLUE, history.to_vec())],
         )?;
     }
-    Ok(())
+    Ok(left_out)
 }
 
-/// The slice of a 4-D or 5-D grid, at node speeds inside the trusted box, with the most nodes
-/// that are safe, in the constraint set and trusted in gap; `None` when no such node exists.
-/// Speeds are the nodes' own (axes 1 and 3, and 4 on a 5-D grid), so the count is exact.
-fn widest_slice(
+/// The slice of a 4-D or 5-D grid, at node speeds inside the trusted box, through the safe
+/// set's boundary: the one whose trusted gap nodes in the constraint set are split most evenly
+/// between safe and not safe (the most nodes on the rarer side). `None` when no slice has
+/// both. Speeds are the nodes' own (axes 1 and 3, and 4 on a 5-D grid), so the count is exact.
+///
+/// (Issue 22: the slice "with the most safe states" was all safe, and said nothing.)
+fn boundary_slice(
     grid: &Grid,
     values: &[f32],
     trusted: Option<&[(f64, f64)]>,
@@ -428,8 +507,9 @@ fn widest_slice(
                 .iter()
                 .filter(|&&(i, j)| values[base + i * strides[0] + j * strides[2]] > 0.0)
                 .count();
-            if safe > 0 && best.as_ref().is_none_or(|(n, _)| safe > *n) {
-                best = Some((safe, index.clone()));
+            let rarer = safe.min(gap_nodes.len() - safe);
+            if rarer > 0 && best.as_ref().is_none_or(|(n, _)| rarer > *n) {
+                best = Some((rarer, index.clone()));
             }
         }
         // The next combination of speed nodes, odometer style.
@@ -469,23 +549,52 @@ mod tests {
     use super::*;
     use crate::pipeline::run::run;
 
+    /// Nothing is drawn as safe or certified outside the trusted box (issue 22), and the
+    /// policy is shown only where the state is safe.
     #[test]
-    fn untrusted_cells_take_the_pale_categories_and_policy_shows_only_where_safe() {
+    fn untrusted_cells_take_one_category_and_policy_shows_only_where_safe() {
         assert_eq!(set_category(true, true, true), Some(1));
         assert_eq!(set_category(false, true, true), Some(0));
-        assert_eq!(set_category(true, true, false), Some(3));
+        assert_eq!(set_category(true, true, false), Some(2));
         assert_eq!(set_category(false, true, false), Some(2));
         assert_eq!(set_category(false, false, true), None);
-        assert_eq!(SET_LEGEND[3].0, "safe set, untrusted");
-        // The policy bit is shown only where the state is safe.
-        assert_eq!(policy_category(true, true, true, false), Some(0));
-        assert_eq!(policy_category(true, true, false, false), Some(1));
-        assert_eq!(policy_category(false, true, true, false), Some(2));
-        assert_eq!(policy_category(false, false, false, false), None);
+        assert_eq!(SET_LEGEND[2], UNTRUSTED);
+        assert_eq!(policy_category(true, true, true, false, true), Some(0));
+        assert_eq!(policy_category(true, true, false, false, true), Some(1));
+        assert_eq!(policy_category(false, true, true, false, true), Some(2));
+        assert_eq!(policy_category(false, false, false, false, true), None);
         // A tie is shown as such where safe, whatever the bit says.
-        assert_eq!(policy_category(true, true, false, true), Some(3));
-        assert_eq!(policy_category(false, true, false, true), Some(2));
-        assert_eq!(POLICY_LEGEND[3].1, PALE_YELLOW);
+        assert_eq!(policy_category(true, true, false, true, true), Some(3));
+        assert_eq!(policy_category(false, true, false, true, true), Some(2));
+        for (safe, accelerate, tie) in [
+            (true, true, false),
+            (true, false, true),
+            (false, true, true),
+        ] {
+            assert_eq!(policy_category(safe, true, accelerate, tie, false), Some(4));
+        }
+        assert_eq!(POLICY_LEGEND[4], UNTRUSTED);
+        assert_eq!(TABLE_LEGEND[4], UNTRUSTED);
+        // No legend entry outside the untrusted one is drawn in its colour, and no label of
+        // the untrusted category says safe or certified.
+        for legend in [&SET_LEGEND[..], &POLICY_LEGEND[..], &TABLE_LEGEND[..]] {
+            let untrusted: Vec<_> = legend.iter().filter(|(_, c)| *c == DARK_GREY).collect();
+            assert_eq!(untrusted.len(), 1);
+        }
+        assert!(!UNTRUSTED.0.contains("safe") && !UNTRUSTED.0.contains("certified"));
+    }
+
+    #[test]
+    fn held_speeds_are_said_in_words() {
+        assert_eq!(
+            relative_speeds_text(-3.0, 0.0),
+            "leader 3.0 m/s slower than the ego, follower at the ego's speed"
+        );
+        // rel_speed_follower = v_ego - v_follower: positive is a slower follower.
+        assert_eq!(
+            relative_speeds_text(4.0, -1.0),
+            "leader 4.0 m/s faster than the ego, follower 1.0 m/s faster than the ego"
+        );
     }
 
     /// The compiled table's map reads the table as the firmware does: certified states with
@@ -505,12 +614,34 @@ mod tests {
         let bytes = std::fs::read(dir.join("table.bin")).unwrap();
         let table = table_format::Table::parse(&bytes).unwrap();
         // Closing at 14 m/s from 20 m: no braking saves it.
-        assert_eq!(table_category(&table, &[20.0, -14.0], true), Some(2));
+        assert_eq!(
+            table_category(&table, &[20.0, -14.0], true, false, true),
+            Some(2)
+        );
         // Closing at 2 m/s from 20 m: certified, and the bit brakes.
-        assert_eq!(table_category(&table, &[20.0, -2.0], true), Some(1));
+        assert_eq!(
+            table_category(&table, &[20.0, -2.0], true, false, true),
+            Some(1)
+        );
+        // Where the solver has a tie, the stored bit is not shown as a decision.
+        assert_eq!(
+            table_category(&table, &[20.0, 5.0], true, true, true),
+            Some(3)
+        );
+        // Untrusted: no claim, whatever the table says.
+        assert_eq!(
+            table_category(&table, &[20.0, -2.0], true, false, false),
+            Some(4)
+        );
         // Outside the constraint set, and outside the grid.
-        assert_eq!(table_category(&table, &[-3.0, 0.0], false), None);
-        assert_eq!(table_category(&table, &[100.0, 0.0], true), None);
+        assert_eq!(
+            table_category(&table, &[-3.0, 0.0], false, false, true),
+            None
+        );
+        assert_eq!(
+            table_category(&table, &[100.0, 0.0], true, false, true),
+            None
+        );
         let png = std::fs::read(dir.join("table_vs_solver.png")).unwrap();
         // Two maps side by side: the PNG's IHDR width is 1800.
         assert_eq!(
@@ -520,10 +651,11 @@ mod tests {
         std::fs::remove_dir_all(&out).ok();
     }
 
-    /// A 4-D grid whose safe states sit at known speed nodes: the widest slice is found there,
-    /// inside the trusted box, and nowhere when nothing is safe.
+    /// A 4-D grid whose safe states sit at known speed nodes: the slice through the boundary is
+    /// the one split most evenly (not the one with the most safe states, which may be all
+    /// safe), inside the trusted box, and none when no slice has both kinds.
     #[test]
-    fn the_widest_slice_is_the_one_with_the_most_safe_states() {
+    fn the_boundary_slice_is_the_one_split_most_evenly() {
         use crate::engine::grid::GridAxis;
         let grid = Grid::new(vec![
             GridAxis::new("gap_leader", 0.0, 40.0, 5),
@@ -534,28 +666,30 @@ mod tests {
         .unwrap();
         let st = grid.strides();
         let mut values = vec![-1.0f32; grid.len()];
-        // Speeds (5, -5): 6 safe nodes; speeds (-10, 0): 9, but outside the trusted box below.
+        // 16 gap nodes at or above a 2 m minimum gap (gaps 10..40 on both axes).
         let mut mark = |v1: usize, v3: usize, n: usize| {
             let cells = (1..5).flat_map(|i| (1..5).map(move |j| (i, j)));
             for (i, j) in cells.take(n) {
                 values[i * st[0] + v1 * st[1] + j * st[2] + v3 * st[3]] = 1.0;
             }
         };
-        mark(3, 1, 6);
-        mark(0, 2, 9);
-        let widest = widest_slice(&grid, &values, None, 2.0).unwrap();
+        mark(3, 1, 6); // 6 safe, 10 not: 6 on the rarer side
+        mark(0, 2, 9); // 9 safe, 7 not: 7, but outside the trusted box below
+        mark(4, 4, 16); // all safe: nothing on the rarer side
+        let through = boundary_slice(&grid, &values, None, 2.0).unwrap();
         assert_eq!(
-            (widest.rel_speed_leader, widest.rel_speed_follower),
+            (through.rel_speed_leader, through.rel_speed_follower),
             (-10.0, 0.0)
         );
         let trusted = [(0.0, 40.0), (-5.0, 10.0), (0.0, 40.0), (-10.0, 10.0)];
-        let widest = widest_slice(&grid, &values, Some(&trusted), 2.0).unwrap();
+        let through = boundary_slice(&grid, &values, Some(&trusted), 2.0).unwrap();
         assert_eq!(
-            (widest.rel_speed_leader, widest.rel_speed_follower),
+            (through.rel_speed_leader, through.rel_speed_follower),
             (5.0, -5.0)
         );
         // Safe nodes below the minimum gap do not count.
-        assert!(widest_slice(&grid, &values, None, 100.0).is_none());
-        assert!(widest_slice(&grid, &vec![-1.0; grid.len()], None, 2.0).is_none());
+        assert!(boundary_slice(&grid, &values, None, 100.0).is_none());
+        assert!(boundary_slice(&grid, &vec![-1.0; grid.len()], None, 2.0).is_none());
+        assert!(boundary_slice(&grid, &vec![1.0; grid.len()], None, 2.0).is_none());
     }
 }

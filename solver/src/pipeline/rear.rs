@@ -566,6 +566,11 @@ pub fn run_rear_with_report(
     })?;
     output::write_bytes(&dir.join("table.bin"), &proof.bytes)?;
     output::write_json(&dir.join("verify.json"), &proof.report)?;
+    super::table_plots::deployed_table_plots(
+        &table_format::Table::parse(&proof.bytes)?,
+        &proof.report,
+        &dir,
+    )?;
     let lists: Vec<Vec<f32>> = (0..3).map(|k| grid.axis(k).to_vec()).collect();
     let points = [lists[0].len(), lists[1].len(), lists[2].len()];
     output::write_npy(&dir.join("value.npy"), &values, &points)?;

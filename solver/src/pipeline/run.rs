@@ -71,18 +71,23 @@ pub struct Summary {
     /// Nodes per axis.
     pub grid_shape: Vec<usize>,
     /// Backward time reached, s.
+    #[serde(rename = "horizon_s")]
     pub time: f64,
     /// Time steps.
     pub steps: usize,
     /// Time step, s.
+    #[serde(rename = "time_step_s")]
     pub dt: f64,
     /// `fixed_horizon`, `converged` or `not_converged`.
     pub convergence: String,
-    /// Last `max |dV/dt|`.
+    /// Last `max |dV/dt|`, m/s.
+    #[serde(rename = "residual_m_per_s")]
     pub residual: f64,
     /// Wall time of the main solve, s.
+    #[serde(rename = "solve_s")]
     pub solve_seconds: f64,
     /// Wall time of the whole run, s.
+    #[serde(rename = "total_s")]
     pub total_seconds: f64,
     /// Share of all nodes with `V > 0`.
     pub safe_fraction: f64,
@@ -90,10 +95,14 @@ pub struct Summary {
     pub safe_fraction_trusted: f64,
     /// Share of all nodes with `V > 1 mm` (hj_reachability's reference figure).
     pub share_above_1mm: f64,
-    /// `(horizon s, share of nodes with V > 0)` along the solve.
+    /// The share of nodes with `V > 0` along the solve, by horizon.
+    #[serde(serialize_with = "horizon_shares", rename = "safe_fraction_by_horizon")]
     pub safe_fraction_history: Vec<(f64, f64)>,
-    /// Trusted box per axis `(min, max)`, or `None` if empty.
+    /// Trusted box per axis `(min, max)` in the axis' unit (`axes.json`), or `None` if empty.
     pub trusted_box: Option<Vec<(f64, f64)>>,
+    /// The configured slices not drawn because their held speeds lie outside the trusted box
+    /// (nothing there may be drawn as safe), by file tag.
+    pub slices_not_drawn_untrusted: Vec<String>,
     /// The table compiler's figures.
     pub table: Option<CompileReport>,
     /// Two-car only: accuracy against the exact value.
@@ -247,7 +256,7 @@ pub fn run(
         None
     };
 
-    plots::plots(
+    let slices_not_drawn_untrusted = plots::plots(
         config,
         &grid,
         &solution,
@@ -285,9 +294,26 @@ pub fn run(
         trusted_box: trusted.as_ref().map(|b| b.bounds(&grid)),
         table: table.map(|t| t.1),
         exact,
+        slices_not_drawn_untrusted,
     };
     output::write_json(&dir.join("summary.json"), &summary)?;
     Ok(summary)
+}
+
+/// `(horizon, share)` pairs written as `{"horizon_s": .., "share": ..}` objects (issue 22:
+/// unlabelled pairs).
+fn horizon_shares<S: serde::Serializer>(history: &[(f64, f64)], s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeSeq;
+    #[derive(serde::Serialize)]
+    struct Point {
+        horizon_s: f64,
+        share: f64,
+    }
+    let mut seq = s.serialize_seq(Some(history.len()))?;
+    for &(horizon_s, share) in history {
+        seq.serialize_element(&Point { horizon_s, share })?;
+    }
+    seq.end()
 }
 
 /// The share of values above zero.

@@ -133,8 +133,8 @@ pub fn verify_table(
         source: e,
     })?;
     output::write_json(&dir.join("verify.json"), &report)?;
-    verify::plot(&rear, &report, &dir, &[0.1, 5.0, 15.0, 30.0], f64::INFINITY)?;
     let table = table_format::Table::parse(&bytes)?;
+    super::table_plots::deployed_table_plots(&table, &report, &dir)?;
     let axes = [rear.axis(0), rear.axis(1), rear.axis(2)];
     let exact = robust::robustness(&table, &report, axes, &MeasurementError::EXACT);
     let declared = robust::robustness(&table, &report, axes, error);

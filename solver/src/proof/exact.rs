@@ -41,11 +41,14 @@ pub fn two_car_boundary(v: f64, horizon: f64, ego_min: f64, leader_min: f64, min
 pub struct ExactComparison {
     /// Largest `|V - V_exact|` over nodes in the box where the exact value is at least 1 m above
     /// the solver's clip level, m.
+    #[serde(rename = "max_value_error_m")]
     pub max_value_error: f64,
     /// Mean `|V - V_exact|` over the same nodes, m.
+    #[serde(rename = "mean_value_error_m")]
     pub mean_value_error: f64,
     /// Largest distance in gap between the computed and exact safe-set boundaries (the first
     /// sign change along the gap axis, linearly interpolated), over speed nodes in the box, m.
+    #[serde(rename = "max_boundary_error_m")]
     pub max_boundary_error: f64,
 }
 

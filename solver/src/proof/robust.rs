@@ -214,9 +214,10 @@ pub fn plot(
         return Ok(dir.to_path_buf());
     };
     let legend: [(&str, RGBColor); 3] = [
-        ("not certified", RGBColor(225, 225, 225)),
-        ("certified with exact sensors only", RGBColor(245, 160, 40)),
-        ("certified with the declared error", RGBColor(90, 170, 90)),
+        // Okabe and Ito's colour-blind-safe palette.
+        ("not certified", RGBColor(222, 222, 222)),
+        ("certified with exact sensors only", RGBColor(230, 159, 0)),
+        ("certified with the declared error", RGBColor(0, 114, 178)),
     ];
     let cell = |i: usize, j: usize| {
         Some(if passes(last, i, j) {

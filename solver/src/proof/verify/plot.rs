@@ -25,12 +25,13 @@ pub fn plot(
     let speeds = centre(table.axis(1), nj);
     // Severity order: not certified, proven, not checked, tangency, resolution, collision.
     let legend: [(&str, RGBColor); 6] = [
-        ("not certified", RGBColor(225, 225, 225)),
-        ("proven", RGBColor(90, 170, 90)),
-        ("not checked (the budget ran out)", RGBColor(120, 120, 120)),
-        ("unproven: tangency", RGBColor(245, 160, 40)),
-        ("unproven: resolution", RGBColor(200, 40, 40)),
-        ("unproven: collision", RGBColor(90, 0, 90)),
+        // Okabe and Ito's colour-blind-safe palette, greys apart.
+        ("not certified", RGBColor(222, 222, 222)),
+        ("proven", RGBColor(0, 158, 115)),
+        ("not checked (the budget ran out)", RGBColor(140, 140, 140)),
+        ("unproven: tangency", RGBColor(230, 159, 0)),
+        ("unproven: resolution", RGBColor(213, 94, 0)),
+        ("unproven: collision", RGBColor(204, 121, 167)),
     ];
     let severity = |v: &Verdict| match v {
         Verdict::NotCertified => 0,
@@ -82,12 +83,12 @@ pub fn plot(
     let title = "verify: (gap, follower speed) columns over every ego speed".to_string();
     let path = dir.join("verdicts-worst.png");
     let over_speeds: [(&str, RGBColor); 7] = [
-        ("certified at no ego speed", RGBColor(225, 225, 225)),
+        ("certified at no ego speed", RGBColor(222, 222, 222)),
         (
             "proven at some ego speeds, not certified at the others",
-            RGBColor(160, 205, 160),
+            RGBColor(86, 180, 233),
         ),
-        ("proven at every ego speed", RGBColor(40, 120, 40)),
+        ("proven at every ego speed", RGBColor(0, 114, 178)),
         legend[2],
         legend[3],
         legend[4],
