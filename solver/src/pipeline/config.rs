@@ -460,7 +460,7 @@ pub(crate) fn locate(error: ConfigError, text: &str) -> ConfigError {
             let Some(DeValue::Array(array)) = here.map(|h| h.get_ref()) else {
                 break 'walk;
             };
-            let Some(item) = array.iter().nth(i) else {
+            let Some(item) = array.get(i) else {
                 break 'walk;
             };
             span = Some(item.span());
