@@ -509,7 +509,7 @@ pub struct Header<'a> {
     pub error_bound: ErrorBound,
     /// How the policy bits are read.
     pub policy: PolicyEncoding,
-    /// What `solver verify` proved of this table's payload, if it was run (version 3).
+    /// What `solver verify` proved of this table's payload, if it was run (since format version 3).
     pub verification: Option<Verification>,
 }
 

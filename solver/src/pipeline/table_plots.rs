@@ -2,7 +2,7 @@
 //! firmware reads it.
 //!
 //! One responsibility: turn a compiled table (and its proof's report) into PNG files. The
-//! level-set runs' maps are [`super::plots`]'s; verify's verdicts are drawn by
+//! level-set runs' maps are the `plots` module's; verify's verdicts are drawn by
 //! [`crate::verify::plot`], called from here over the table's whole extent.
 //!
 //! - `certified-rear-ego-<v>.png`: the rear certificate on `(gap to the follower, follower

@@ -540,8 +540,10 @@ pub fn standstill_exit_speed(table: &RearTable, g: f64, level: f64) -> Option<f6
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Standstill {
     /// `G`, m.
+    #[serde(rename = "gap_m")]
     pub gap: f64,
     /// `V`, m/s.
+    #[serde(rename = "exit_speed_m_per_s")]
     pub exit_speed: f64,
 }
 
@@ -556,6 +558,7 @@ pub struct UnprovenCell {
     pub reason: Reason,
     /// How far below the level its certified states' images may fall, m (see
     /// [`Verdict::Unproven`]).
+    #[serde(rename = "deficit_m")]
     pub deficit: f64,
 }
 
@@ -565,8 +568,10 @@ pub struct Report {
     /// The settings.
     pub settings: Settings,
     /// The level the firmware certifies above, m (`error_bound + rear_margin`).
+    #[serde(rename = "level_m")]
     pub level: f64,
     /// The table's error bound, m.
+    #[serde(rename = "error_bound_m")]
     pub error_bound: f64,
     /// The table's CRC-32 (its trailer), hex.
     pub table_crc32: String,
@@ -592,13 +597,16 @@ pub struct Report {
     /// The largest deficit among the unproven cells: how far below the level the images of
     /// their certified states may fall, under the best of the periods (0 when every cell is
     /// proven), m.
+    #[serde(rename = "largest_unproven_deficit_m")]
     pub dip: f64,
     /// The largest amount by which `W` can read below the level at a multiple of the shortest
     /// period inside the period that proves a box, over every box proven by a period (the
     /// standstill lemma's sub-boxes excepted), m; a box is proven only when this is within
     /// [`table_format::REAR_SAMPLE_TOLERANCE`].
+    #[serde(rename = "largest_dip_between_samples_m")]
     pub sample_dip: f64,
     /// Wall time, s.
+    #[serde(rename = "wall_s")]
     pub seconds: f64,
     /// Every unproven cell.
     pub unproven: Vec<UnprovenCell>,
