@@ -15,7 +15,7 @@
 //! binaries put it on the hardware: `stm32f407` (stm32f4xx-hal, bxcan, defmt over RTT) and
 //! `netduino-check`, the board-independent part on QEMU's `netduinoplus2` (an STM32F405).
 //!
-//! Why stm32f4xx-hal and not embassy-stm32 (measured side by side, README "On a real board"):
+//! Why stm32f4xx-hal and not embassy-stm32 (measured side by side, docs/board.md, "On a real board"):
 //! its bxCAN driver implements `embedded_can::nb::Can`, which the firmware's CAN driver is
 //! written against, where embassy's would need an adapter; the loop is a plain periodic loop
 //! with no async executor to reason about; and its binary is the smaller of the two.

@@ -2,7 +2,7 @@
 //! T = 3 s, WENO5/RK3): distance between the computed and the exact safe-set boundary inside the
 //! trusted box and at least 1 m/s from the low-speed face, at 51^2 to 401^2, for comparison with
 //! hj_reachability's on the same grids (`bash solver/benches/compare_hj_reachability.sh` runs
-//! both side by side; the README quotes the figures).
+//! both side by side; docs/numerics.md quotes the figures).
 //! `cargo run -p solver --release --example two_car_accuracy`
 
 use std::time::Instant;

@@ -42,7 +42,7 @@
 //! command's look-ahead said it would (at `now`, from the last command) and it keeps its start
 //! and reference while it runs, so that the argument below holds; a command that passes ends it.
 //! The price: the certificate's steady-following gap grows by about `v (u + beta) / (2 j)`, at
-//! 30 m/s from 76 m to 97 m (`host-tests gap-policy`, README); the override starts earlier, not
+//! 30 m/s from 76 m to 97 m (`host-tests gap-policy`, docs/closed-loop.md); the override starts earlier, not
 //! harder. `Config::bang_bang()` is the paper's policy instead: no ramp (`brake_jerk =
 //! f32::INFINITY`) and braking at `beta` whenever the look-ahead refuses.
 //!
@@ -140,7 +140,7 @@
 //! ego back into the domain, and its braking, like every command's, is at most `beta`, which
 //! spares the follower: a rear table certifies nothing unless the follower can out-brake the
 //! band (measured: with the follower's braking equal to `beta` the rear value's plateau is
-//! -0.99 m, README).
+//! -0.99 m, docs/numerics.md).
 //!
 //! # Measurement error, aging and lost tracks, cut-ins (issue 20)
 //! The sensors' error is bounded and declared in [`Config::sensors`] ([`crate::sensing`]): every
@@ -163,7 +163,7 @@
 //!   (`solver verify`, `solver::robust`): 74.8% of the measured rear states pass with the
 //!   default error against 77.1% with exact sensors; every passing measurement's box lies in
 //!   cells the proof covers. Cost: the worst control step on the Cortex-M4F is 18,374
-//!   instructions with issue 21's braking ramp and gap policy (QEMU, README), against a budget
+//!   instructions with issue 21's braking ramp and gap policy (QEMU, docs/board.md), against a budget
 //!   of 20,000 (0.12 ms at one instruction per
 //!   cycle, 0.71 ms at six: 3.6% of the 20 ms period at 168 MHz).
 //! - **Aging**: a measurement is argued from its own time, so its age is inside the argument.
