@@ -543,6 +543,18 @@ fn the_command_writes_its_report_and_fails_cleanly_on_unproven_cells() {
     .expect("JSON");
     assert!(report["certified"].as_u64() > Some(500_000));
     assert!(out.join("verify/default/verdicts-worst.png").exists());
+    // The deployed table's own plots (issue 22): the rear certificate at every ego speed up to
+    // the domain's edge, and the front's certified gap.
+    for name in [
+        "certified-rear-ego-0.png",
+        "certified-rear-ego-5.png",
+        "certified-rear-ego-15.png",
+        "certified-rear-ego-25.png",
+        "certified-rear-ego-35.png",
+        "front-certified-gap.png",
+    ] {
+        assert!(out.join("verify/default").join(name).exists(), "{name}");
+    }
     // A missing table: one line too.
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_solver"))
         .args([
