@@ -26,7 +26,7 @@ use crate::pipeline::config::{
 };
 use crate::pipeline::output;
 use crate::proof::verify::{
-    verify_bytes_with_progress, Budget, Report, Settings as VerifySettings,
+    verify_bytes_with_progress, Budget, RearTable, Report, Settings as VerifySettings,
 };
 
 /// A breakpoint axis: from `start`, uniform pieces `[end, spacing]` in turn.
@@ -568,6 +568,7 @@ pub fn run_rear_with_report(
     output::write_json(&dir.join("verify.json"), &proof.report)?;
     super::table_plots::deployed_table_plots(
         &table_format::Table::parse(&proof.bytes)?,
+        &proof.rear,
         &proof.report,
         &dir,
     )?;
@@ -624,6 +625,8 @@ pub fn run_rear_with_report(
 struct Proof {
     /// The table's bytes, with the proof's record in its header.
     bytes: Vec<u8>,
+    /// The table as the proof read it.
+    rear: RearTable,
     report: Report,
     quantization_error: f32,
 }
@@ -691,12 +694,13 @@ fn prove(
         },
         ..VerifySettings::default()
     };
-    let (_, report, bytes) =
+    let (rear, report, bytes) =
         verify_bytes_with_progress(&bytes, &settings, suspects, &mut |done, total| {
             events(RearEvent::ProofProgress(done, total))
         })?;
     Ok(Proof {
         bytes,
+        rear,
         report,
         quantization_error,
     })

@@ -16,7 +16,7 @@
 
 use std::path::{Path, PathBuf};
 
-use table_format::front::{front_value, FrontModel};
+use table_format::front::front_value;
 use table_format::{Game, Table};
 
 use super::output::{self, CellMap, PlotAxis};
@@ -35,15 +35,12 @@ const FRONT_LEVEL: f32 = 0.5;
 /// game has none of them.
 pub fn deployed_table_plots(
     table: &Table<'_>,
+    rear: &RearTable,
     report: &Report,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, SolverError> {
-    let Game::ThreeCarSplit {
-        ego,
-        leader,
-        max_speed,
-        ..
-    } = table.header().game
+    let game = table.header().game;
+    let (Game::ThreeCarSplit { max_speed, .. }, Some(model)) = (game, game.front_model(0.0, 0.0))
     else {
         return Ok(Vec::new());
     };
@@ -105,7 +102,6 @@ pub fn deployed_table_plots(
         written.push(path);
     }
 
-    let model = FrontModel::step(-leader.min, -ego.min, 0.0, 0.0, max_speed);
     let smallest_gap = |leader_speed: f32, ego_speed: f32| -> Option<f64> {
         // `front_value` is non-decreasing in the gap: bisection to 1 mm.
         let certified = |g: f32| front_value(g, leader_speed, ego_speed, &model) > FRONT_LEVEL;
@@ -138,7 +134,7 @@ pub fn deployed_table_plots(
         &path,
         &format!(
             "front certificate: the smallest certified gap (leader brakes at {:.1}, ego at {:.1} m/s^2)",
-            -leader.min, -ego.min
+            model.leader_braking, model.ego_braking
         ),
         "ego's speed [m/s]",
         "smallest certified gap to the leader [m]",
@@ -154,18 +150,11 @@ pub fn deployed_table_plots(
     )?;
     written.push(path);
 
-    let rear = RearTable::from_table(table)?;
     let verdict_speeds: Vec<f64> = EGO_SPEEDS
         .iter()
         .filter(|&&v| v <= max_speed)
         .map(|&v| f64::from(v))
         .collect();
-    written.extend(crate::verify::plot(
-        &rear,
-        report,
-        dir,
-        &verdict_speeds,
-        f64::INFINITY,
-    )?);
+    written.extend(crate::verify::plot(rear, report, dir, &verdict_speeds)?);
     Ok(written)
 }

@@ -134,7 +134,7 @@ pub fn verify_table(
     })?;
     output::write_json(&dir.join("verify.json"), &report)?;
     let table = table_format::Table::parse(&bytes)?;
-    super::table_plots::deployed_table_plots(&table, &report, &dir)?;
+    super::table_plots::deployed_table_plots(&table, &rear, &report, &dir)?;
     let axes = [rear.axis(0), rear.axis(1), rear.axis(2)];
     let exact = robust::robustness(&table, &report, axes, &MeasurementError::EXACT);
     let declared = robust::robustness(&table, &report, axes, error);

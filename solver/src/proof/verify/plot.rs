@@ -4,24 +4,21 @@ use super::table::RearTable;
 use super::{Reason, Report, Verdict};
 use crate::error::SolverError;
 
-/// Draws the verdicts on `(gap_follower, follower_speed)` cells: one slice per ego speed in
-/// `ego_speeds` (the cell holding it), and the worst verdict over every ego speed.
+/// Draws the verdicts on `(gap_follower, follower_speed)` cells over the table's whole extent:
+/// one slice per ego speed in `ego_speeds` (the cell holding it), and the worst verdict over
+/// every ego speed.
 pub fn plot(
     table: &RearTable,
     report: &Report,
     dir: &std::path::Path,
     ego_speeds: &[f64],
-    gap_limit: f64,
 ) -> Result<Vec<std::path::PathBuf>, SolverError> {
     use crate::pipeline::output::{draw_cell_map, CellMap, PlotAxis};
     use plotters::style::RGBColor;
     let [ni, nj, nk] = table.cells();
     let centre =
         |a: &[f64], n: usize| -> Vec<f64> { (0..n).map(|i| 0.5 * (a[i] + a[i + 1])).collect() };
-    let gaps: Vec<f64> = centre(table.axis(0), ni)
-        .into_iter()
-        .take_while(|&g| g <= gap_limit)
-        .collect();
+    let gaps = centre(table.axis(0), ni);
     let speeds = centre(table.axis(1), nj);
     // Severity order: not certified, proven, not checked, tangency, resolution, collision.
     let legend: [(&str, RGBColor); 6] = [
