@@ -32,7 +32,8 @@
 
 use embedded_can::{Frame, Id, StandardId};
 
-use crate::controller::{Command, DriverRequest, Mode};
+use crate::controller::{Command, Mode};
+use crate::driver::DriverRequest;
 use crate::inputs::{Actuator, Inputs, Measurement, Sensors, Track};
 use crate::math;
 use crate::sensing::TrackState;

@@ -58,7 +58,7 @@ pub struct Inputs {
     /// the ego speed's stale limit, it is not used and the band's top is assumed.
     pub ego_acceleration: Measurement<f32>,
     /// A request from the driver's controls this period, if any.
-    pub driver: Option<crate::controller::DriverRequest>,
+    pub driver: Option<crate::driver::DriverRequest>,
     /// The time of this control step, microseconds.
     pub now_us: u64,
 }

@@ -3,7 +3,7 @@
 //!
 //! The normative text (ISO 15622:2018) is paywalled. The figures are those the open
 //! implementations that cite it agree on (FrogPilot, sunnypilot, opendbc's Honda and GM code,
-//! the ACC_W211 project's requirements; `ANCHORS.md`):
+//! the ACC_W211 project's requirements):
 //!
 //! | quantity | at or below 5 m/s | at or above 20 m/s |
 //! |---|---|---|

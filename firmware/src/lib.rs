@@ -36,6 +36,7 @@ mod fmt;
 
 pub mod can;
 pub mod controller;
+pub mod driver;
 pub mod inputs;
 pub mod iso15622;
 pub mod math;

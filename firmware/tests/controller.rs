@@ -1,6 +1,6 @@
 //! The controller on the host, with the default table: modes, faults, and a closed loop.
 
-use firmware::table_format::{self, Game, Table};
+use firmware::table_format::{self, Game, MeasurementError, Table};
 use firmware::{
     Command, Config, Controller, Fault, Inputs, Measurement, Mode, SensorBounds, Track,
     DEFAULT_TABLE,
@@ -749,6 +749,7 @@ fn complete_record(rear_margin: f32) -> table_format::Verification {
         proven_cells: 10,
         shortest_period: 0.02,
         longest_period: 0.3,
+        measurement_error: table_format::MeasurementError::default(),
     }
 }
 
@@ -799,6 +800,46 @@ fn a_table_without_a_complete_proof_for_the_configured_margin_is_refused() {
         ..ideal()
     };
     assert!(Controller::new(&at_margin, config).table().is_some());
+}
+
+#[test]
+fn a_table_checked_for_less_error_than_declared_is_refused() {
+    // The committed table was checked under the declared default error.
+    let record = Table::parse(DEFAULT_TABLE)
+        .unwrap()
+        .header()
+        .verification
+        .expect("the default table is verified");
+    assert_eq!(record.measurement_error, MeasurementError::default());
+    assert!(Controller::new(DEFAULT_TABLE, Config::default())
+        .table()
+        .is_some());
+    let split = split_table((-3.5, 2.0));
+    // Each bound in turn declared larger than the table's record: refused, naming why.
+    for k in 0..6 {
+        let mut error = MeasurementError::default();
+        match k {
+            0 => error.range += 0.05,
+            1 => error.range_relative += 0.005,
+            2 => error.range_rate += 0.02,
+            3 => error.ego_speed += 0.02,
+            4 => error.ego_speed_relative += 0.001,
+            _ => error.ego_age += 0.005,
+        }
+        let config = Config {
+            sensors: SensorBounds {
+                error,
+                ..SensorBounds::default()
+            },
+            ..ideal()
+        };
+        let mut c = Controller::new(&split, config);
+        assert!(c.table().is_none(), "bound {k}");
+        let cmd = c.step(&inputs((8.0, -4.0), (30.0, 0.0), 25.0));
+        assert_eq!(fault_of(cmd), Fault::TableCheckedForLessError, "bound {k}");
+    }
+    // Declaring less error than the table was checked for is fine.
+    assert!(Controller::new(&split, ideal()).table().is_some());
 }
 
 #[test]
@@ -949,21 +990,21 @@ fn measured(
 ) -> Inputs {
     let range = |g: f32, e: f32| {
         if g.is_finite() {
-            g + e * (sensors.range_error + sensors.range_error_relative * g)
+            g + e * (sensors.error.range + sensors.error.range_relative * g)
         } else {
             g
         }
     };
     let ego_measured = ego_speed
-        + error[4] * (sensors.ego_speed_error + sensors.ego_speed_error_relative * ego_speed);
+        + error[4] * (sensors.error.ego_speed + sensors.error.ego_speed_relative * ego_speed);
     let mut i = inputs(
         (
             range(gap_leader, error[0]),
-            leader_speed - ego_speed + error[1] * sensors.range_rate_error,
+            leader_speed - ego_speed + error[1] * sensors.error.range_rate,
         ),
         (
             range(gap_follower, error[2]),
-            ego_speed - follower_speed + error[3] * sensors.range_rate_error,
+            ego_speed - follower_speed + error[3] * sensors.error.range_rate,
         ),
         ego_measured.max(0.0),
     );
@@ -1207,7 +1248,7 @@ fn a_speed_kept_in_the_domain_keeps_the_rear_box_in_it() {
     };
     let s = config.sensors;
     // The measured speed whose highest true speed is 34.975 m/s.
-    let measured = 34.975 * (1.0 - s.ego_speed_error_relative) - s.ego_speed_error;
+    let measured = 34.975 * (1.0 - s.error.ego_speed_relative) - s.error.ego_speed;
     let mut c = Controller::new(DEFAULT_TABLE, config);
     let step = |c: &mut Controller<'_>, k: u64| {
         let now = NOW + k * 20_000;
@@ -1228,8 +1269,7 @@ fn a_speed_kept_in_the_domain_keeps_the_rear_box_in_it() {
 
 /// The speed cap counts what the lag still passes on from older commands: the next step's
 /// `pending` is the command plus that tail, so a command capped without it left the next
-/// step's speed headroom negative within 0.3 m/s of the domain's top (found in review for
-/// issue 20). Along a run held at 34.8 m/s with a set speed above the domain, once the
+/// step's speed headroom negative within 0.3 m/s of the domain's top. Along a run held at 34.8 m/s with a set speed above the domain, once the
 /// commands are known, the headroom never goes below zero.
 #[test]
 fn the_speed_cap_counts_what_the_lag_still_passes_on() {

@@ -17,7 +17,7 @@ use serde::Serialize;
 use table_format::Table;
 
 use crate::humans::{Follower, HumanModel, Humans, Leader};
-use crate::sim::{ActuatorModel, Car, ErrorBounds, SensorModel};
+use crate::sim::{ActuatorModel, Car, SensorModel};
 pub use crate::world::{state_of, CutInKind, CutInScore, Half, ModeName, Trace, TracePoint};
 use crate::world::{Start, Tolerances, World};
 
@@ -227,11 +227,9 @@ pub fn run_episode(
     };
     let sensors = match episode.sensors {
         Sensing::Fixed(m) => m,
-        Sensing::Datasheet => SensorModel::datasheet(
-            ErrorBounds::from(&config.sensors),
-            config.sensors.max_track_age_us,
-            &mut rng,
-        ),
+        Sensing::Datasheet => {
+            SensorModel::datasheet(config.sensors, config.sensors.max_track_age_us, &mut rng)
+        }
     };
     let mut world = World::new(
         bytes,
@@ -706,7 +704,7 @@ pub struct CampaignReport {
     /// The sensors.
     pub sensors: Sensing,
     /// The firmware's declared sensor bounds.
-    pub declared_sensor_bounds: ErrorBounds,
+    pub declared_sensor_bounds: firmware::SensorBounds,
     /// The track age the firmware covers, s.
     pub covered_track_age_s: f32,
     /// The cut-in, if any.
@@ -807,7 +805,7 @@ pub fn run_campaign(
         episodes_per_group: settings.episodes,
         seconds: settings.seconds,
         sensors: settings.sensing,
-        declared_sensor_bounds: ErrorBounds::from(&settings.config.sensors),
+        declared_sensor_bounds: settings.config.sensors,
         covered_track_age_s: settings.config.sensors.max_track_age_us as f32 * 1e-6,
         cut_in: settings.cut_in,
         actuator: settings.actuator,

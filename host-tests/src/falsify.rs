@@ -28,8 +28,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use table_format::Table;
 
-use crate::humans::{follower_speed_gradient, idm, HumanModel};
-use crate::sim::{ActuatorModel, Car, ErrorBounds, SensorModel};
+use crate::humans::{follower_speed_gradient, HumanModel};
+use crate::sim::{ActuatorModel, Car, SensorModel};
 use crate::world::{state_of, Half, ModeName, Score, Start, Tolerances, Trace, World};
 
 /// How the humans' inputs were chosen.
@@ -258,7 +258,9 @@ impl<'t> Setting<'t> {
                 }
             }
         };
-        let a_follower = idm(&m.idm, follower.v, ego.v, ego.x - follower.x, time_gap)
+        let a_follower = m
+            .idm
+            .acceleration(follower.v, follower.v - ego.v, ego.x - follower.x, time_gap)
             .clamp(m.follower.0, m.follower.1);
         let limit = |a: f32, v: f32| {
             if a > 0.0 {
@@ -404,11 +406,7 @@ impl<'t> Setting<'t> {
     fn draw_delays(&self, rng: &mut impl Rng) -> (SensorModel, ActuatorModel) {
         let c = &self.config;
         let sensors = if rng.random::<f32>() < 0.75 {
-            SensorModel::datasheet(
-                ErrorBounds::from(&c.sensors),
-                c.sensors.max_track_age_us,
-                rng,
-            )
+            SensorModel::datasheet(c.sensors, c.sensors.max_track_age_us, rng)
         } else {
             SensorModel::exact_with_latencies([
                 rng.random_range(0..=5),

@@ -137,22 +137,6 @@ pub fn follower_speed_gradient(table: &Table<'_>, z: [f32; 3]) -> Option<f32> {
     Some((at(hi)? - at(lo)?) / (hi - lo))
 }
 
-/// The IDM acceleration (Treiber et al. 2000) of a vehicle at `speed` behind a vehicle at
-/// `leader_speed`, `gap` metres ahead, with desired time gap `time_gap`.
-pub fn idm(p: &IdmParameters, speed: f32, leader_speed: f32, gap: f32, time_gap: f32) -> f32 {
-    let approach = speed - leader_speed;
-    let desired = p.jam_distance
-        + (speed * time_gap
-            + speed * approach / (2.0 * (p.max_acceleration * p.comfortable_deceleration).sqrt()))
-        .max(0.0);
-    let interaction = if gap > 0.0 {
-        (desired / gap).powi(2)
-    } else {
-        f32::INFINITY
-    };
-    p.max_acceleration * (1.0 - (speed / p.desired_speed).powi(i32::from(p.exponent)) - interaction)
-}
-
 /// `a` limited so that a car at `v` stays in `[0, v_max]` over a period `h` (the plant stops
 /// cars at zero by itself).
 fn within_speed_limit(a: f32, v: f32, v_max: f32, h: f32) -> f32 {
@@ -236,8 +220,11 @@ impl<'t> Humans<'t> {
         let (fmin, fmax) = m.follower;
         let (tmin, tmax) = m.time_gap;
         let gap = ego.x - follower.x;
-        let idm_with =
-            |time_gap: f32| idm(&m.idm, follower.v, ego.v, gap, time_gap).clamp(fmin, fmax);
+        let idm_with = |time_gap: f32| {
+            m.idm
+                .acceleration(follower.v, follower.v - ego.v, gap, time_gap)
+                .clamp(fmin, fmax)
+        };
         let a_follower = match self.follower {
             Follower::IdmFixed | Follower::IdmRandom => idm_with(self.episode_time_gap),
             Follower::IdmSwitching => {

@@ -784,7 +784,7 @@ fn scenarios(out: &std::path::Path, only: Option<&str>) -> Result<()> {
             } else if r.source.starts_with("Euro") {
                 "Euro NCAP"
             } else {
-                "issue 21"
+                "hjacc"
             },
             if r.follower { "IDM" } else { "none" },
             r.policy,
@@ -834,7 +834,7 @@ fn gap_policy(out: &std::path::Path) -> Result<()> {
     let bytes = firmware::DEFAULT_TABLE;
     let configs = [
         (
-            "no ramp (before issue 21)",
+            "no ramp",
             firmware::Config {
                 brake_jerk: f32::INFINITY,
                 ..firmware::Config::default()

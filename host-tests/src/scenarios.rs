@@ -33,9 +33,9 @@ use firmware::{Config, DriverRequest, Mode};
 use serde::Serialize;
 use table_format::Table;
 
-use crate::humans::{idm, HumanModel};
+use crate::humans::HumanModel;
 use crate::iso::IsoWorst;
-use crate::sim::{ActuatorModel, Car, ErrorBounds, Noise, SensorModel};
+use crate::sim::{ActuatorModel, Car, Noise, SensorModel};
 use crate::world::{Start, Tolerances, Trace, World};
 
 /// A leader's speed programme: piecewise linear in time through `(t, v)` points, constant
@@ -174,7 +174,7 @@ const MPH: f32 = 0.447_04;
 const KMH: f32 = 1.0 / 3.6;
 const OPENPILOT: &str = "openpilot selfdrive/test/longitudinal_maneuvers/test_longitudinal.py";
 const NCAP: &str = "Euro NCAP AEB Car-to-Car Rear, 2020";
-const ISSUE: &str = "issue 21";
+const OWN: &str = "hjacc's own checks";
 
 fn lead(gap: f32, speeds: &[(f32, f32)]) -> Option<Lead> {
     Some(Lead {
@@ -445,7 +445,7 @@ pub fn suite() -> Vec<Scenario> {
     for v in [10.0f32, 15.0, 20.0, 25.0, 30.0, 34.0] {
         let mut steady = scenario(
             format!("steady following at {v:.0} m/s"),
-            ISSUE,
+            OWN,
             60.0,
             v,
             35.0,
@@ -456,7 +456,7 @@ pub fn suite() -> Vec<Scenario> {
     }
     let mut stop = scenario(
         "stopping behind a stopped car from 10 m/s",
-        ISSUE,
+        OWN,
         40.0,
         10.0,
         10.0,
@@ -468,7 +468,7 @@ pub fn suite() -> Vec<Scenario> {
         ("set speed 25 -> 15 m/s behind a car at 20 m/s", 15.0),
         ("set speed 25 -> 35 m/s behind a car at 20 m/s", 35.0),
     ] {
-        let mut change = scenario(name, ISSUE, 60.0, 20.0, 25.0, lead(0.0, &[(0.0, 20.0)]));
+        let mut change = scenario(name, OWN, 60.0, 20.0, 25.0, lead(0.0, &[(0.0, 20.0)]));
         change.driver = vec![(20.0, DriverRequest::SetSpeed(to))];
         change.check = Check::SetSpeedChange;
         s.push(change);
@@ -477,7 +477,7 @@ pub fn suite() -> Vec<Scenario> {
         ("climbing a 10% grade at 25 m/s", 0.1),
         ("descending a 10% grade at 25 m/s", -0.1),
     ] {
-        let mut g = scenario(name, ISSUE, 60.0, 25.0, 25.0, None);
+        let mut g = scenario(name, OWN, 60.0, 25.0, 25.0, None);
         g.grade = vec![(0.0, grade)];
         g.check = Check::HoldsSetSpeed;
         s.push(g);
@@ -535,7 +535,7 @@ pub fn run(
         let v = v0;
         let p = &model.idm;
         let s_star = p.jam_distance + v * FOLLOWER_TIME_GAP;
-        let ratio = (v / p.desired_speed).powi(4);
+        let ratio = p.free_road_term(v);
         let mut gap = s_star / (1.0 - ratio).max(0.1).sqrt();
         while probe
             .certificate([1e4, v0, gap, v, v0])
@@ -548,7 +548,7 @@ pub fn run(
     } else {
         Car { x: -1e5, v: 0.0 }
     };
-    let bounds = ErrorBounds::from(&config.sensors);
+    let bounds = config.sensors;
     let mut radar = crate::sim::Channel::IDEAL;
     radar.cycle_us = config.sensors.cycle_us;
     radar.latency_us = config.sensors.latency_us;
@@ -604,7 +604,9 @@ pub fn run(
             None => 0.0,
         };
         let a_follower = if with_follower {
-            idm(&model.idm, f.v, e.v, e.x - f.x, FOLLOWER_TIME_GAP)
+            model
+                .idm
+                .acceleration(f.v, f.v - e.v, e.x - f.x, FOLLOWER_TIME_GAP)
                 .clamp(model.follower.0, model.follower.1)
         } else {
             0.0

@@ -1,7 +1,7 @@
 //! The plant: three vehicles on a lane, integrated exactly between control samples, with
 //! collision detection inside every interval, and the sensors the firmware reads.
 
-use firmware::{Inputs, Measurement, Track};
+use firmware::{Inputs, Measurement, SensorBounds, Track};
 use rand::Rng;
 
 /// One vehicle: front-bumper position (m) and speed (m/s, never negative). Gaps are
@@ -225,37 +225,6 @@ pub enum Noise {
     WorstCorner,
 }
 
-/// The error bounds the noise is drawn within (the firmware's declared
-/// [`firmware::SensorBounds`], or a share of them).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ErrorBounds {
-    /// Range error, absolute part, m.
-    pub range: f32,
-    /// Range error, relative part.
-    pub range_relative: f32,
-    /// Range-rate error, m/s.
-    pub range_rate: f32,
-    /// Ego-speed error, absolute part, m/s.
-    pub ego_speed: f32,
-    /// Ego-speed error, relative part.
-    pub ego_speed_relative: f32,
-    /// The actuator's reported state's error, m/s^2.
-    pub acceleration: f32,
-}
-
-impl From<&firmware::SensorBounds> for ErrorBounds {
-    fn from(b: &firmware::SensorBounds) -> Self {
-        ErrorBounds {
-            range: b.range_error,
-            range_relative: b.range_error_relative,
-            range_rate: b.range_rate_error,
-            ego_speed: b.ego_speed_error,
-            ego_speed_relative: b.ego_speed_error_relative,
-            acceleration: b.acceleration_error,
-        }
-    }
-}
-
 /// One sensor channel's timing and losses.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Channel {
@@ -293,7 +262,7 @@ pub struct SensorModel {
     /// How the error is drawn.
     pub noise: Noise,
     /// The bounds it is drawn within.
-    pub bounds: ErrorBounds,
+    pub bounds: SensorBounds,
     /// Leader track, follower track, ego speed.
     pub channels: [Channel; 3],
 }
@@ -302,14 +271,7 @@ impl SensorModel {
     /// Perfect sensors.
     pub const IDEAL: SensorModel = SensorModel {
         noise: Noise::None,
-        bounds: ErrorBounds {
-            range: 0.0,
-            range_relative: 0.0,
-            range_rate: 0.0,
-            ego_speed: 0.0,
-            ego_speed_relative: 0.0,
-            acceleration: 0.0,
-        },
+        bounds: SensorBounds::EXACT,
         channels: [Channel::IDEAL; 3],
     };
 
@@ -327,12 +289,12 @@ impl SensorModel {
         m
     }
 
-    /// The radars of the datasheets (ANCHORS.md), drawn for one episode: the error inside
+    /// The radars of the datasheets (`table_format::sensing`), drawn for one episode: the error inside
     /// `bounds` (uniform, or the worst corner a third of the time), radar cycles of 50-80 ms,
     /// latencies of 40-100 ms with up to 30 ms of jitter per channel, 10% of the refreshes lost
     /// at random and bursts of losses (one every 20 s on average) up to `burst_max_us`; the
     /// ego's speed every 20 ms, 0-20 ms old, never lost.
-    pub fn datasheet(bounds: ErrorBounds, burst_max_us: u32, rng: &mut impl Rng) -> Self {
+    pub fn datasheet(bounds: SensorBounds, burst_max_us: u32, rng: &mut impl Rng) -> Self {
         let noise = if rng.random::<f32>() < 1.0 / 3.0 {
             Noise::WorstCorner
         } else {
@@ -472,7 +434,7 @@ impl Sensors {
         rng: &mut impl Rng,
     ) -> Inputs {
         let [leader, ego, follower] = cars;
-        let b = self.model.bounds;
+        let b = self.model.bounds.error;
         let error: [f32; 5] = match self.model.noise {
             Noise::None => [0.0; 5],
             Noise::Uniform => std::array::from_fn(|_| rng.random::<f32>() * 2.0 - 1.0),
@@ -501,7 +463,10 @@ impl Sensors {
             follower: self.follower.step(&cf, now_us, follower_track, rng),
             ego_speed: self.ego.step(&ce, now_us, ego_speed, rng),
             // Reported with the ego's speed, on its channel's timing.
-            ego_acceleration: Measurement::new(actuator + actuator_error * b.acceleration, now_us),
+            ego_acceleration: Measurement::new(
+                actuator + actuator_error * self.model.bounds.acceleration_error,
+                now_us,
+            ),
             driver: None,
             now_us,
         }

@@ -164,14 +164,19 @@ fn sensors_within_their_declared_bounds_keep_the_certificate_and_beyond_them_are
     }
     assert_eq!((failed, uncertified), (0, 0));
     assert!(fallback > 0, "no burst ever reached the covered age");
-    let bounds = host_tests::sim::ErrorBounds::from(&Config::default().sensors);
-    let triple = host_tests::sim::ErrorBounds {
-        range: 3.0 * bounds.range,
-        range_relative: 3.0 * bounds.range_relative,
-        range_rate: 3.0 * bounds.range_rate,
-        ego_speed: 3.0 * bounds.ego_speed,
-        ego_speed_relative: 3.0 * bounds.ego_speed_relative,
-        acceleration: 3.0 * bounds.acceleration,
+    let bounds = Config::default().sensors;
+    let e = bounds.error;
+    let triple = firmware::SensorBounds {
+        error: firmware::sensing::MeasurementError {
+            range: 3.0 * e.range,
+            range_relative: 3.0 * e.range_relative,
+            range_rate: 3.0 * e.range_rate,
+            ego_speed: 3.0 * e.ego_speed,
+            ego_speed_relative: 3.0 * e.ego_speed_relative,
+            ego_age: e.ego_age,
+        },
+        acceleration_error: 3.0 * bounds.acceleration_error,
+        ..bounds
     };
     let beyond = SensorModel {
         noise: Noise::WorstCorner,

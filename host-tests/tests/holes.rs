@@ -1,4 +1,4 @@
-//! Regression tests for the holes at the domain's edge (issue 19): each reproduction from the
+//! Regression tests for the holes at the domain's edge: each reproduction from the
 //! issue, in the closed loop with the firmware, on the default table. Each failed before its
 //! fix: (A) certified a start that collides, (B) ran the nominal law unchecked above 35 m/s,
 //! (C) left the domain on a follower at exactly 35 m/s seen through measurements of different

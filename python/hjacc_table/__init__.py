@@ -1,4 +1,4 @@
-"""Reads hjacc safety tables (``table.bin``, format version 4) in Python.
+"""Reads hjacc safety tables (``table.bin``, format version 5) in Python.
 
 The format is specified byte by byte in ``table-format/README.md``; this reader follows it
 and answers exactly as the Rust reader (``table_format::Table``) does, to the last bit:
@@ -22,7 +22,7 @@ import zlib
 __all__ = ["Table", "TableError", "MAGIC", "FORMAT_VERSION"]
 
 MAGIC = b"HJTB"
-FORMAT_VERSION = 4
+FORMAT_VERSION = 5
 _PREAMBLE = 8
 _CRC = 4
 
@@ -265,6 +265,18 @@ class Table:
                 "proven_cells": c.varint(),
                 "shortest_period": c.f32(),
                 "longest_period": c.f32(),
+                # The measurement error the table was checked under (format version 5).
+                "measurement_error": {
+                    k: c.f32()
+                    for k in (
+                        "range",
+                        "range_relative",
+                        "range_rate",
+                        "ego_speed",
+                        "ego_speed_relative",
+                        "ego_age",
+                    )
+                },
             }
         else:
             raise TableError("invalid verification flag %d" % present)

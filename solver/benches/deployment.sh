@@ -2,8 +2,8 @@
 # The firmware's deployed table: solves solver/configs/rear/deployment.toml (the iteration,
 # stopped at the first iterate `solver verify` proves, and that proof), prints the wall time,
 # the peak resident memory and the solver's own figures, and checks that the result is byte for
-# byte firmware/tables/default.bin (exit 1 if not). Targets (issue 23): solve and proof together
-# in at most 30 s on two cores; issue 10's 4 GiB of memory.
+# byte firmware/tables/default.bin (exit 1 if not). Targets: solve and proof together
+# in at most 30 s on two cores, in at most 4 GiB of memory.
 #   bash solver/benches/deployment.sh
 set -euo pipefail
 cd "$(dirname "$0")/../.."

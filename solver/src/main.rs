@@ -57,49 +57,16 @@ enum Command {
 struct VerifyArgs {
     /// The table (a ThreeCarSplit table, e.g. firmware/tables/default.bin).
     table: PathBuf,
-    /// The periods a box may be advanced by, ms, comma-separated (`solver::verify`).
-    #[arg(long, value_delimiter = ',', default_values_t = [20.0, 100.0, 200.0, 300.0])]
-    period_ms: Vec<f64>,
-    /// The firmware's `rear_margin`, m (the level is the table's error bound plus this).
-    #[arg(long, default_value_t = 0.0)]
-    rear_margin: f64,
-    /// How many times a cell may be halved (axes in turn).
-    #[arg(long, default_value_t = 21)]
-    depth: u32,
-    /// Stop after this many seconds; the cells not checked by then are reported and the
-    /// table's record is incomplete (0: no limit).
-    #[arg(long, default_value_t = 600.0)]
-    budget_seconds: f64,
-    /// Stop once this many certified cells are found unproven, naming them (0: no limit).
-    #[arg(long, default_value_t = 1000)]
-    max_unproven: usize,
-    /// Search every sub-box of an unproven cell for its largest deficit (slower on a table
-    /// with many unproven cells; the verdicts are the same).
-    #[arg(long)]
-    exhaustive: bool,
     /// Also write the table with the proof's record in its header to FILE (the firmware
     /// refuses a split table without a complete one).
     #[arg(long, value_name = "FILE")]
     write: Option<PathBuf>,
-    /// The declared range error's absolute part, m (the firmware's `SensorBounds`).
-    #[arg(long, default_value_t = solver::robust::MeasurementError::default().range)]
-    range_error: f32,
-    /// The declared range error's relative part.
-    #[arg(long, default_value_t = solver::robust::MeasurementError::default().range_relative)]
-    range_error_relative: f32,
-    /// The declared range-rate error, m/s.
-    #[arg(long, default_value_t = solver::robust::MeasurementError::default().range_rate)]
-    range_rate_error: f32,
-    /// The declared ego-speed error's absolute part, m/s.
-    #[arg(long, default_value_t = solver::robust::MeasurementError::default().ego_speed)]
-    ego_speed_error: f32,
-    /// The declared ego-speed error's relative part.
-    #[arg(long, default_value_t = solver::robust::MeasurementError::default().ego_speed_relative)]
-    ego_speed_error_relative: f32,
+    #[command(flatten)]
+    options: solver::verify_table::VerifyOptions,
 }
 
 /// Fails at once, naming the folder, if `out` cannot be written: a solve takes minutes, and
-/// its results must not be lost to a typo in `--out`. Nothing is created here (issue 22: a run
+/// its results must not be lost to a typo in `--out`. Nothing is created here (a run
 /// refused for a bad config must not leave an empty folder behind); the nearest existing
 /// folder on the path is probed instead, and the run creates `out` when it writes.
 fn ensure_writable(out: &std::path::Path) -> Result<()> {
@@ -405,62 +372,26 @@ fn run_configs(args: &Args) -> Result<()> {
 /// `verify`: reads the table, checks every cell, writes the report, and fails (non-zero exit)
 /// when a certified cell is unproven.
 fn run_verify(v: &VerifyArgs, out: &std::path::Path, quiet: bool) -> Result<()> {
-    use solver::verify::Settings;
-    if !(v.budget_seconds.is_finite() && v.budget_seconds >= 0.0) {
-        anyhow::bail!(
-            "--budget-seconds: must be a finite number of seconds, 0 for no limit (got {})",
-            v.budget_seconds
-        );
-    }
-    let settings = Settings {
-        periods: v.period_ms.iter().map(|p| p * 1e-3).collect(),
-        rear_margin: v.rear_margin,
-        max_depth: v.depth,
-        budget: solver::verify::Budget {
-            seconds: (v.budget_seconds > 0.0).then_some(v.budget_seconds),
-            unproven_cells: (v.max_unproven > 0).then_some(v.max_unproven),
-        },
-        exhaustive: v.exhaustive,
-    };
-    let error = solver::robust::MeasurementError {
-        range: v.range_error,
-        range_relative: v.range_error_relative,
-        range_rate: v.range_rate_error,
-        ego_speed: v.ego_speed_error,
-        ego_speed_relative: v.ego_speed_error_relative,
-        ..solver::robust::MeasurementError::default()
-    };
     // Every option is checked before anything runs, named as the command line names it.
-    solver::verify_table::check_settings(&settings, &error).map_err(|e| {
-        let flag = match e.field.as_str() {
-            "periods" => "--period-ms",
-            "budget seconds" => "--budget-seconds",
-            "rear margin" => "--rear-margin",
-            "range error" => "--range-error",
-            "relative range error" => "--range-error-relative",
-            "range-rate error" => "--range-rate-error",
-            "ego-speed error" => "--ego-speed-error",
-            "relative ego-speed error" => "--ego-speed-error-relative",
-            _ => "verify",
-        };
-        anyhow::anyhow!("{flag}: {}", e.reason)
-    })?;
+    let settings = v
+        .options
+        .resolve()
+        .map_err(|e| anyhow::anyhow!("{}: {}", e.flag(), e.reason))?;
     let progress = Progress::new(quiet, "verify");
-    let run =
-        solver::verify_table::verify_table(&v.table, &settings, &error, out, &mut |done, total| {
-            progress.set(
-                done as f64 / total as f64,
-                &format!("{done} of {total} cells"),
-            )
-        })
-        .with_context(|| v.table.display().to_string())?;
+    let run = solver::verify_table::verify_table(&v.table, &settings, out, &mut |done, total| {
+        progress.set(
+            done as f64 / total as f64,
+            &format!("{done} of {total} cells"),
+        )
+    })
+    .with_context(|| v.table.display().to_string())?;
     progress.finish();
     let report = &run.report;
     println!(
         "{}: periods {:?} ms, level {:.4} m: {} of {} certified cells proven ({:.3}%; {} with the standstill lemma); \
          unproven: {} tangency, {} resolution, {} collision{}; largest deficit found {:.4} m; {:.1} s",
         v.table.display(),
-        v.period_ms,
+        v.options.period_ms,
         report.level,
         report.proven,
         report.certified,

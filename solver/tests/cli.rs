@@ -28,7 +28,7 @@ fn a_config_given_to_the_wrong_door_names_the_right_one() {
 }
 
 /// A refused run leaves nothing behind: the `--out` folder is probed, not created, before the
-/// configs are read (issue 22: a failed run created its folder).
+/// configs are read.
 #[test]
 fn a_refused_run_creates_no_output_folder() {
     let out = std::env::temp_dir().join(format!("hjacc-refused-{}/deeper", std::process::id()));
@@ -80,7 +80,8 @@ fn a_refused_run_creates_no_output_folder() {
 fn verify_refuses_nonsense_before_it_runs() {
     let table = "../firmware/tables/default.bin";
     for (args, names) in [
-        (vec!["verify", table, "--range-error", "2"], "--range-error"),
+        (vec!["verify", table, "--range-error", "6"], "--range-error"),
+        (vec!["verify", table, "--ego-age", "-0.01"], "--ego-age"),
         (
             vec!["verify", "--range-error-relative", "nan", table],
             "--range-error-relative",

@@ -69,28 +69,58 @@ fn the_committed_firmware_table_is_the_deployment_configs() {
     assert!(header.verification.is_some_and(|v| v.is_complete()));
 }
 
-/// `solver verify`'s declared measurement error is the firmware's default sensor bounds, so
-/// that the proof under error is about the error the firmware assumes.
+/// The deployed table was checked under the firmware's declared error, and says so in its
+/// record: the firmware's default configuration loads it, and its declared error is the one
+/// `solver verify` checks under by default.
 #[test]
-fn the_declared_measurement_error_is_the_firmwares() {
-    let s = firmware::SensorBounds::default();
-    let e = solver::robust::MeasurementError::default();
+fn the_deployed_table_records_the_error_the_firmware_declares() {
+    let table = table_format::Table::parse(firmware::DEFAULT_TABLE).expect("parses");
+    let record = table.header().verification.expect("verified");
+    let declared = firmware::Config::default().sensors.error;
+    assert_eq!(record.measurement_error, declared);
     assert_eq!(
-        [
-            e.range,
-            e.range_relative,
-            e.range_rate,
-            e.ego_speed,
-            e.ego_speed_relative
-        ],
-        [
-            s.range_error,
-            s.range_error_relative,
-            s.range_rate_error,
-            s.ego_speed_error,
-            s.ego_speed_error_relative
-        ]
+        solver::verify_table::VerifyOptions::default().measurement_error(),
+        declared
     );
-    // The ego measurement nearest a track is at most half the ego speed's 20 ms cycle away.
-    assert!(e.ego_age >= 0.01);
+    assert!(
+        firmware::Controller::new(firmware::DEFAULT_TABLE, firmware::Config::default())
+            .table()
+            .is_some()
+    );
+}
+
+/// What the standstill lemma proves, and what it does not, on the deployed table: the audit's
+/// state `(gap 0.048633 m, follower 0.742819 m/s, ego 0.304971 m/s)` is certified and lies in
+/// the lemma's region (gap at most `G / 2`). With the ego braking at `beta` and the follower at
+/// its clip (the IDM asks for at least that much below `G`), both come to rest 1.59 cm apart:
+/// the gap never reaches zero (the lemma's claim), but the state they rest in is not certified
+/// (its value is below the level), and nothing re-certifies it. The docs claim exactly this
+/// (docs/certificate.md, `firmware::controller`'s `REAR_SAMPLE_TOLERANCE`).
+#[test]
+fn the_standstill_lemma_keeps_the_gap_but_not_the_certificate() {
+    let table = Table::parse(firmware::DEFAULT_TABLE).expect("parses");
+    let header = table.header();
+    let model = solver::verify::RearModel::from_game(&header.game, header.min_gap).expect("split");
+    let level = header.error_bound.total();
+    let (gap, follower, ego) = (0.048_633f32, 0.742_819f32, 0.304_971f32);
+    let value = |g: f32, vf: f32, ve: f32| table.value_at(&[g, vf, ve]).expect("in the grid");
+    assert!(
+        value(gap, follower, ego) > level,
+        "the audit's state is certified"
+    );
+    let region = solver::verify::standstill_gap(&model).expect("the lemma applies");
+    assert!((region - 0.756).abs() < 1e-3 && f64::from(gap) <= 0.5 * region);
+    // Both brake to rest: the ego at beta, the follower at its clip.
+    let beta = -model.ego_min;
+    let clip = -model.clip_min;
+    let (ve, vf) = (f64::from(ego), f64::from(follower));
+    let rest = f64::from(gap) + ve * ve / (2.0 * beta) - vf * vf / (2.0 * clip);
+    // The gap's least value is at the rest (the follower is the faster until it stops).
+    assert!(rest > model.min_gap, "the lemma: the gap stays above zero");
+    assert!((rest - 0.0159).abs() < 2e-4, "{rest}");
+    let at_rest = value(rest as f32, 0.0, 0.0);
+    assert!(
+        at_rest <= level && at_rest > level - 0.01,
+        "the rest state is safe but not certified: {at_rest} against {level}"
+    );
 }

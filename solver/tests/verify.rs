@@ -14,11 +14,7 @@ fn braking_follower() -> RearModel {
         ego_max: 2.0,
         clip_min: -6.0,
         clip_max: -6.0,
-        idm_a: 1.0,
-        idm_b: 1.5,
-        idm_v0: 33.3,
-        idm_delta: 4,
-        idm_s0: 2.0,
+        idm: table_format::IdmParameters::HIGHWAY,
         time_gap: Interval { lo: 1.0, hi: 2.0 },
         max_speed: 4.0,
         min_gap: 0.0,
@@ -295,11 +291,7 @@ fn deployment_model() -> RearModel {
         ego_max: 2.0,
         clip_min: -6.0,
         clip_max: 2.0,
-        idm_a: 1.0,
-        idm_b: 1.5,
-        idm_v0: 33.3,
-        idm_delta: 4,
-        idm_s0: 2.0,
+        idm: table_format::IdmParameters::HIGHWAY,
         time_gap: Interval { lo: 1.0, hi: 2.0 },
         max_speed: 35.0,
         min_gap: 0.0,
@@ -308,14 +300,8 @@ fn deployment_model() -> RearModel {
 
 /// The follower's clipped IDM acceleration at a point, as the model states it.
 fn idm(m: &RearModel, gap: f64, vf: f64, ve: f64, t: f64) -> f64 {
-    let c = 2.0 * (m.idm_a * m.idm_b).sqrt();
-    let desired = m.idm_s0 + (vf * t + vf * (vf - ve) / c).max(0.0);
-    let interaction = if gap > 0.0 {
-        (desired / gap).powi(2)
-    } else {
-        f64::INFINITY
-    };
-    (m.idm_a * (1.0 - (vf / m.idm_v0).powi(m.idm_delta) - interaction))
+    m.idm
+        .acceleration_f64(vf, vf - ve, gap, t)
         .clamp(m.clip_min, m.clip_max)
 }
 
@@ -543,7 +529,7 @@ fn the_command_writes_its_report_and_fails_cleanly_on_unproven_cells() {
     .expect("JSON");
     assert!(report["certified"].as_u64() > Some(500_000));
     assert!(out.join("verify/default/verdicts-worst.png").exists());
-    // The deployed table's own plots (issue 22): the rear certificate at every ego speed up to
+    // The deployed table's own plots: the rear certificate at every ego speed up to
     // the domain's edge, and the front's certified gap.
     for name in [
         "certified-rear-ego-0.png",
@@ -617,7 +603,7 @@ fn dipping_table() -> RearTable {
     RearTable::new(model, axes, values, 0.0).expect("a valid table")
 }
 
-/// The samples between a proof's periods (issue 19, D). From the cell `gap in [1, 1.25]`,
+/// The samples between a proof's periods. From the cell `gap in [1, 1.25]`,
 /// follower speed in `[0, 1]`, ego speed in `[0, 1]`, the gap's least change at `t` is
 /// `3 t^2 - (t - 3 t^2)` until the follower stops: least at `t = 1/12` s, -4.17 cm. 20 ms is
 /// too short to prove the cell, 1 s proves it; the value at the samples in between dips by

@@ -57,6 +57,11 @@
 //! most five segments (the response ends, the ramp ends, the leader stops, the ego stops, then
 //! nothing moves). f32 throughout; no panics, no loops without a bound.
 
+/// The front value a certified state keeps, m, unless a configuration declares another: the
+/// firmware's default `front_margin`, and the level the solver measures a table's certified
+/// volume at.
+pub const DEFAULT_FRONT_MARGIN: f32 = 0.5;
+
 /// The front model: the leader's hardest braking, and the ego's braking level, response, braking
 /// ramp and the leader's speed limit. All in SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -6,6 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::sensing::MeasurementError;
 use crate::Error;
 
 /// The largest number of state axes a table may have (six; the solver's games have two to
@@ -531,6 +532,11 @@ pub struct Verification {
     pub shortest_period: f32,
     /// The longest period the proof uses, s.
     pub longest_period: f32,
+    /// The measurement error the table was checked under (since format version 5): every
+    /// measured rear state whose error box the firmware's test passes lies in proven cells.
+    /// The firmware refuses a table checked for less error than its configuration declares
+    /// ([`MeasurementError::covers`]).
+    pub measurement_error: MeasurementError,
 }
 
 impl Verification {
@@ -627,7 +633,8 @@ impl Header<'_> {
                 && v.shortest_period.is_finite()
                 && v.shortest_period > 0.0
                 && v.longest_period >= v.shortest_period
-                && v.longest_period.is_finite();
+                && v.longest_period.is_finite()
+                && v.measurement_error.is_valid();
             if !ok {
                 return Err(Error::InvalidHeader("verification"));
             }

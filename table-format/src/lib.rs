@@ -49,6 +49,8 @@
 mod error;
 pub mod front;
 mod header;
+pub mod idm;
+pub mod sensing;
 mod table;
 #[cfg(feature = "std")]
 mod writer;
@@ -58,6 +60,7 @@ pub use header::{
     Axis, Bounds, ErrorBound, FollowerSpeed, Game, GameKind, Header, Horizon, HorizonStatus,
     IdmParameters, PolicyEncoding, Quantization, Spacing, Verification, MAX_DIMS,
 };
+pub use sensing::{MeasurementError, SensorBounds};
 pub use table::{EgoAction, Lookup, Table, BOX_INTERIOR};
 #[cfg(feature = "std")]
 pub use writer::{encode, with_verification, TableContents, ValueBits};
@@ -79,7 +82,7 @@ pub const MAGIC: [u8; 4] = *b"HJTB";
 
 /// The layout version this crate reads and writes. Bumped on any change a reader of the previous
 /// version would misread.
-pub const FORMAT_VERSION: u16 = 4;
+pub const FORMAT_VERSION: u16 = 5;
 
 /// Bytes before the header: magic (4), format version (2), header length (2).
 pub const PREAMBLE_LEN: usize = 8;

@@ -409,11 +409,18 @@ fn specific_corruptions_name_their_cause() {
         Table::parse(&version_three).unwrap_err(),
         Error::UnsupportedVersion { found: 3 }
     );
+    // A version-4 table (no measurement error in its verification record) likewise.
+    let mut version_four = bytes.clone();
+    version_four[4] = 4;
+    assert_eq!(
+        Table::parse(&version_four).unwrap_err(),
+        Error::UnsupportedVersion { found: 4 }
+    );
     let mut future = bytes.clone();
-    future[4] = 5;
+    future[4] = 6;
     assert_eq!(
         Table::parse(&future).unwrap_err(),
-        Error::UnsupportedVersion { found: 5 }
+        Error::UnsupportedVersion { found: 6 }
     );
     let mut payload_flip = bytes.clone();
     let last = payload_flip.len() - 5;
@@ -690,6 +697,7 @@ fn a_verification_record_changes_the_header_only() {
         proven_cells: 998,
         shortest_period: 0.02,
         longest_period: 0.3,
+        measurement_error: table_format::MeasurementError::default(),
     };
     let recorded = table_format::with_verification(&plain, record).expect("re-encodes");
     let (a, b) = (
@@ -704,10 +712,18 @@ fn a_verification_record_changes_the_header_only() {
         assert_eq!(a.value_at_node(n), b.value_at_node(n));
         assert_eq!(a.action_at_node(n), b.action_at_node(n));
     }
-    assert_eq!(recorded.len(), plain.len() + 17);
+    assert_eq!(recorded.len(), plain.len() + 17 + 6 * 4);
     // A record the header cannot hold is refused.
     let bad = table_format::Verification {
         proven_cells: 1001,
+        ..record
+    };
+    assert!(table_format::with_verification(&plain, bad).is_err());
+    let bad = table_format::Verification {
+        measurement_error: table_format::MeasurementError {
+            range_rate: f32::NAN,
+            ..record.measurement_error
+        },
         ..record
     };
     assert!(table_format::with_verification(&plain, bad).is_err());

@@ -200,7 +200,7 @@ fn main() -> ! {
     let h = config.period_us as f32 * 1e-6;
     let s = config.sensors;
     // A range read long by the declared error.
-    let long = |g: f32| g + s.range_error + s.range_error_relative * g;
+    let long = |g: f32| g + s.error.range + s.error.range_relative * g;
     let steps = 3000u32; // 60 s
                          // At the gap policy's distance (the certificate's steady gap with the law's room).
     let mut leader = Car { x: 140.0, v: 25.0 };
@@ -228,19 +228,19 @@ fn main() -> ! {
             leader: Measurement::new(
                 Track {
                     gap: long(leader.x - ego.x),
-                    rel_speed: leader.v - ego.v + s.range_rate_error,
+                    rel_speed: leader.v - ego.v + s.error.range_rate,
                 },
                 now_us,
             ),
             follower: Measurement::new(
                 Track {
                     gap: long(ego.x - follower.x),
-                    rel_speed: ego.v - follower.v + s.range_rate_error,
+                    rel_speed: ego.v - follower.v + s.error.range_rate,
                 },
                 now_us,
             ),
             ego_speed: Measurement::new(
-                (ego.v - s.ego_speed_error - s.ego_speed_error_relative * ego.v).max(0.0),
+                (ego.v - s.error.ego_speed - s.error.ego_speed_relative * ego.v).max(0.0),
                 now_us,
             ),
             // The actuator's state: the last command (this plant has no delay), reported at

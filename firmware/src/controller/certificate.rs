@@ -6,8 +6,8 @@ use table_format::front::{front_value, FrontModel};
 use table_format::{Bounds, Game, Table};
 
 use super::history::seconds;
-use super::tracks::LeaderMemo;
 use super::{Config, Controller, Fault, OverridePolicy};
+use crate::inputs::Track;
 use crate::math;
 
 /// e^-5: what a first-order lag still passes on, after five time constants, of a command older
@@ -61,10 +61,16 @@ pub const CERTIFICATE_TOLERANCE: f32 = 0.01;
 /// `solver verify` proves it over, m ([`table_format::REAR_SAMPLE_TOLERANCE`]). `verify` (from
 /// its version [`table_format::REAR_SAMPLE_VERIFIER`]) proves, for every certified cell, that
 /// at every multiple of its shortest period inside the period that closes the cell's proof the
-/// table's value stays above `level - REAR_SAMPLE_TOLERANCE` (measured on the deployed table:
-/// at most 8.3 cm by its interval bounds); the firmware refuses a table with an older record.
-/// So the rear half's claim at every 20 ms sample is `rear > -REAR_SAMPLE_TOLERANCE`, at the
-/// proof's own periods `rear > 0`, and the gap to the follower stays above zero throughout.
+/// table's value stays above `level - REAR_SAMPLE_TOLERANCE` (the deployed table's bound is in
+/// docs/certificate.md); the firmware refuses a table with an older record. So the rear half's
+/// claim, for a state in a cell a period proves, is `rear > -REAR_SAMPLE_TOLERANCE` at every
+/// 20 ms sample and `rear > 0` at the proof's own periods. For a state the standstill lemma
+/// proves (a gap below half the gap where the IDM brakes at its clip, 0.378 m on the deployed
+/// table), the claim is the lemma's: the gap to the follower stays above zero while it is in
+/// that region, and a state leaving it is certified again; a state may also come to rest
+/// inside it, safe but no longer certified (test
+/// `the_standstill_lemma_keeps_the_gap_but_not_the_certificate` in `solver/tests`). In every
+/// case the gap to the follower stays above zero throughout.
 pub const REAR_SAMPLE_TOLERANCE: f32 = table_format::REAR_SAMPLE_TOLERANCE;
 
 /// How far below zero the ego's speed headroom may read, m/s: `f32` rounding of a speed near
@@ -140,6 +146,12 @@ pub(super) fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Faul
                 && v.verifier >= table_format::REAR_SAMPLE_VERIFIER => {}
         _ => return Err(Fault::TableNotVerified),
     }
+    if !header
+        .verification
+        .is_some_and(|v| v.measurement_error.covers(&config.sensors.error))
+    {
+        return Err(Fault::TableCheckedForLessError);
+    }
     // The rear table must cover every speed the game allows: the domain check below relies on
     // it.
     let covers = |b: Bounds| b.min <= 0.0 && b.max >= max_speed;
@@ -168,6 +180,24 @@ pub(super) fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Faul
     })
 }
 
+/// The last plausible leader measurement (module docs: aging and lost tracks).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct LeaderMemo {
+    /// When it was measured, microseconds.
+    pub(super) at_us: u64,
+    pub(super) track: Track,
+    /// The interval of the ego's speed at `at_us`, measurement error included, m/s.
+    pub(super) ego: (f32, f32),
+}
+
+/// The last plausible follower measurement and its rear value at its time: it holds for ever
+/// while every command is in the band (module docs), so it is computed once per measurement.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct RearMemo {
+    pub(super) at_us: u64,
+    pub(super) track: Track,
+    pub(super) value: Result<f32, Fault>,
+}
 /// A braking ramp: the commands from `start_us` on are at most `max(from - jerk (t -
 /// start_us), beta)` (module docs: the braking ramp).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -384,7 +414,7 @@ impl Controller<'_> {
         // its least true gap at `(m - e) / (1 + r)` (sensing's module docs).
         let offset = front_value(0.0, leader_low, ego_high, &front);
         let needed = c.front_margin - offset;
-        needed * (1.0 + sensors.range_error_relative) + sensors.range_error
+        needed * (1.0 + sensors.error.range_relative) + sensors.error.range
     }
 
     /// The front half applied to a `proposal` (module docs: the delays, the measurement error,
@@ -437,8 +467,7 @@ impl Controller<'_> {
         let headroom = model.max_ego_speed - (ego_now + rise);
         // The look-ahead (module docs): `u` held for one period, then the ramp from `u`. Its
         // hold is `max(pending, u + tail)`: the lag averages every command ever issued, and the
-        // window's older ones (up to the band's top) still pass `tail` on top of `u` (found in
-        // review for issue 20).
+        // window's older ones (up to the band's top) still pass `tail` on top of `u`.
         let tail = self.lag_tail(model);
         let after = |u: f32| Ramp {
             start_us: now.saturating_add(h_us),

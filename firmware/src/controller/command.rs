@@ -1,6 +1,7 @@
 //! What one control step gives out: the command, its mode, and the events worth a log line.
 
-use super::{DriverError, Fault};
+use super::Fault;
+use crate::driver::DriverError;
 use crate::sensing::TrackState;
 
 /// Which law produced the command.

@@ -245,7 +245,7 @@ impl Default for Config {
             auto_resume_us: 3_000_000,
             brake_jerk: crate::iso15622::jerk_limit(f32::INFINITY),
             override_policy: OverridePolicy::Graded,
-            front_margin: 0.5,
+            front_margin: table_format::front::DEFAULT_FRONT_MARGIN,
             rear_margin: 0.0,
             mrm_deceleration: 2.0,
             mrm_gentle_deceleration: 1.0,

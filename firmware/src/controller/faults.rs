@@ -56,6 +56,10 @@ pub enum Fault {
     /// says nothing about another), or one of a `verify` older than
     /// [`table_format::REAR_SAMPLE_VERIFIER`] (which did not bound the samples in between).
     TableNotVerified,
+    /// The table was checked under less measurement error than the configuration declares
+    /// (`sensors.error`): some bound of its record
+    /// ([`table_format::Verification::measurement_error`]) is below the declared one.
+    TableCheckedForLessError,
     /// The board restarted after a fault of its own: the watchdog expired, or a HardFault
     /// (a stack overflow among them) or a panic ended the last run. The minimum-risk manoeuvre
     /// until the next power-on reset (see [`Controller::latch_minimum_risk`](super::Controller::latch_minimum_risk)).

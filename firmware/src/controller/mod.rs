@@ -79,8 +79,7 @@
 //! at the state of `t_m` through the committed ramp: the one under way, or one starting now from
 //! the last command. The **look-ahead** of a command `u` is the ramp from `u` starting at `now +
 //! h`, with a hold of `max(pending, u + tail)`, `tail` the lag's `e^-5` of the band's width (the
-//! next step's `pending` is `u + tail` when `u` is the largest command; found in review for
-//! issue 20). Why it is invariant: at the next step the certified value's ramp is the one the
+//! next step's `pending` is `u + tail` when `u` is the largest command). Why it is invariant: at the next step the certified value's ramp is the one the
 //! look-ahead assumed (a new ramp from `u` at `now + h`), or the same ramp under way, with a
 //! `pending` no larger, from a later state that one of the behaviours the look-ahead took the
 //! minimum over has reached; so it is at least the look-ahead's value. The step is assumed to
@@ -99,9 +98,7 @@
 //! non-decreasing in `u`), and when even the ramp's floor breaks it, nothing passes and the
 //! ramp goes on. Why it is invariant: as for the front value. The law's set speed is held
 //! below the domain's top by the ego speed's error and 0.5 m/s, so that cruising never leans on
-//! the cap. Before (issue 19), the front value held the ego at `max_speed` during its response,
-//! which the dynamics do not: a start 0.05 m above the margin, engaged at 34.8 m/s and
-//! +0.8 m/s^2, collided.
+//! the cap.
 //!
 //! # The driver's controls
 //! Set speed, time-gap setting, engage (SET), cancel and resume arrive through
@@ -128,21 +125,19 @@
 //! value over the box of those ego speeds and the follower speeds that go with them, held in
 //! the human's `[0, max_speed]` ([`Table::least_over_box`]: exact for the multilinear interpolation, one
 //! lookup when the times agree, at most `8^3` points with [`table_format::BOX_INTERIOR`] breakpoints
-//! inside). Before (issue 19), the two were subtracted as if taken at once: a follower at
-//! exactly 35 m/s read 35.05 m/s behind an accelerating ego, and the firmware ran uncertified.
+//! inside).
 //!
 //! An ego or follower faster than `max_speed` at that time, or a follower gap below the grid,
 //! is outside the domain: [`Fault::OutsideDomain`], [`Mode::Uncertified`]. Only the rear half
 //! is unknown there: the command is the nominal law under the same speed cap and front
-//! look-ahead as in the domain, so the front override still acts (before issue 19 the nominal
-//! law ran unchecked, and an ego at 35.14 m/s braked at -1.5 m/s^2 into a stopped leader). The
+//! look-ahead as in the domain, so the front override still acts. The
 //! nominal law's set speed (30 m/s by default, below the table's 35) and the cap bring a fast
 //! ego back into the domain, and its braking, like every command's, is at most `beta`, which
 //! spares the follower: a rear table certifies nothing unless the follower can out-brake the
 //! band (measured: with the follower's braking equal to `beta` the rear value's plateau is
 //! -0.99 m, docs/numerics.md).
 //!
-//! # Measurement error, aging and lost tracks, cut-ins (issue 20)
+//! # Measurement error, aging and lost tracks, cut-ins
 //! The sensors' error is bounded and declared in [`Config::sensors`] ([`crate::sensing`]): every
 //! measurement stands for the box of true values its error allows.
 //! - **Front**: the front value is evaluated at the box's worst corner: the least gap, the
@@ -163,7 +158,7 @@
 //!   (`solver verify`, `solver::robust`): 74.8% of the measured rear states pass with the
 //!   default error against 77.1% with exact sensors; every passing measurement's box lies in
 //!   cells the proof covers. Cost: the worst control step on the Cortex-M4F is 18,374
-//!   instructions with issue 21's braking ramp and gap policy (QEMU, docs/board.md), against a budget
+//!   instructions (QEMU, docs/board.md), against a budget
 //!   of 20,000 (0.12 ms at one instruction per
 //!   cycle, 0.71 ms at six: 3.6% of the 20 ms period at 168 MHz).
 //! - **Aging**: a measurement is argued from its own time, so its age is inside the argument.
@@ -218,20 +213,23 @@
 //! such state one of the periods 20, 100, 200 or 300 ms (chosen by the state) takes it, whatever
 //! the ego does in the band and whatever time gap the IDM follower holds, to a state that passes
 //! the test again, with the gap above zero in between; at standstill, below the gap where the
-//! IDM brakes at its clip (0.756 m), a closed-form lemma does the same. Measured: 537,280 of
-//! 537,280 certified cells, 26 s on two cores (`solver::verify` has the method and why the
-//! deployment table is solved with the follower pushed 0.2 m/s^2 beyond its model). The actuator's
+//! IDM brakes at its clip (0.756 m), a closed-form lemma keeps the gap above zero instead,
+//! without the promise of a certified state at the next period ([`REAR_SAMPLE_TOLERANCE`] says
+//! what holds there). The deployed table's figures are in docs/certificate.md (`solver::verify`
+//! has the method and why the deployment table is solved with the follower pushed 0.2 m/s^2
+//! beyond its model). The actuator's
 //! dead time and lag do not enter: whatever they do, the realised acceleration stays in the
 //! band when every command is in it. Between those periods the value may dip below the level:
-//! by at most [`REAR_SAMPLE_TOLERANCE`] (10 cm; 8.3 cm measured by verify's bounds on the
-//! deployed table) at every 20 ms sample, which verify proves from its version 2 on. What it
+//! by at most [`REAR_SAMPLE_TOLERANCE`] (10 cm) at every 20 ms sample, which verify proves from
+//! its version 2 on. What it
 //! does not claim: anything about `f32` rounding beyond `solver::verify::TOLERANCE`.
 //!
 //! # The tolerances, per part
 //! Each part of a certified state's certificate is claimed to stay above its own stated
 //! tolerance at every control period: the front half above `-CERTIFICATE_TOLERANCE` (1 cm,
 //! `f32` rounding of the closed form), the rear half above `-REAR_SAMPLE_TOLERANCE` (10 cm,
-//! proven by verify; above zero at its proof periods), the speed headroom above
+//! proven by verify; above zero at its proof periods, except in the standstill lemma's region,
+//! where the gap stays above zero), the speed headroom above
 //! `-SPEED_TOLERANCE` (1 mm/s, `f32` rounding near 35 m/s).
 //!
 //! # What is assumed
@@ -253,12 +251,12 @@
 mod certificate;
 mod command;
 mod config;
-mod driver;
 mod faults;
 mod history;
 mod law;
 mod tracks;
 
+pub use crate::driver::{DriverError, DriverRequest, DriverState};
 pub use certificate::{Certificate, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE};
 pub use command::{Command, Event, Mode};
 pub use config::{
@@ -266,7 +264,6 @@ pub use config::{
     MAX_ACTUATOR_LAG_US, MAX_DEAD_TIME_US, MAX_PERIOD_US, MAX_STALE_PERIODS, MAX_STEP_GAP_PERIODS,
     MIN_PERIOD_US, TIME_GAP_SETTINGS,
 };
-pub use driver::{DriverError, DriverRequest, DriverState};
 pub use faults::Fault;
 
 use heapless::Deque;
@@ -278,7 +275,7 @@ use crate::iso15622;
 use crate::math;
 use crate::sensing::TrackState;
 
-use certificate::{model_of, Model, Ramp};
+use certificate::{model_of, LeaderMemo, Model, Ramp, RearMemo};
 
 /// How long [`Mode::Override`] is still reported after the look-ahead's last trim of the law's
 /// command, microseconds: the label does not chatter while the law rides the look-ahead's edge.
@@ -289,7 +286,7 @@ pub const OVERRIDE_HOLD_US: u64 = 500_000;
 const SET_SPEED_ROOM: f32 = 0.5;
 use history::{seconds, IssuedCommands};
 use law::{Law, LawInputs};
-use tracks::{LeaderMemo, RearMemo, EGO_HISTORY};
+use tracks::EGO_HISTORY;
 
 /// The ACC safety controller. It owns the table and a log of recent events; it never allocates
 /// and never panics. A clone is an independent controller in the same state (host-side

@@ -2,47 +2,28 @@
 //! measurement with the ego's speed at its time, the follower's rear value), their ages and
 //! states, and the cut-in test.
 
-use super::certificate::{rear_value, Model};
+use super::certificate::{rear_value, LeaderMemo, Model, RearMemo};
 use super::history::seconds;
 use super::{Controller, Event, Fault};
 use crate::inputs::{Measurement, Track};
 use crate::math;
-use crate::sensing::TrackState;
+use crate::sensing::{self, TrackState};
 
 /// Ego-speed measurements kept to find the one nearest a track's time: 16 periods, 320 ms at
 /// the default period, more than the radar's latency and cycle.
 pub(super) const EGO_HISTORY: usize = 16;
 
-/// The last plausible leader measurement (module docs: aging and lost tracks).
-#[derive(Debug, Clone, Copy)]
-pub(super) struct LeaderMemo {
-    /// When it was measured, microseconds.
-    pub(super) at_us: u64,
-    pub(super) track: Track,
-    /// The interval of the ego's speed at `at_us`, measurement error included, m/s.
-    pub(super) ego: (f32, f32),
-}
-
-/// The last plausible follower measurement and its rear value at its time: it holds for ever
-/// while every command is in the band (module docs), so it is computed once per measurement.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct RearMemo {
-    pub(super) at_us: u64,
-    pub(super) track: Track,
-    pub(super) value: Result<f32, Fault>,
-}
 impl Controller<'_> {
     /// A track measurement the controller can use: flagged valid by the sensor, a gap that is
     /// not NaN and not below minus the range's absolute error (`+inf`: no vehicle; a vehicle a
     /// few centimetres away can be measured below zero within the declared error, and its
     /// error box still holds the truth), a finite relative speed within 100 m/s, taken no later
-    /// than now. (Found by the campaign for issue 21: a follower 1.6 cm behind, measured
-    /// negative, was refused, and the step ran an uncertified minimum-risk manoeuvre.)
+    /// than now.
     pub(super) fn is_plausible(&self, m: &Measurement<Track>, now_us: u64) -> bool {
         let t = m.value;
         m.valid
             && !t.gap.is_nan()
-            && t.gap >= -self.config.sensors.range_error
+            && t.gap >= -self.config.sensors.error.range
             && math::is_finite(t.rel_speed)
             && math::abs(t.rel_speed) <= 100.0
             && m.timestamp_us <= now_us
@@ -64,7 +45,7 @@ impl Controller<'_> {
 
     /// The state of a track kept from `at_us`, at `now`.
     pub(super) fn track_state(&self, at_us: u64, now: u64) -> TrackState {
-        self.config.sensors.track_state(now.saturating_sub(at_us))
+        sensing::track_state(&self.config.sensors, now.saturating_sub(at_us))
     }
 
     /// The ego's speed, if its measurement is valid, finite, in `[0, 100]` m/s and no older than
@@ -189,17 +170,17 @@ impl Controller<'_> {
             } else {
                 ego_high
             };
-            let gap = sensors.range(m.value.gap);
-            let (rate_low, rate_high) = sensors.range_rate(m.value.rel_speed);
-            // The follower's speed is `ego - rel_speed`, held in the human's `[0, max_speed]`.
-            let follower_low = math::max(ego_low - rate_high, 0.0);
-            let follower_high = math::min(math::max(ego_high - rate_low, 0.0), model.max_speed);
+            let (lo, hi) =
+                sensors
+                    .error
+                    .rear_box(m.value.gap, m.value.rel_speed, (ego_low, ego_high));
+            // The follower's speed is held in the human's `[0, max_speed]`.
             let value = rear_value(
                 table,
                 model,
-                gap,
-                (follower_low, follower_high),
-                (ego_low, ego_high),
+                (lo[0], hi[0]),
+                (lo[1], math::min(hi[1], model.max_speed)),
+                (lo[2], hi[2]),
             );
             self.rear = Some(RearMemo {
                 at_us: m.timestamp_us,

@@ -203,6 +203,7 @@ fn run_rear(py: Python<'_>, config_path: PathBuf, out: PathBuf) -> PyResult<Py<P
     range_rate_error = None,
     ego_speed_error = None,
     ego_speed_error_relative = None,
+    ego_age = None,
 ))]
 #[allow(clippy::too_many_arguments)]
 fn verify(
@@ -220,28 +221,28 @@ fn verify(
     range_rate_error: Option<f32>,
     ego_speed_error: Option<f32>,
     ego_speed_error_relative: Option<f32>,
+    ego_age: Option<f32>,
 ) -> PyResult<Py<PyAny>> {
-    let declared = solver::robust::MeasurementError::default();
-    let error = solver::robust::MeasurementError {
-        range: range_error.unwrap_or(declared.range),
-        range_relative: range_error_relative.unwrap_or(declared.range_relative),
-        range_rate: range_rate_error.unwrap_or(declared.range_rate),
-        ego_speed: ego_speed_error.unwrap_or(declared.ego_speed),
-        ego_speed_relative: ego_speed_error_relative.unwrap_or(declared.ego_speed_relative),
-        ..declared
-    };
-    let settings = solver::verify::Settings {
-        periods: periods_ms.iter().map(|p| p * 1e-3).collect(),
+    let defaults = solver::verify_table::VerifyOptions::default();
+    let options = solver::verify_table::VerifyOptions {
+        period_ms: periods_ms,
         rear_margin,
-        max_depth: depth,
-        budget: solver::verify::Budget {
-            seconds: budget_seconds,
-            unproven_cells: max_unproven,
-        },
+        depth,
+        budget_seconds: budget_seconds.unwrap_or(0.0),
+        max_unproven: max_unproven.unwrap_or(0),
         exhaustive,
+        range_error: range_error.unwrap_or(defaults.range_error),
+        range_error_relative: range_error_relative.unwrap_or(defaults.range_error_relative),
+        range_rate_error: range_rate_error.unwrap_or(defaults.range_rate_error),
+        ego_speed_error: ego_speed_error.unwrap_or(defaults.ego_speed_error),
+        ego_speed_error_relative: ego_speed_error_relative
+            .unwrap_or(defaults.ego_speed_error_relative),
+        ego_age: ego_age.unwrap_or(defaults.ego_age),
     };
-    // Refused before anything runs, as the command line refuses it.
-    solver::verify_table::check_settings(&settings, &error).map_err(value_error)?;
+    // Refused before anything runs, as the command line refuses it, named by its keyword.
+    let settings = options
+        .resolve()
+        .map_err(|e| value_error(format!("{}: {}", e.keyword(), e.reason)))?;
     if !table.exists() {
         return Err(PyOSError::new_err(format!(
             "{}: no such file",
@@ -251,7 +252,7 @@ fn verify(
     writable(&out)?;
     let run = py
         .detach(|| {
-            solver::verify_table::verify_table(&table, &settings, &error, &out, &mut |_, _| {})
+            solver::verify_table::verify_table(&table, &settings, &out, &mut |_, _| {})
         })
         .map_err(value_error)?;
     json_to_python(

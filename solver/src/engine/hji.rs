@@ -46,10 +46,10 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::engine::dynamics::{Dynamics, Vector};
 use crate::engine::grid::{Grid, MAX_DIMS};
 use crate::engine::scheme::{derivatives_row, derivatives_strided, Spatial};
 use crate::error::SolverError;
-use crate::games::{Dynamics, Vector};
 
 /// TVD Runge-Kutta order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

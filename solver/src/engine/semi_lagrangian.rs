@@ -27,9 +27,9 @@
 
 use rayon::prelude::*;
 
+use crate::engine::dynamics::Vector;
 use crate::engine::grid::{Grid, MAX_DIMS};
 use crate::error::ConfigError;
-use crate::games::Vector;
 
 /// A Cartesian grid whose axes are lists of breakpoints (strictly increasing, at least two),
 /// stored in C order (last axis fastest). Fine where the value needs it, coarse elsewhere.

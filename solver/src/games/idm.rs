@@ -1,74 +1,12 @@
-//! The Intelligent Driver Model, as the IDM games use it: the follower's acceleration, the
-//! reading of its speed, and the adversary's choice of time gap.
+//! The Intelligent Driver Model as the IDM games use it: the reading of the follower's speed,
+//! its clipped acceleration, and the adversary's choice of time gap. The model itself is
+//! written once, in [`table_format::idm`].
 
 use super::Accel;
 
-/// The Intelligent Driver Model (Treiber, Hennecke & Helbing, 2000).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Idm {
-    /// `a`, m/s^2.
-    pub max_acceleration: f32,
-    /// `b`, m/s^2 (positive).
-    pub comfortable_deceleration: f32,
-    /// `v0`, m/s.
-    pub desired_speed: f32,
-    /// `delta`.
-    pub exponent: i32,
-    /// `s0`, m.
-    pub jam_distance: f32,
-}
-
-impl Idm {
-    /// Treiber & Kesting's highway parameters (*Traffic Flow Dynamics*, Table 11.2), the
-    /// config defaults: `a` 1.0 m/s^2, `b` 1.5 m/s^2, `v0` 33.3 m/s, `delta` 4, `s0` 2 m.
-    pub const HIGHWAY: Idm = Idm {
-        max_acceleration: 1.0,
-        comfortable_deceleration: 1.5,
-        desired_speed: 33.3,
-        exponent: 4,
-        jam_distance: 2.0,
-    };
-
-    /// The IDM acceleration of a vehicle at speed `speed` (>= 0), `gap` metres behind its
-    /// leader, approaching it at `approach_rate = speed - leader_speed`, with desired time gap
-    /// `time_gap`:
-    ///
-    /// `g = a (1 - (v / v0)^delta - (s* / s)^2)`,
-    /// `s* = s0 + max(0, v T + v dv / (2 sqrt(a b)))`.
-    ///
-    /// For `v >= 0`, `g` is non-increasing in `T` (`s*` grows with `T` at rate `v >= 0` where the
-    /// max is active, and `(s*/s)^2` grows with `s* >= 0`) and non-increasing in `v` at a fixed
-    /// approach rate (`(v/v0)^delta` grows, and `s* - s0 = max(0, v (T + dv / (2 sqrt(ab))))`
-    /// is non-decreasing in `v`). The exponent is applied with `powi`, exact for integers.
-    /// A gap of zero or less with a positive desired gap gives `-inf` (the caller clips).
-    #[inline(always)]
-    pub fn acceleration(&self, speed: f32, approach_rate: f32, gap: f32, time_gap: f32) -> f32 {
-        let a = self.max_acceleration;
-        let ab2 = 2.0 * (a * self.comfortable_deceleration).sqrt();
-        let desired = self.jam_distance + (speed * time_gap + speed * approach_rate / ab2).max(0.0);
-        let interaction = if gap > 0.0 {
-            let r = desired / gap;
-            r * r
-        } else if desired > 0.0 {
-            f32::INFINITY
-        } else {
-            0.0
-        };
-        a * (1.0 - (speed / self.desired_speed).powi(self.exponent) - interaction)
-    }
-}
-
-impl From<table_format::IdmParameters> for Idm {
-    fn from(idm: table_format::IdmParameters) -> Self {
-        Idm {
-            max_acceleration: idm.max_acceleration,
-            comfortable_deceleration: idm.comfortable_deceleration,
-            desired_speed: idm.desired_speed,
-            exponent: i32::from(idm.exponent),
-            jam_distance: idm.jam_distance,
-        }
-    }
-}
+/// The Intelligent Driver Model: [`table_format::IdmParameters`], whose point and interval
+/// forms ([`table_format::idm`]) the games, the proof and the simulations share.
+pub use table_format::IdmParameters as Idm;
 
 /// How the IDM game gets the follower's absolute speed `v3 = v_ego - v_g2`.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -36,7 +36,7 @@
 //! # Two-car game, state `z = (x, v)`
 //! `x' = v`, `v' = u1 - u2`: `p . f = p1 v - p2 u2 + p2 u1`, so `u2* = a_max` if `p2 < 0`.
 
-use crate::engine::grid::MAX_DIMS;
+pub use crate::engine::dynamics::{Dynamics, Vector};
 
 mod idm;
 mod rear_idm;
@@ -51,9 +51,6 @@ pub use three_car_baseline::ThreeCarBaseline;
 pub use three_car_idm::ThreeCarIdm;
 pub use three_car_idm_speeds::ThreeCarIdmSpeeds;
 pub use two_car::TwoCar;
-
-/// A state or co-state with room for every supported dimension.
-pub type Vector = [f32; MAX_DIMS];
 
 /// The optimal inputs of all players at one state for one co-state.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -76,17 +73,9 @@ pub struct OptimalInputs {
 /// brakes at exactly zero).
 pub const TIE_TOLERANCE: f32 = 1e-3;
 
-/// A differential game the level-set engine can solve.
-pub trait Dynamics: Sync {
-    /// The number of state axes.
-    fn dims(&self) -> usize;
-    /// The constraint `l(z)`; `l >= 0` is the allowed set.
-    fn constraint(&self, z: &Vector) -> f32;
-    /// `H(z, p) = max_u min_d p . f(z, u, d)`.
-    fn hamiltonian(&self, z: &Vector, p: &Vector) -> f32;
-    /// Per axis a bound `alpha_i(z) >= max_{u,d} |f_i(z, u, d)|` for the Lax-Friedrichs
-    /// dissipation.
-    fn dissipation(&self, z: &Vector, alpha: &mut Vector);
+/// What a car-following game adds to its [`Dynamics`]: the players' optimal inputs, and the
+/// ego's switching function (the table's policy bit).
+pub trait Game: Dynamics {
     /// All players' optimal inputs at `z` for co-state `p`.
     fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs;
     /// The ego's switching function: the coefficient of its acceleration in `p . f` (the
@@ -98,47 +87,6 @@ pub trait Dynamics: Sync {
     /// tie brakes.
     fn ego_accelerates(&self, p: &Vector) -> bool {
         self.ego_switching(p) > 0.0
-    }
-    /// Whether `V` is non-decreasing along `axis`, so that the pessimistic and optimistic ghost
-    /// values of [`crate::engine::hji::Boundary`] bound the true ones there. Axes where it is not (or
-    /// where nothing leaves the grid) take extrapolated ghosts. Default: every axis.
-    fn monotone_axis(&self, _axis: usize) -> bool {
-        true
-    }
-
-    /// The Lax-Friedrichs numerical Hamiltonian `H(z, pbar) + sum_k alpha_k(z) half_jump_k` along a row
-    /// of the last axis: `z` holds the row's fixed coordinates, `last[c]` the last one, and
-    /// `pbar[k][c]`, `half_jump[k][c]` the central gradient and `(p+ - p-)/2`. `alpha` is the
-    /// global dissipation, used unless `local`. The games override it with straight-line code
-    /// that the compiler vectorises; this default is the scalar reference.
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn lax_friedrichs_row(
-        &self,
-        z: &Vector,
-        last: &[f32],
-        pbar: &[&[f32]],
-        half_jump: &[&[f32]],
-        local: bool,
-        alpha: &Vector,
-        rate: &mut [f32],
-    ) {
-        let d = self.dims();
-        for (c, r) in rate.iter_mut().enumerate() {
-            let mut zz = *z;
-            zz[d - 1] = last[c];
-            let mut a = *alpha;
-            if local {
-                self.dissipation(&zz, &mut a);
-            }
-            let mut p = [0f32; MAX_DIMS];
-            let mut diss = 0.0;
-            for k in 0..d {
-                p[k] = pbar[k][c];
-                diss += a[k] * half_jump[k][c];
-            }
-            *r = self.hamiltonian(&zz, &p) + diss;
-        }
     }
 }
 
@@ -305,7 +253,7 @@ impl AnyGame {
                 ego: Accel::from(ego),
                 leader: Accel::from(leader),
                 follower_clip: Accel::from(follower_clip),
-                idm: Idm::from(idm),
+                idm,
                 time_gap: Accel::from(time_gap),
                 follower_speed: match follower_speed {
                     table_format::FollowerSpeed::NominalEgoSpeed { ego_speed } => {
@@ -332,7 +280,7 @@ impl AnyGame {
                 ego: Accel::from(ego),
                 leader: Accel::from(leader),
                 follower_clip: Accel::from(follower_clip),
-                idm: Idm::from(idm),
+                idm,
                 time_gap: Accel::from(time_gap),
                 max_speed,
                 min_gap,
@@ -347,7 +295,7 @@ impl AnyGame {
             } => AnyGame::Rear(RearIdm {
                 ego: Accel::from(ego),
                 follower_clip: Accel::from(follower_clip),
-                idm: Idm::from(idm),
+                idm,
                 time_gap: Accel::from(time_gap),
                 max_speed,
                 min_gap,
@@ -356,8 +304,8 @@ impl AnyGame {
         }
     }
 
-    /// The dynamics as a trait object (for code off the hot path).
-    pub fn dynamics(&self) -> &dyn Dynamics {
+    /// The game as a trait object (for code off the hot path).
+    pub fn dynamics(&self) -> &dyn Game {
         with_game!(self, g => g)
     }
 }

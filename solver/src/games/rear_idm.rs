@@ -34,7 +34,7 @@
 //! Speeds stay in `[0, v_max]` through the input sets (a car at rest cannot brake, one at
 //! `v_max` cannot speed up), so nothing leaves through a speed face.
 
-use super::{Accel, Dynamics, Idm, OptimalInputs, Vector};
+use super::{Accel, Dynamics, Game, Idm, OptimalInputs, Vector};
 use crate::engine::semi_lagrangian::SampledGame;
 
 /// The rear game of one braking level `beta` (see the module docs).
@@ -110,27 +110,6 @@ impl Dynamics for RearIdm {
         alpha[2] = self.ego.at_speed(z[2], self.max_speed).magnitude();
     }
 
-    fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs {
-        let t = self.adversarial_time_gap(p[1]);
-        OptimalInputs {
-            ego: self.ego.at_speed(z[2], self.max_speed).argmin(p[2]),
-            leader: 0.0,
-            follower: Some(self.follower_acceleration(z[1], z[2], z[0], t)),
-            time_gap: Some(t),
-            follower_speed: Some(z[1]),
-        }
-    }
-
-    /// The ego is adversarial here: the switching function is the one of its worst case.
-    fn ego_switching(&self, p: &Vector) -> f32 {
-        -p[2]
-    }
-
-    /// The bit says whether the ego's worst case is to accelerate (a tie accelerates).
-    fn ego_accelerates(&self, p: &Vector) -> bool {
-        p[2] <= 0.0
-    }
-
     /// Local-local Lax-Friedrichs (Osher & Shu 1991): with `local`, `alpha_k` is the largest
     /// `|dH/dp_k|` over the co-states between `p-` and `p+` only, not over every input.
     ///
@@ -191,6 +170,29 @@ impl Dynamics for RearIdm {
             };
             *r = h + a1 * half_jump[0][c] + a2 * half_jump[1][c] + a3 * half_jump[2][c];
         }
+    }
+}
+
+impl Game for RearIdm {
+    fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs {
+        let t = self.adversarial_time_gap(p[1]);
+        OptimalInputs {
+            ego: self.ego.at_speed(z[2], self.max_speed).argmin(p[2]),
+            leader: 0.0,
+            follower: Some(self.follower_acceleration(z[1], z[2], z[0], t)),
+            time_gap: Some(t),
+            follower_speed: Some(z[1]),
+        }
+    }
+
+    /// The ego is adversarial here: the switching function is the one of its worst case.
+    fn ego_switching(&self, p: &Vector) -> f32 {
+        -p[2]
+    }
+
+    /// The bit says whether the ego's worst case is to accelerate (a tie accelerates).
+    fn ego_accelerates(&self, p: &Vector) -> bool {
+        p[2] <= 0.0
     }
 }
 

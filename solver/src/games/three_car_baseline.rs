@@ -1,7 +1,7 @@
 //! The three-car game with a follower that may apply any acceleration in its bounds (the
 //! paper's baseline).
 
-use super::{three_car_row, Accel, Dynamics, OptimalInputs, Vector};
+use super::{three_car_row, Accel, Dynamics, Game, OptimalInputs, Vector};
 
 /// The three-car game where the follower's acceleration is any value within bounds (the
 /// paper's baseline).
@@ -42,19 +42,6 @@ impl Dynamics for ThreeCarBaseline {
         alpha[3] = (self.ego.max - self.follower.min).max(self.follower.max - self.ego.min);
     }
 
-    fn optimal_inputs(&self, _z: &Vector, p: &Vector) -> OptimalInputs {
-        OptimalInputs {
-            ego: self.ego.argmax(p[3] - p[1]),
-            leader: self.leader.argmin(p[1]),
-            follower: Some(self.follower.argmin(-p[3])),
-            time_gap: None,
-            follower_speed: None,
-        }
-    }
-
-    fn ego_switching(&self, p: &Vector) -> f32 {
-        p[3] - p[1]
-    }
     #[inline(always)]
     fn lax_friedrichs_row(
         &self,
@@ -80,5 +67,20 @@ impl Dynamics for ThreeCarBaseline {
             rate,
             |_, p4| follower.argmin(-p4),
         );
+    }
+}
+
+impl Game for ThreeCarBaseline {
+    fn optimal_inputs(&self, _z: &Vector, p: &Vector) -> OptimalInputs {
+        OptimalInputs {
+            ego: self.ego.argmax(p[3] - p[1]),
+            leader: self.leader.argmin(p[1]),
+            follower: Some(self.follower.argmin(-p[3])),
+            time_gap: None,
+            follower_speed: None,
+        }
+    }
+    fn ego_switching(&self, p: &Vector) -> f32 {
+        p[3] - p[1]
     }
 }

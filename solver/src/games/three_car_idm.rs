@@ -1,6 +1,6 @@
 //! The three-car game with an IDM follower in relative speeds (the paper's alternative).
 
-use super::{three_car_row, Accel, Dynamics, FollowerSpeedModel, Idm, OptimalInputs, Vector};
+use super::{three_car_row, Accel, Dynamics, FollowerSpeedModel, Game, Idm, OptimalInputs, Vector};
 
 /// The three-car game with an IDM follower whose desired time gap (the paper's "safe reaction
 /// time") is adversarial in `[T_min, T_max]` (the paper's alternative).
@@ -65,21 +65,6 @@ impl Dynamics for ThreeCarIdm {
             (self.ego.max - self.follower_clip.min).max(self.follower_clip.max - self.ego.min);
     }
 
-    fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs {
-        let (u3, t, v3) = self.follower(z, p[3] > 0.0);
-        OptimalInputs {
-            ego: self.ego.argmax(p[3] - p[1]),
-            leader: self.leader.argmin(p[1]),
-            follower: Some(u3),
-            time_gap: Some(t),
-            follower_speed: Some(v3),
-        }
-    }
-
-    fn ego_switching(&self, p: &Vector) -> f32 {
-        p[3] - p[1]
-    }
-
     #[inline(always)]
     fn lax_friedrichs_row(
         &self,
@@ -107,5 +92,21 @@ impl Dynamics for ThreeCarIdm {
                 self.follower(&zz, p4 > 0.0).0
             },
         );
+    }
+}
+
+impl Game for ThreeCarIdm {
+    fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs {
+        let (u3, t, v3) = self.follower(z, p[3] > 0.0);
+        OptimalInputs {
+            ego: self.ego.argmax(p[3] - p[1]),
+            leader: self.leader.argmin(p[1]),
+            follower: Some(u3),
+            time_gap: Some(t),
+            follower_speed: Some(v3),
+        }
+    }
+    fn ego_switching(&self, p: &Vector) -> f32 {
+        p[3] - p[1]
     }
 }

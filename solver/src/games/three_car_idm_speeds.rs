@@ -1,7 +1,7 @@
 //! The three-car game with an IDM follower in absolute speeds (five axes).
 
 use super::idm::{clipped_idm, time_gap_against};
-use super::{Accel, Dynamics, Idm, OptimalInputs, Vector};
+use super::{Accel, Dynamics, Game, Idm, OptimalInputs, Vector};
 
 /// The three-car IDM game in absolute speeds, `z = (x_g1, v1, x_g2, v3, v_ego)` (five axes).
 ///
@@ -111,22 +111,6 @@ impl Dynamics for ThreeCarIdmSpeeds {
         alpha[4] = self.ego.at_speed(z[4], vm).magnitude();
     }
 
-    fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs {
-        let vm = self.max_speed;
-        let t = self.adversarial_time_gap(p[3]);
-        OptimalInputs {
-            ego: self.ego.at_speed(z[4], vm).argmax(p[4]),
-            leader: self.leader.at_speed(z[1], vm).argmin(p[1]),
-            follower: Some(self.follower_acceleration(z[3], z[4], z[2], t)),
-            time_gap: Some(t),
-            follower_speed: Some(z[3]),
-        }
-    }
-
-    fn ego_switching(&self, p: &Vector) -> f32 {
-        p[4]
-    }
-
     #[inline(always)]
     fn lax_friedrichs_row(
         &self,
@@ -176,5 +160,22 @@ impl Dynamics for ThreeCarIdmSpeeds {
                 + a4 * h4[c];
             rate[c] = h;
         }
+    }
+}
+
+impl Game for ThreeCarIdmSpeeds {
+    fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs {
+        let vm = self.max_speed;
+        let t = self.adversarial_time_gap(p[3]);
+        OptimalInputs {
+            ego: self.ego.at_speed(z[4], vm).argmax(p[4]),
+            leader: self.leader.at_speed(z[1], vm).argmin(p[1]),
+            follower: Some(self.follower_acceleration(z[3], z[4], z[2], t)),
+            time_gap: Some(t),
+            follower_speed: Some(z[3]),
+        }
+    }
+    fn ego_switching(&self, p: &Vector) -> f32 {
+        p[4]
     }
 }

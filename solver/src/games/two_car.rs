@@ -1,6 +1,6 @@
 //! The two-car game: the ego behind a leader (paper Fig. 1a).
 
-use super::{Accel, Dynamics, OptimalInputs, Vector};
+use super::{Accel, Dynamics, Game, OptimalInputs, Vector};
 
 /// The two-car game (paper Fig. 1a).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -35,20 +35,6 @@ impl Dynamics for TwoCar {
         alpha[1] = (self.leader.max - self.ego.min).max(self.ego.max - self.leader.min);
     }
 
-    fn optimal_inputs(&self, _z: &Vector, p: &Vector) -> OptimalInputs {
-        OptimalInputs {
-            ego: self.ego.argmax(-p[1]),
-            leader: self.leader.argmin(p[1]),
-            follower: None,
-            time_gap: None,
-            follower_speed: None,
-        }
-    }
-
-    fn ego_switching(&self, p: &Vector) -> f32 {
-        -p[1]
-    }
-
     #[inline(always)]
     fn lax_friedrichs_row(
         &self,
@@ -77,5 +63,20 @@ impl Dynamics for TwoCar {
             let h = p0[c] * v[c] + p1[c] * (u1 - u2) + a0 * h0[c] + a1 * h1[c];
             rate[c] = h;
         }
+    }
+}
+
+impl Game for TwoCar {
+    fn optimal_inputs(&self, _z: &Vector, p: &Vector) -> OptimalInputs {
+        OptimalInputs {
+            ego: self.ego.argmax(-p[1]),
+            leader: self.leader.argmin(p[1]),
+            follower: None,
+            time_gap: None,
+            follower_speed: None,
+        }
+    }
+    fn ego_switching(&self, p: &Vector) -> f32 {
+        -p[1]
     }
 }

@@ -358,7 +358,7 @@ pub struct Config {
 /// byte span, which says nothing to a person editing the file.
 pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, ConfigError> {
     toml::from_str(text).map_err(|e| {
-        // Rust's type names say nothing to a person editing the file (issue 22).
+        // Rust's type names say nothing to a person editing the file.
         let message = e
             .message()
             .trim()
@@ -422,7 +422,7 @@ fn line_column(text: &str, offset: usize) -> (usize, usize) {
 }
 
 /// `error` (a refusal found after parsing, by `validate`) with the line and the column of its
-/// field in `text` appended, as the parser's own refusals have them (issue 22).
+/// field in `text` appended, as the parser's own refusals have them.
 ///
 /// The field is a dotted path with array indices (`grid.gap_leader.points`,
 /// `vary[1].values`). The path is walked through the document with the parser's spans; where

@@ -8,12 +8,14 @@
 //! - [`compile`]: values to a quantized, interpolated table with its error bound;
 //! - `plots`: what a level-set run draws, and where;
 //! - [`table_plots`]: what a split table certifies, and verify's verdicts over it;
+//! - [`proof_plots`]: the proof's verdicts and the measured states under error, drawn;
 //! - [`output`]: the files (`.npy`, JSON, tables) and the plots' drawing.
 
 pub mod compile;
 pub mod config;
 pub mod output;
 mod plots;
+pub mod proof_plots;
 pub mod rear;
 pub mod run;
 pub mod sweep;

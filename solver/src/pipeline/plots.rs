@@ -16,7 +16,7 @@ use crate::pipeline::output::{self, CellMap, PlotAxis};
 use crate::proof::exact;
 use crate::proof::trusted::IndexBox;
 
-// Okabe and Ito's colour-blind-safe palette (issue 22), and two greys. Blue and vermillion
+// Okabe and Ito's colour-blind-safe palette, and two greys. Blue and vermillion
 // differ in hue and lightness for every common colour-vision deficiency; yellow is far lighter
 // than both; the reddish purple of the exact boundary differs from all three.
 /// Okabe-Ito blue: the safe set, and braking.
@@ -37,7 +37,7 @@ pub(crate) const LIGHT_GREY: RGBColor = RGBColor(222, 222, 222);
 pub(crate) const DARK_GREY: RGBColor = RGBColor(140, 140, 140);
 
 /// The label of the cells outside the trusted box, in every map: no colour there says "safe"
-/// or "certified" (issue 22).
+/// or "certified".
 const UNTRUSTED: (&str, RGBColor) = (
     "outside the trusted box: no claim (the solver's numbers disagree)",
     DARK_GREY,
@@ -325,7 +325,7 @@ pub(crate) fn plots(
             let tag = s.tag(five);
             let speeds = s.point(five, 0.0, 0.0);
             // The slice is trusted where its held speeds lie inside the box; an untrusted
-            // slice carries no claim at all and is not drawn (issue 22).
+            // slice carries no claim at all and is not drawn.
             let held_inside = [1, 3, 4]
                 .iter()
                 .all(|&k| speeds.get(k).is_none_or(|&x| inside(k, x)));
@@ -549,7 +549,7 @@ mod tests {
     use super::*;
     use crate::pipeline::run::run;
 
-    /// Nothing is drawn as safe or certified outside the trusted box (issue 22), and the
+    /// Nothing is drawn as safe or certified outside the trusted box, and the
     /// policy is shown only where the state is safe.
     #[test]
     fn untrusted_cells_take_one_category_and_policy_shows_only_where_safe() {

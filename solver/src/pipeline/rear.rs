@@ -19,7 +19,7 @@ use table_format::{Axis, Bounds, Game, Horizon, HorizonStatus, Spacing, TableCon
 
 use crate::engine::semi_lagrangian::{Breakpoints, Iteration};
 use crate::error::{ConfigError, SolverError};
-use crate::games::{Accel, Idm, RearIdm};
+use crate::games::{Accel, RearIdm};
 use crate::pipeline::config::{
     check, check_memory, check_name, idm_parameters, locate, parse_toml, IdmConfig, Range,
     SAMPLED_BYTES_PER_NODE,
@@ -291,7 +291,7 @@ impl RearConfig {
         RearIdm {
             ego: accel(g.ego),
             follower_clip: accel(g.follower),
-            idm: Idm::from(idm_parameters(g.idm)),
+            idm: idm_parameters(g.idm),
             time_gap: accel(g.time_gap),
             max_speed: g.max_speed as f32,
             min_gap: g.min_gap as f32,

@@ -300,8 +300,8 @@ pub fn run(
     Ok(summary)
 }
 
-/// `(horizon, share)` pairs written as `{"horizon_s": .., "share": ..}` objects (issue 22:
-/// unlabelled pairs).
+/// `(horizon, share)` pairs written as `{"horizon_s": .., "share": ..}` objects, not
+/// unlabelled pairs.
 fn horizon_shares<S: serde::Serializer>(history: &[(f64, f64)], s: S) -> Result<S::Ok, S::Error> {
     use serde::ser::SerializeSeq;
     #[derive(serde::Serialize)]

@@ -18,7 +18,7 @@
 //! ```
 //! `[[points]]` lists points, each a table of `key = value` (an empty one is the base); with
 //! `[[vary]]` too, each listed point is combined with every combination of the values. Keys
-//! under `front.` ([`FrontSettings`]) and `sensors.` (`proof::robust::MeasurementError`)
+//! under `front.` ([`FrontSettings`]) and `sensors.` (`table_format::MeasurementError`)
 //! change how a table is measured, not the table: points that differ only there share one
 //! solve. `solver/configs/reference/sweep.toml` documents every field.
 //!
@@ -54,8 +54,9 @@ use crate::error::{ConfigError, SolverError};
 use crate::pipeline::config::{check, check_name, locate, parse_toml};
 use crate::pipeline::output;
 use crate::pipeline::rear::{run_rear_with_report, RearConfig, RearEvent, RearStopped};
-use crate::proof::robust::{robustness, MeasurementError};
+use crate::proof::robust::robustness;
 use crate::proof::verify::RearTable;
+use table_format::MeasurementError;
 
 /// A sweep file ([module docs](self)).
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -126,7 +127,7 @@ impl Default for FrontSettings {
             response_time: 0.0,
             response_acceleration: 0.0,
             jerk: None,
-            front_level: 0.5,
+            front_level: table_format::front::DEFAULT_FRONT_MARGIN,
             rear_level: 0.0,
         }
     }

@@ -3,7 +3,7 @@
 //!
 //! One responsibility: turn a compiled table (and its proof's report) into PNG files. The
 //! level-set runs' maps are the `plots` module's; verify's verdicts are drawn by
-//! [`crate::verify::plot`], called from here over the table's whole extent.
+//! [`super::proof_plots::verdicts`], called from here over the table's whole extent.
 //!
 //! - `certified-rear-ego-<v>.png`: the rear certificate on `(gap to the follower, follower
 //!   speed)` at ego speeds 0, 5, 15, 25 and 35 m/s (those within the table's speed limit): a state
@@ -22,10 +22,10 @@ use table_format::{Game, Table};
 use super::output::{self, CellMap, PlotAxis};
 use super::plots::{BLUE, GREEN, LIGHT_GREY, ORANGE, VERMILLION};
 use crate::error::SolverError;
-use crate::verify::{RearTable, Report};
+use crate::proof::verify::{RearTable, Report};
 
 /// The ego speeds of the rear maps, m/s: the edge of the deployed domain (35 m/s) included,
-/// where issue 21's holes were.
+/// where the domain's edge is.
 const EGO_SPEEDS: [f32; 5] = [0.0, 5.0, 15.0, 25.0, 35.0];
 
 /// The front value a certified state exceeds, m: the firmware's default `front_margin`.
@@ -69,7 +69,7 @@ pub fn deployed_table_plots(
             table.value_at(&state).ok().map(|w| usize::from(w <= bound))
         };
         let path = dir.join(format!("certified-rear-ego-{ve:.0}.png"));
-        // A uniform map says so in its title (issue 22: uniform maps said nothing).
+        // A uniform map says so in its title.
         let cells = (0..gap_axis.len()).flat_map(|i| (0..speed_axis.len()).map(move |j| (i, j)));
         let certified = cells.filter(|&(i, j)| cell(i, j) == Some(0)).count();
         let all = gap_axis.len() * speed_axis.len();
@@ -155,6 +155,11 @@ pub fn deployed_table_plots(
         .filter(|&&v| v <= max_speed)
         .map(|&v| f64::from(v))
         .collect();
-    written.extend(crate::verify::plot(rear, report, dir, &verdict_speeds)?);
+    written.extend(super::proof_plots::verdicts(
+        rear,
+        report,
+        dir,
+        &verdict_speeds,
+    )?);
     Ok(written)
 }

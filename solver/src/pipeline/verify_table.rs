@@ -11,8 +11,10 @@ use serde::Serialize;
 
 use crate::error::{ConfigError, SolverError};
 use crate::pipeline::output;
-use crate::proof::robust::{self, MeasurementError, Robustness};
-use crate::proof::verify::{self, Report, Settings};
+use table_format::MeasurementError;
+
+use crate::proof::robust::{self, Robustness};
+use crate::proof::verify::{self, Budget, Report, Settings};
 
 /// What `verify` proved of a table file, and where it wrote it.
 #[derive(Debug, Clone, Serialize)]
@@ -60,8 +62,163 @@ impl VerifiedTable {
     }
 }
 
-/// Checks what a run cannot use, before it starts: periods, the budget, the error bounds.
-pub fn check_settings(settings: &Settings, error: &MeasurementError) -> Result<(), ConfigError> {
+/// `verify`'s options, as the command line and the Python module both take them: one place
+/// names each option, gives its default and checks it ([`VerifyOptions::resolve`]).
+#[derive(Debug, Clone, PartialEq, clap::Args)]
+// A negative number is a value (refused with a reason), not an unknown flag.
+#[command(allow_negative_numbers = true)]
+pub struct VerifyOptions {
+    /// The periods a box may be advanced by, ms, comma-separated (`solver::verify`).
+    #[arg(long, value_delimiter = ',', default_values_t = [20.0, 100.0, 200.0, 300.0])]
+    pub period_ms: Vec<f64>,
+    /// The firmware's `rear_margin`, m (the level is the table's error bound plus this).
+    #[arg(long, default_value_t = 0.0)]
+    pub rear_margin: f64,
+    /// How many times a cell may be halved (axes in turn).
+    #[arg(long, default_value_t = 21)]
+    pub depth: u32,
+    /// Stop after this many seconds; the cells not checked by then are reported and the
+    /// table's record is incomplete (0: no limit).
+    #[arg(long, default_value_t = 600.0)]
+    pub budget_seconds: f64,
+    /// Stop once this many certified cells are found unproven, naming them (0: no limit).
+    #[arg(long, default_value_t = 1000)]
+    pub max_unproven: usize,
+    /// Search every sub-box of an unproven cell for its largest deficit (slower on a table
+    /// with many unproven cells; the verdicts are the same).
+    #[arg(long)]
+    pub exhaustive: bool,
+    /// The declared range error's absolute part, m (`table_format::MeasurementError`).
+    #[arg(long, default_value_t = MeasurementError::default().range)]
+    pub range_error: f32,
+    /// The declared range error's relative part.
+    #[arg(long, default_value_t = MeasurementError::default().range_relative)]
+    pub range_error_relative: f32,
+    /// The declared range-rate error, m/s.
+    #[arg(long, default_value_t = MeasurementError::default().range_rate)]
+    pub range_rate_error: f32,
+    /// The declared ego-speed error's absolute part, m/s.
+    #[arg(long, default_value_t = MeasurementError::default().ego_speed)]
+    pub ego_speed_error: f32,
+    /// The declared ego-speed error's relative part.
+    #[arg(long, default_value_t = MeasurementError::default().ego_speed_relative)]
+    pub ego_speed_error_relative: f32,
+    /// The longest time between a track and the ego-speed measurement paired with it, s.
+    #[arg(long, default_value_t = MeasurementError::default().ego_age)]
+    pub ego_age: f32,
+}
+
+impl Default for VerifyOptions {
+    /// The command line's defaults.
+    fn default() -> Self {
+        use clap::FromArgMatches;
+        let matches = <Self as clap::Args>::augment_args(clap::Command::new("verify"))
+            .no_binary_name(true)
+            .get_matches_from(std::iter::empty::<String>());
+        // The defaults parse by construction.
+        Self::from_arg_matches(&matches).unwrap_or_else(|e| unreachable!("{e}"))
+    }
+}
+
+/// An option `verify` refuses, named as the command line and as Python name it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OptionError {
+    /// The option's field in [`VerifyOptions`] (the flag is it in kebab case, after `--`).
+    pub option: &'static str,
+    /// Why it is refused.
+    pub reason: String,
+}
+
+impl OptionError {
+    /// The command line's flag, e.g. `--range-error`.
+    pub fn flag(&self) -> String {
+        format!("--{}", self.option.replace('_', "-"))
+    }
+
+    /// The Python module's keyword (`periods_ms` for `period_ms`, else the field).
+    pub fn keyword(&self) -> &'static str {
+        match self.option {
+            "period_ms" => "periods_ms",
+            other => other,
+        }
+    }
+}
+
+impl VerifyOptions {
+    /// The declared measurement error.
+    pub fn measurement_error(&self) -> MeasurementError {
+        MeasurementError {
+            range: self.range_error,
+            range_relative: self.range_error_relative,
+            range_rate: self.range_rate_error,
+            ego_speed: self.ego_speed_error,
+            ego_speed_relative: self.ego_speed_error_relative,
+            ego_age: self.ego_age,
+        }
+    }
+
+    /// The proof's settings, or the first option a run cannot use, before anything runs.
+    pub fn resolve(&self) -> Result<Settings, OptionError> {
+        let refuse = |option, reason: String| Err(OptionError { option, reason });
+        if self.period_ms.is_empty() || self.period_ms.iter().any(|p| !(p.is_finite() && *p > 0.0))
+        {
+            return refuse(
+                "period_ms",
+                "every period must be a positive number of milliseconds".into(),
+            );
+        }
+        if !(self.budget_seconds.is_finite() && self.budget_seconds >= 0.0) {
+            return refuse(
+                "budget_seconds",
+                format!(
+                    "must be a finite number of seconds, 0 for no limit (got {})",
+                    self.budget_seconds
+                ),
+            );
+        }
+        if !self.rear_margin.is_finite() {
+            return refuse("rear_margin", "must be a finite number of metres".into());
+        }
+        let error = self.measurement_error();
+        if let Some(bound) = error.invalid_bound() {
+            let option = match bound {
+                "range" => "range_error",
+                "range_relative" => "range_error_relative",
+                "range_rate" => "range_rate_error",
+                "ego_speed" => "ego_speed_error",
+                "ego_speed_relative" => "ego_speed_error_relative",
+                _ => "ego_age",
+            };
+            return refuse(
+                option,
+                format!(
+                    "a measurement error bound must be finite, not negative and within the \
+                     limits table_format::sensing declares (got {})",
+                    error
+                        .named()
+                        .iter()
+                        .find(|(n, _)| *n == bound)
+                        .map_or(f32::NAN, |b| b.1)
+                ),
+            );
+        }
+        Ok(Settings {
+            periods: self.period_ms.iter().map(|p| p * 1e-3).collect(),
+            rear_margin: self.rear_margin,
+            max_depth: self.depth,
+            budget: Budget {
+                seconds: (self.budget_seconds > 0.0).then_some(self.budget_seconds),
+                unproven_cells: (self.max_unproven > 0).then_some(self.max_unproven),
+            },
+            exhaustive: self.exhaustive,
+            measurement_error: error,
+        })
+    }
+}
+
+/// Checks what a run cannot use, before it starts: periods, the budget, the error bounds (for
+/// settings made without [`VerifyOptions`]).
+pub fn check_settings(settings: &Settings) -> Result<(), ConfigError> {
     if settings.periods.is_empty()
         || settings
             .periods
@@ -89,35 +246,26 @@ pub fn check_settings(settings: &Settings, error: &MeasurementError) -> Result<(
             "must be a finite number of metres",
         ));
     }
-    for (name, x) in [
-        ("range error", error.range),
-        ("relative range error", error.range_relative),
-        ("range-rate error", error.range_rate),
-        ("ego-speed error", error.ego_speed),
-        ("relative ego-speed error", error.ego_speed_relative),
-        ("ego measurement age", error.ego_age),
-    ] {
-        if !(x.is_finite() && (0.0..1.0).contains(&x)) {
-            return Err(ConfigError::new(
-                name,
-                format!("an error bound must be a finite number in [0, 1) (got {x})"),
-            ));
-        }
+    if let Some(bound) = settings.measurement_error.invalid_bound() {
+        return Err(ConfigError::new(
+            format!("measurement error {bound}"),
+            "must be finite, not negative and within its limit",
+        ));
     }
     Ok(())
 }
 
-/// Proves the table at `path` and measures it under `error`; writes
+/// Proves the table at `path` and measures it under the settings' measurement error; writes
 /// `out/verify/<file stem>/`: `verify.json` (the proof's report), `robustness.json` (exact
 /// sensors and the declared error) and the plots. `progress` sees `(cells checked, cells)`.
 pub fn verify_table(
     path: &Path,
     settings: &Settings,
-    error: &MeasurementError,
     out: &Path,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<VerifiedTable, SolverError> {
-    check_settings(settings, error)?;
+    check_settings(settings)?;
+    let error = &settings.measurement_error;
     let bytes = std::fs::read(path).map_err(|e| SolverError::Io {
         path: path.display().to_string(),
         source: e,
@@ -142,7 +290,7 @@ pub fn verify_table(
         &dir.join("robustness.json"),
         &serde_json::json!({ "exact": exact, "declared": declared }),
     )?;
-    robust::plot(axes, &[&exact, &declared], &dir, 20.0)?;
+    super::proof_plots::robustness(axes, &[&exact, &declared], &dir, 20.0)?;
     Ok(VerifiedTable {
         table: path.to_path_buf(),
         dir,

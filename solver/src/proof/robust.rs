@@ -19,55 +19,9 @@
 
 use rayon::prelude::*;
 use serde::Serialize;
-use table_format::Table;
+use table_format::{MeasurementError, Table};
 
 use crate::proof::verify::{Report, Verdict};
-
-/// The declared measurement error (the firmware's `SensorBounds`; its defaults here).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct MeasurementError {
-    /// Range error, absolute part, m.
-    pub range: f32,
-    /// Range error, relative part.
-    pub range_relative: f32,
-    /// Range-rate error, m/s.
-    pub range_rate: f32,
-    /// Ego-speed error, absolute part, m/s.
-    pub ego_speed: f32,
-    /// Ego-speed error, relative part.
-    pub ego_speed_relative: f32,
-    /// The largest time between the ego's speed measurement and the track's, s (the firmware
-    /// takes the ego measurement nearest the track's time, 10 ms away at most at a 20 ms
-    /// ego-speed cycle).
-    pub ego_age: f32,
-}
-
-impl Default for MeasurementError {
-    /// The firmware's default sensor bounds (a host test checks they agree).
-    fn default() -> Self {
-        MeasurementError {
-            range: 0.1,
-            range_relative: 0.015,
-            range_rate: 0.14,
-            ego_speed: 0.1,
-            ego_speed_relative: 0.005,
-            ego_age: 0.01,
-        }
-    }
-}
-
-impl MeasurementError {
-    /// No error.
-    pub const EXACT: MeasurementError = MeasurementError {
-        range: 0.0,
-        range_relative: 0.0,
-        range_rate: 0.0,
-        ego_speed: 0.0,
-        ego_speed_relative: 0.0,
-        ego_age: 0.0,
-    };
-}
 
 /// The certified volume and the proof under one measurement error.
 #[derive(Debug, Clone, Serialize)]
@@ -89,9 +43,10 @@ pub struct Robustness {
     pub passes: Vec<bool>,
 }
 
-/// The error box around the measured rear state `(gap, follower_speed, ego_speed)`, clipped to
-/// the grid's speeds `[0, vmax]` and gaps: `None` when it leaves the grid below, or its speeds
-/// lie entirely above `vmax`.
+/// The error box around the measured rear state `(gap, follower_speed, ego_speed)`
+/// ([`MeasurementError::rear_box`], the firmware's), the ego's speed within its error and moved
+/// within the band over `ego_age`, clipped to the grid's speeds `[0, vmax]` and gaps: `None`
+/// when it leaves the grid below, or its speeds lie entirely above `vmax`.
 fn error_box(
     e: &MeasurementError,
     [gap, follower, ego]: [f32; 3],
@@ -99,21 +54,19 @@ fn error_box(
     grid: ([f32; 2], f32),
 ) -> Option<([f32; 3], [f32; 3])> {
     let ([gap_min, gap_max], vmax) = grid;
-    let gap_lo = (gap - e.range) / (1.0 + e.range_relative);
-    let gap_hi = ((gap + e.range) / (1.0 - e.range_relative)).min(gap_max);
-    let ego_lo = ((ego - e.ego_speed) / (1.0 + e.ego_speed_relative) + band.0 * e.ego_age).max(0.0);
-    let ego_hi = (ego + e.ego_speed) / (1.0 - e.ego_speed_relative) + band.1 * e.ego_age;
+    let (ego_lo, ego_hi) = e.ego_speed(ego);
+    let ego_at_track = (
+        (ego_lo + band.0 * e.ego_age).max(0.0),
+        ego_hi + band.1 * e.ego_age,
+    );
     // The measured range rate is `ego - follower`.
-    let rate = ego - follower;
-    let follower_lo = (ego_lo - rate - e.range_rate).max(0.0);
-    let follower_hi = (ego_hi - rate + e.range_rate).min(vmax);
-    if gap_lo < gap_min || ego_hi > vmax || follower_lo > vmax {
+    let (lo, hi) = e.rear_box(gap, ego - follower, ego_at_track);
+    let gap_hi = hi[0].min(gap_max);
+    let follower_hi = hi[1].min(vmax);
+    if lo[0] < gap_min || hi[2] > vmax || lo[1] > vmax {
         return None;
     }
-    Some((
-        [gap_lo, follower_lo, ego_lo],
-        [gap_hi.max(gap_lo), follower_hi, ego_hi],
-    ))
+    Some((lo, [gap_hi.max(lo[0]), follower_hi, hi[2]]))
 }
 
 /// The cells `[lo, hi]` on an axis of breakpoints `axis` touch: first and last cell index.
@@ -188,70 +141,4 @@ pub fn robustness(
         too_wide: results.iter().filter(|r| r.3).count(),
         passes: results.iter().map(|r| r.1).collect(),
     }
-}
-
-/// Draws the measured rear states at the ego speed nearest `ego_speed` on `(gap_follower,
-/// follower_speed)` nodes: passing with every error in `runs` (the last is the declared one),
-/// passing only with the first (exact sensors), or passing with neither. Writes
-/// `robustness-ego-<v>.png`.
-pub fn plot(
-    axes: [&[f64]; 3],
-    runs: &[&Robustness],
-    dir: &std::path::Path,
-    ego_speed: f64,
-) -> Result<std::path::PathBuf, crate::error::SolverError> {
-    use crate::pipeline::output::{draw_cell_map, CellMap, PlotAxis};
-    use plotters::style::RGBColor;
-    let (nj, nk) = (axes[1].len(), axes[2].len());
-    let k = axes[2].partition_point(|&b| b < ego_speed).min(nk - 1);
-    let passes = |r: &Robustness, i: usize, j: usize| {
-        r.passes
-            .get((i * nj + j) * nk + k)
-            .copied()
-            .unwrap_or(false)
-    };
-    let (Some(first), Some(last)) = (runs.first(), runs.last()) else {
-        return Ok(dir.to_path_buf());
-    };
-    let legend: [(&str, RGBColor); 3] = [
-        // Okabe and Ito's colour-blind-safe palette.
-        ("not certified", RGBColor(222, 222, 222)),
-        ("certified with exact sensors only", RGBColor(230, 159, 0)),
-        ("certified with the declared error", RGBColor(0, 114, 178)),
-    ];
-    let cell = |i: usize, j: usize| {
-        Some(if passes(last, i, j) {
-            2
-        } else if passes(first, i, j) {
-            1
-        } else {
-            0
-        })
-    };
-    let title = format!(
-        "measured rear states at ego speed {:.1} m/s (whole table: {:.1}% certified exact, {:.1}% with the error)",
-        axes[2][k],
-        100.0 * first.passing_share,
-        100.0 * last.passing_share
-    );
-    let path = dir.join(format!("robustness-ego-{:.0}.png", axes[2][k]));
-    draw_cell_map(
-        &path,
-        &CellMap {
-            title: &title,
-            x: PlotAxis {
-                label: "measured gap to the follower (m)",
-                coords: axes[0],
-            },
-            y: PlotAxis {
-                label: "measured follower speed (m/s)",
-                coords: axes[1],
-            },
-            cell: &cell,
-            legend: &legend,
-            curves: &[],
-            frame: None,
-        },
-    )?;
-    Ok(path)
 }

@@ -41,6 +41,7 @@ def verify(
     range_rate_error: Optional[float] = None,
     ego_speed_error: Optional[float] = None,
     ego_speed_error_relative: Optional[float] = None,
+    ego_age: Optional[float] = None,
 ) -> dict[str, Any]: ...
 def campaign(
     episodes: int = 500,

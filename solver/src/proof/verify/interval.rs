@@ -3,16 +3,7 @@
 
 use serde::Serialize;
 
-/// Outward widening of every computed bound (relative and absolute).
-const WIDEN: f64 = 1e-9;
-
-pub(super) fn widen_down(x: f64) -> f64 {
-    x - WIDEN * (1.0 + x.abs())
-}
-
-pub(super) fn widen_up(x: f64) -> f64 {
-    x + WIDEN * (1.0 + x.abs())
-}
+pub(super) use table_format::idm::{widen_down, widen_up};
 
 /// A closed interval.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

@@ -118,14 +118,12 @@ use crate::error::SolverError;
 
 mod interval;
 mod model;
-mod plot;
 mod table;
 
 use interval::widen_down;
 pub use interval::{Interval, StateBox};
 use model::least_difference;
 pub use model::{travel, Reach, RearModel};
-pub use plot::plot;
 pub use table::{Located, RearTable};
 
 /// The version of what `verify` proves, recorded in the tables it checks
@@ -191,6 +189,15 @@ pub struct Settings {
     /// The verdicts are the same either way; the search can take long on a table with many
     /// unproven cells.
     pub exhaustive: bool,
+    /// The measurement error the table is checked under ([`crate::proof::robust`]), recorded in
+    /// its header ([`table_format::Verification::measurement_error`]). The proof itself is
+    /// about true states; a complete one also places every measured state the firmware's test
+    /// passes in proven cells, under any error: a box whose least value exceeds the level lies
+    /// in the certified set, so every cell it touches has a corner above the level (the
+    /// multilinear interpolant's largest value on a cell is at a corner), is certified, and was
+    /// proven. The record says which error the table's figures and checks were made for, so
+    /// that the firmware can refuse a table checked for less than it declares.
+    pub measurement_error: table_format::MeasurementError,
 }
 
 /// When `verify` stops before every cell is checked. The cells go in C order (the gap to the
@@ -226,6 +233,7 @@ impl Default for Settings {
             max_depth: 21,
             budget: Budget::default(),
             exhaustive: false,
+            measurement_error: table_format::MeasurementError::default(),
         }
     }
 }
@@ -511,8 +519,8 @@ fn verify_cell_with(
 /// asks for the follower's clip `a_min` or harder whatever the speeds; `None` if the model has
 /// no such gap.
 pub fn standstill_gap(m: &RearModel) -> Option<f64> {
-    let ratio = 1.0 - m.clip_min / m.idm_a;
-    (m.clip_min < 0.0 && ratio > 1.0).then(|| m.idm_s0 / ratio.sqrt())
+    let ratio = 1.0 - m.clip_min / f64::from(m.idm.max_acceleration);
+    (m.clip_min < 0.0 && ratio > 1.0).then(|| f64::from(m.idm.jam_distance) / ratio.sqrt())
 }
 
 /// The standstill lemma's exit check (module docs): the largest follower speed `V` (a multiple
@@ -626,6 +634,7 @@ impl Report {
             proven_cells: u32::try_from(self.proven).unwrap_or(u32::MAX),
             shortest_period: periods.iter().copied().fold(f64::INFINITY, f64::min) as f32,
             longest_period: periods.iter().copied().fold(0.0, f64::max) as f32,
+            measurement_error: self.settings.measurement_error,
         }
     }
 }

@@ -1,7 +1,7 @@
 //! The rear game's model as a table's header states it, and sound bounds of what one period
 //! can do from a box of states (the module docs of [`crate::proof::verify`] derive them).
 
-use table_format::Game;
+use table_format::{Game, IdmParameters};
 
 use super::interval::{widen_down, widen_up, Interval, StateBox};
 
@@ -16,16 +16,8 @@ pub struct RearModel {
     pub clip_min: f64,
     /// The follower's clip, m/s^2.
     pub clip_max: f64,
-    /// IDM `a`, m/s^2.
-    pub idm_a: f64,
-    /// IDM `b`, m/s^2.
-    pub idm_b: f64,
-    /// IDM `v0`, m/s.
-    pub idm_v0: f64,
-    /// IDM `delta`.
-    pub idm_delta: i32,
-    /// IDM `s0`, m.
-    pub idm_s0: f64,
+    /// The follower's IDM ([`table_format::idm`]: its interval form is the proof's).
+    pub idm: IdmParameters,
     /// The time gap's range, s.
     pub time_gap: Interval,
     /// Every speed lies in `[0, max_speed]`, m/s.
@@ -50,11 +42,7 @@ impl RearModel {
                 ego_max: f64::from(ego.max),
                 clip_min: f64::from(follower_clip.min),
                 clip_max: f64::from(follower_clip.max),
-                idm_a: f64::from(idm.max_acceleration),
-                idm_b: f64::from(idm.comfortable_deceleration),
-                idm_v0: f64::from(idm.desired_speed),
-                idm_delta: i32::from(idm.exponent),
-                idm_s0: f64::from(idm.jam_distance),
+                idm,
                 time_gap: Interval::new(f64::from(time_gap.min), f64::from(time_gap.max)),
                 max_speed: f64::from(max_speed),
                 min_gap: f64::from(min_gap),
@@ -64,38 +52,15 @@ impl RearModel {
     }
 
     /// Bounds of the follower's clipped IDM acceleration over a box of gaps and speeds and
-    /// every time gap in range (module docs).
+    /// every time gap in range ([`IdmParameters::acceleration_bounds`], the ego the
+    /// follower's leader), clipped; a NaN bound is the clip's lowest.
     pub fn follower_acceleration(&self, b: &StateBox) -> Interval {
-        let (p, q) = (b.follower_speed.lo.max(0.0), b.follower_speed.hi.max(0.0));
-        let (r, s) = (b.ego_speed.lo, b.ego_speed.hi);
-        let c = 2.0 * (self.idm_a * self.idm_b).sqrt();
-        // z(v) = v T + v (v - v_e) / c is non-increasing in v_e and non-decreasing in T
-        // (v >= 0), convex in v: its least value at T_min, v_e = s, at the vertex clamped into
-        // [p, q]; its largest at T_max, v_e = r, at an end.
-        let z = |v: f64, t: f64, ve: f64| v * t + v * (v - ve) / c;
-        let vertex = (0.5 * (s - c * self.time_gap.lo)).clamp(p, q);
-        let z_lo = z(p, self.time_gap.lo, s)
-            .min(z(q, self.time_gap.lo, s))
-            .min(z(vertex, self.time_gap.lo, s));
-        let z_hi = z(p, self.time_gap.hi, r).max(z(q, self.time_gap.hi, r));
-        let desired_lo = widen_down(self.idm_s0 + z_lo.max(0.0));
-        let desired_hi = widen_up(self.idm_s0 + z_hi.max(0.0));
-        let speed_term = |v: f64| power(v / self.idm_v0, self.idm_delta);
-        let (speed_lo, speed_hi) = (speed_term(p), speed_term(q));
-        // (s*/g)^2 with s* >= s0 > 0: decreasing in g > 0; infinite at g <= 0.
-        let (g1, g2) = (b.gap.lo, b.gap.hi);
-        let interaction_hi = if g1 > 0.0 {
-            (desired_hi / g1).powi(2)
-        } else {
-            f64::INFINITY
-        };
-        let interaction_lo = if g2 > 0.0 {
-            (desired_lo / g2).powi(2)
-        } else {
-            f64::INFINITY
-        };
-        let lo = widen_down(self.idm_a * (1.0 - speed_hi - interaction_hi));
-        let hi = widen_up(self.idm_a * (1.0 - speed_lo - interaction_lo));
+        let (lo, hi) = self.idm.acceleration_bounds(
+            (b.gap.lo, b.gap.hi),
+            (b.follower_speed.lo, b.follower_speed.hi),
+            (b.ego_speed.lo, b.ego_speed.hi),
+            (self.time_gap.lo, self.time_gap.hi),
+        );
         let clamp = |x: f64| {
             if x.is_nan() {
                 self.clip_min
@@ -253,24 +218,4 @@ pub(super) fn least_difference(ve: f64, ae: f64, vf: f64, af: f64, period: f64, 
         .into_iter()
         .map(|t| travel(ve, ae, t, v_max).0 - travel(vf, af, t, v_max).0)
         .fold(f64::INFINITY, f64::min)
-}
-
-/// `x^n` by squaring, for the IDM's small integer exponent: `f64::powi` with an exponent known
-/// only at run time is a library call (`__powidf2`) on the proof's hottest path. The exponent
-/// is at least 1 (`Idm` refuses others); a bound computed from it is widened like any other.
-#[inline(always)]
-fn power(x: f64, n: i32) -> f64 {
-    let (mut base, mut e, mut out) = (x, n.unsigned_abs(), 1.0);
-    while e > 0 {
-        if e & 1 == 1 {
-            out *= base;
-        }
-        base *= base;
-        e >>= 1;
-    }
-    if n < 0 {
-        1.0 / out
-    } else {
-        out
-    }
 }

@@ -1,19 +1,21 @@
-//! The verdicts drawn on `(gap, follower speed)` slices.
+//! The proof's plots: its verdicts on `(gap, follower speed)` slices, and the measured rear
+//! states the firmware's test passes under measurement error. The proof returns data
+//! ([`crate::proof`]); this room draws it.
 
-use super::table::RearTable;
-use super::{Reason, Report, Verdict};
 use crate::error::SolverError;
+use crate::proof::robust::Robustness;
+use crate::proof::verify::{RearTable, Reason, Report, Verdict};
 
 /// Draws the verdicts on `(gap_follower, follower_speed)` cells over the table's whole extent:
 /// one slice per ego speed in `ego_speeds` (the cell holding it), and the worst verdict over
 /// every ego speed.
-pub fn plot(
+pub fn verdicts(
     table: &RearTable,
     report: &Report,
     dir: &std::path::Path,
     ego_speeds: &[f64],
 ) -> Result<Vec<std::path::PathBuf>, SolverError> {
-    use crate::pipeline::output::{draw_cell_map, CellMap, PlotAxis};
+    use super::output::{draw_cell_map, CellMap, PlotAxis};
     use plotters::style::RGBColor;
     let [ni, nj, nk] = table.cells();
     let centre =
@@ -117,4 +119,70 @@ pub fn plot(
     )?;
     written.push(path);
     Ok(written)
+}
+
+/// Draws the measured rear states at the ego speed nearest `ego_speed` on `(gap_follower,
+/// follower_speed)` nodes: passing with every error in `runs` (the last is the declared one),
+/// passing only with the first (exact sensors), or passing with neither. Writes
+/// `robustness-ego-<v>.png`.
+pub fn robustness(
+    axes: [&[f64]; 3],
+    runs: &[&Robustness],
+    dir: &std::path::Path,
+    ego_speed: f64,
+) -> Result<std::path::PathBuf, crate::error::SolverError> {
+    use super::output::{draw_cell_map, CellMap, PlotAxis};
+    use plotters::style::RGBColor;
+    let (nj, nk) = (axes[1].len(), axes[2].len());
+    let k = axes[2].partition_point(|&b| b < ego_speed).min(nk - 1);
+    let passes = |r: &Robustness, i: usize, j: usize| {
+        r.passes
+            .get((i * nj + j) * nk + k)
+            .copied()
+            .unwrap_or(false)
+    };
+    let (Some(first), Some(last)) = (runs.first(), runs.last()) else {
+        return Ok(dir.to_path_buf());
+    };
+    let legend: [(&str, RGBColor); 3] = [
+        // Okabe and Ito's colour-blind-safe palette.
+        ("not certified", RGBColor(222, 222, 222)),
+        ("certified with exact sensors only", RGBColor(230, 159, 0)),
+        ("certified with the declared error", RGBColor(0, 114, 178)),
+    ];
+    let cell = |i: usize, j: usize| {
+        Some(if passes(last, i, j) {
+            2
+        } else if passes(first, i, j) {
+            1
+        } else {
+            0
+        })
+    };
+    let title = format!(
+        "measured rear states at ego speed {:.1} m/s (whole table: {:.1}% certified exact, {:.1}% with the error)",
+        axes[2][k],
+        100.0 * first.passing_share,
+        100.0 * last.passing_share
+    );
+    let path = dir.join(format!("robustness-ego-{:.0}.png", axes[2][k]));
+    draw_cell_map(
+        &path,
+        &CellMap {
+            title: &title,
+            x: PlotAxis {
+                label: "measured gap to the follower (m)",
+                coords: axes[0],
+            },
+            y: PlotAxis {
+                label: "measured follower speed (m/s)",
+                coords: axes[1],
+            },
+            cell: &cell,
+            legend: &legend,
+            curves: &[],
+            frame: None,
+        },
+    )?;
+    Ok(path)
 }

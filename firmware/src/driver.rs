@@ -2,19 +2,19 @@
 //! time-gap setting. Each request changes the driver's state only; the command history, which
 //! the certificate needs, is kept across every change.
 
-use super::{Config, TIME_GAP_SETTINGS};
+use crate::controller::{Config, TIME_GAP_SETTINGS};
 use crate::math;
 
 /// A request from the driver's controls (the API: [`Controller::request`]; CAN: frame `0x140`,
 /// [`crate::can`]).
 ///
-/// [`Controller::request`]: super::Controller::request
+/// [`Controller::request`]: crate::Controller::request
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum DriverRequest {
     /// SET: engage at the ego's measured speed as the new set speed (at least 1 m/s).
     Engage,
-    /// Disengage: the controller stops commanding ([`Mode::Standby`](super::Mode::Standby)).
+    /// Disengage: the controller stops commanding ([`Mode::Standby`](crate::Mode::Standby)).
     Cancel,
     /// Engage again at the last set speed; after a stop held longer than `auto_resume_us`, move
     /// off.
