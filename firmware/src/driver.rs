@@ -2,7 +2,7 @@
 //! time-gap setting. Each request changes the driver's state only; the command history, which
 //! the certificate needs, is kept across every change.
 
-use crate::controller::{Config, TIME_GAP_SETTINGS};
+use crate::config::{Config, TIME_GAP_SETTINGS};
 use crate::math;
 
 /// A request from the driver's controls (the API: [`Controller::request`]; CAN: frame `0x140`,

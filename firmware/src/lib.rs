@@ -35,6 +35,7 @@
 mod fmt;
 
 pub mod can;
+pub mod config;
 pub mod controller;
 pub mod driver;
 pub mod inputs;

@@ -250,20 +250,19 @@
 
 mod certificate;
 mod command;
-mod config;
 mod faults;
 mod history;
 mod law;
 mod tracks;
 
-pub use crate::driver::{DriverError, DriverRequest, DriverState};
-pub use certificate::{Certificate, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE};
-pub use command::{Command, Event, Mode};
-pub use config::{
+pub use crate::config::{
     Config, Envelope, OverridePolicy, CLOCK_RECOVERY_PERIODS, ISO_15622_LIMITS,
     MAX_ACTUATOR_LAG_US, MAX_DEAD_TIME_US, MAX_PERIOD_US, MAX_STALE_PERIODS, MAX_STEP_GAP_PERIODS,
     MIN_PERIOD_US, TIME_GAP_SETTINGS,
 };
+pub use crate::driver::{DriverError, DriverRequest, DriverState};
+pub use certificate::{Certificate, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE};
+pub use command::{Command, Event, Mode};
 pub use faults::Fault;
 
 use heapless::Deque;

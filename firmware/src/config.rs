@@ -14,7 +14,7 @@ pub struct Config {
     /// is covered up to `sensors.max_track_age_us`).
     pub stale_periods: u32,
     /// The speed set-point at start, m/s (the driver changes it at run time:
-    /// [`DriverRequest`](super::DriverRequest)).
+    /// [`DriverRequest`](crate::DriverRequest)).
     pub set_speed: f32,
     /// The time gaps the driver may select, s, shortest first; the shortest no shorter than
     /// ISO 15622's minimum ([`crate::iso15622::MIN_TIME_GAP`]).
@@ -96,7 +96,7 @@ pub enum OverridePolicy {
 /// The vehicle's envelope: what the firmware may command and the speeds it may certify, set by
 /// the integrator for the car, not by the table. Every command, in every mode, is clamped into
 /// it, and a table whose band does not fit inside it is refused at load
-/// ([`Fault::TableOutsideEnvelope`](super::Fault::TableOutsideEnvelope)): clamping the table's braking level instead would void
+/// ([`Fault::TableOutsideEnvelope`](crate::Fault::TableOutsideEnvelope)): clamping the table's braking level instead would void
 /// the certificate, which assumes the ego brakes at `beta` when told to.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -121,7 +121,7 @@ impl Default for Envelope {
 }
 
 impl Envelope {
-    pub(super) fn is_valid(&self) -> bool {
+    pub(crate) fn is_valid(&self) -> bool {
         math::is_finite(self.min_acceleration)
             && math::is_finite(self.max_acceleration)
             && math::is_finite(self.max_speed)
@@ -131,7 +131,7 @@ impl Envelope {
     }
 
     /// `a` within the envelope (NaN becomes the hardest braking).
-    pub(super) fn clamp(&self, a: f32) -> f32 {
+    pub(crate) fn clamp(&self, a: f32) -> f32 {
         if a.is_nan() {
             return self.min_acceleration;
         }
