@@ -9,7 +9,7 @@
 //! with humans that keep to the model, collisions and losses must both be zero, or the
 //! certificate is wrong.
 
-use firmware::{Config, Controller};
+use firmware::{Certifier, Config};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
@@ -161,7 +161,7 @@ pub fn in_iso_scope(o: &Outcome) -> bool {
 /// in `[0, max_speed]` otherwise; gaps are uniform in `[0, 150]` m ahead and over the rear grid
 /// behind. `None` after 10,000 rejected draws.
 pub fn sample_start(
-    controller: &Controller<'_>,
+    certifier: &Certifier<'_>,
     model: &HumanModel,
     gap_max: f32,
     response_time: f32,
@@ -180,7 +180,7 @@ pub fn sample_start(
         let gap_leader = rng.random_range(0.0..=150.0f32);
         let gap_follower = rng.random_range(0.0..=gap_max);
         let state = [gap_leader, vl, gap_follower, vf, ve];
-        if let Some(certificate) = controller.certificate_with_response(state, response_time, 0.0) {
+        if let Some(certificate) = certifier.certificate_with_response(state, response_time, 0.0) {
             let margin = certificate.margin();
             if certificate.is_certified() {
                 let ego = Car { x: 0.0, v: ve };
@@ -213,12 +213,12 @@ pub fn run_episode(
 ) -> Option<Outcome> {
     let mut rng = StdRng::seed_from_u64(episode.seed);
     let config = episode.config;
-    let controller = Controller::new(bytes, config);
+    let certifier = Certifier::new(table.clone(), &config).ok()?;
     let model = HumanModel::of(table)?;
     let gap_max = table.axis_bounds(0)?.max;
     let response_time = episode.actuator.dead_time + episode.actuator.lag;
     let (cars, initial_margin) =
-        sample_start(&controller, &model, gap_max, response_time, &mut rng)?;
+        sample_start(&certifier, &model, gap_max, response_time, &mut rng)?;
     let initial = state_of(cars);
     let mut humans = Humans::new(table, episode.leader, episode.follower, &mut rng)?;
     let start = Start {

@@ -289,8 +289,8 @@ impl<'t> Setting<'t> {
     /// Whether `start` is certified at the true state, the engaged acceleration held through
     /// the actuator's dead time and lag.
     fn certified(&self, start: &Start, actuator: &ActuatorModel) -> Option<firmware::Certificate> {
-        let controller = firmware::Controller::new(self.bytes, self.config);
-        let c = controller.certificate_with_response(
+        let certifier = firmware::Certifier::new(self.table.clone(), &self.config).ok()?;
+        let c = certifier.certificate_with_response(
             state_of(start.cars),
             actuator.dead_time + actuator.lag,
             start.engaged_acceleration,

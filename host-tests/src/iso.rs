@@ -1,4 +1,4 @@
-//! ISO 15622's comfort checks on a trace, as the outside test ran them: the braking
+//! ISO 15622's comfort checks on a trace, as an outside review ran them: the braking
 //! jerk averaged over 1 s, the deceleration averaged over 2 s, and the acceleration, each
 //! against its limit at the ego's speed ([`firmware::iso15622`], the firmware's own figures
 //! and interpolation), on the vehicle's realised acceleration and speed (not the command).

@@ -16,11 +16,10 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use host_tests::campaign::{run_episode, CutInKind, ModeName, Sensing, Trace};
+use host_tests::campaign::{run_episode, CutInKind, Sensing, Trace};
 use host_tests::sim::ActuatorModel;
 use host_tests::SensorModel;
 use indicatif::{ProgressBar, ProgressStyle};
-use plotters::prelude::*;
 use table_format::Table;
 
 #[derive(Parser)]
@@ -56,7 +55,7 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         table: Option<PathBuf>,
     },
-    /// Runs the scenario suite (openpilot's maneuvers, Euro NCAP's CCR tests, the issue's
+    /// Runs the scenario suite (openpilot's maneuvers, Euro NCAP's CCR tests, hjacc's own
     /// checks) under ISO 15622's comfort checks, with the graded override and the paper's
     /// bang-bang policy.
     Scenarios {
@@ -93,151 +92,6 @@ enum Command {
         table: Option<PathBuf>,
     },
 }
-
-fn plot_trace(path: &std::path::Path, title: &str, trace: &Trace) -> Result<()> {
-    let root = BitMapBackend::new(path, (1000, 900)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let panels = root.split_evenly((3, 1));
-    let t_max = trace.last().map_or(1.0, |p| p.t).max(0.1);
-    let g_max = trace
-        .iter()
-        .map(|p| p.gap_leader.max(p.gap_follower))
-        .fold(1.0f32, f32::max)
-        * 1.1;
-    macro_rules! legend {
-        ($chart:expr) => {
-            $chart
-                .configure_series_labels()
-                .border_style(BLACK)
-                .background_style(WHITE)
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()?
-        };
-    }
-    let line = |c: RGBColor| {
-        move |(x, y): (i32, i32)| PathElement::new(vec![(x, y), (x + 14, y)], c.stroke_width(2))
-    };
-
-    let mut chart = ChartBuilder::on(&panels[0])
-        .caption(title, ("sans-serif", 18))
-        .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0f32..t_max, 0f32..g_max)?;
-    chart
-        .configure_mesh()
-        .x_desc("time [s]")
-        .y_desc("gap [m]")
-        .draw()?;
-    for (label, colour, f) in [
-        (
-            "gap to leader [m]",
-            BLUE,
-            (|p: &host_tests::campaign::TracePoint| p.gap_leader) as fn(&_) -> f32,
-        ),
-        ("gap to follower [m]", RED, |p| p.gap_follower),
-    ] {
-        chart
-            .draw_series(LineSeries::new(
-                trace.iter().map(|p| (p.t, f(p))),
-                colour.stroke_width(2),
-            ))?
-            .label(label)
-            .legend(line(colour));
-    }
-    legend!(chart);
-
-    let v_max = trace
-        .iter()
-        .map(|p| p.speeds[0].max(p.speeds[1]).max(p.speeds[2]))
-        .fold(1.0f32, f32::max)
-        * 1.1;
-    let mut chart = ChartBuilder::on(&panels[1])
-        .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0f32..t_max, 0f32..v_max)?;
-    chart
-        .configure_mesh()
-        .x_desc("time [s]")
-        .y_desc("speed [m/s]")
-        .draw()?;
-    for (k, label, colour) in [
-        (0, "leader [m/s]", BLUE),
-        (1, "ego [m/s]", BLACK),
-        (2, "follower [m/s]", RED),
-    ] {
-        chart
-            .draw_series(LineSeries::new(
-                trace.iter().map(|p| (p.t, p.speeds[k])),
-                colour.stroke_width(2),
-            ))?
-            .label(label)
-            .legend(line(colour));
-    }
-    legend!(chart);
-
-    let m_max = trace
-        .iter()
-        .map(|p| p.margin)
-        .filter(|m| m.is_finite())
-        .fold(1.0f32, f32::max)
-        .min(10.0);
-    let mut chart = ChartBuilder::on(&panels[2])
-        .margin(10)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0f32..t_max, -4.5f32..m_max.max(2.5))?;
-    chart
-        .configure_mesh()
-        .x_desc("time [s]")
-        .y_desc("command [m/s^2], margin [m]")
-        .draw()?;
-    chart
-        .draw_series(LineSeries::new(
-            trace.iter().map(|p| (p.t, p.command)),
-            // One pixel: plotters joins wider lines with mitres, which at the command's sharp
-            // turns draw spikes beyond the values (a spike to -3.9 under braking at -3.5).
-            BLACK.stroke_width(1),
-        ))?
-        .label("ego command [m/s^2]")
-        .legend(line(BLACK));
-    chart
-        .draw_series(LineSeries::new(
-            trace
-                .iter()
-                .filter(|p| p.margin.is_finite())
-                .map(|p| (p.t, p.margin.min(m_max))),
-            GREEN.stroke_width(1),
-        ))?
-        .label("certificate margin [m]")
-        .legend(line(GREEN));
-    for (mode, colour, label) in [
-        (ModeName::Override, MAGENTA, "override"),
-        (ModeName::MinimumRisk, CYAN, "minimum-risk manoeuvre"),
-        (
-            ModeName::Uncertified,
-            RGBColor(230, 140, 0),
-            "outside the domain",
-        ),
-    ] {
-        chart
-            .draw_series(
-                trace
-                    .iter()
-                    .filter(|p| p.mode == mode)
-                    .map(|p| Circle::new((p.t, p.command), 2, colour.filled())),
-            )?
-            .label(label)
-            .legend(move |(x, y)| Circle::new((x + 7, y), 3, colour.filled()));
-    }
-    legend!(chart);
-    root.present()?;
-    Ok(())
-}
-
-/// The plots' font, shipped with the build: no system font or fontconfig needed.
-static PLOT_FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// Runs [`real_main`]; a user error (a bad flag, an empty group, a failed campaign) is
 /// one clean message on stderr and exit code 1, with or without `RUST_BACKTRACE` (anyhow's
@@ -302,28 +156,10 @@ fn positive_seconds(name: &str, s: f32) -> Result<()> {
     Ok(())
 }
 
-/// Parses the command line; a mistake in it is one line naming the argument (clap's own
-/// message, without its usage block), and exit code 2. Help and version print as usual.
-fn parse_args() -> Args {
-    Args::try_parse().unwrap_or_else(|e| {
-        use clap::error::ErrorKind;
-        if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion)
-            || e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
-        {
-            e.exit()
-        }
-        let text = e.to_string();
-        let first = text.lines().next().unwrap_or("error: bad arguments");
-        eprintln!("{first} (see --help)");
-        std::process::exit(2)
-    })
-}
-
 fn real_main() -> Result<()> {
-    plotters::style::register_font("sans-serif", FontStyle::Normal, PLOT_FONT).map_err(|_| {
-        anyhow::anyhow!("the bundled font assets/fonts/DejaVuSans.ttf does not parse")
-    })?;
-    match parse_args().command {
+    solver::output::register_plot_font()?;
+    let args: Args = solver::cli::parse_args();
+    match args.command {
         Command::Falsify {
             episodes,
             seconds,
@@ -444,7 +280,7 @@ fn replay(
             "trace": trace,
         }))?,
     )?;
-    plot_trace(
+    host_tests::plots::trace(
         &out.join("trace.png"),
         &format!(
             "replay: {:?} humans, {:?} start (smallest margin {:.3} m)",
@@ -627,7 +463,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
             {
                 let name =
                     format!("worst_{:?}_{:?}.png", summary.leader, summary.follower).to_lowercase();
-                let drawn = plot_trace(
+                let drawn = host_tests::plots::trace(
                     &out.join(name),
                     &format!(
                         "smallest margin: {:?} leader, {:?} follower (seed {})",
@@ -807,7 +643,7 @@ fn scenarios(out: &std::path::Path, only: Option<&str>) -> Result<()> {
         );
         if let Some(trace) = trace {
             let file = out.join(format!("trace-{k:02}.png"));
-            plot_trace(&file, &name, &trace)?;
+            host_tests::plots::trace(&file, &name, &trace)?;
             println!("  trace: {}", file.display());
         }
         report.push(r);
@@ -906,7 +742,8 @@ fn gap_policy(out: &std::path::Path) -> Result<()> {
     let response = (declared.actuator_dead_time_us + declared.actuator_lag_us) as f32 * 1e-6;
     let mut shares = Vec::new();
     for (name, config) in configs {
-        let c = firmware::Controller::new(bytes, config);
+        let c = firmware::Certifier::new(table_format::Table::parse(bytes)?, &config)
+            .map_err(|f| anyhow::anyhow!("the default table is refused: {f:?}"))?;
         let (mut certified, mut all) = (0u64, 0u64);
         for g in 0..=150 {
             for l in 0..=70 {
@@ -935,68 +772,7 @@ fn gap_policy(out: &std::path::Path) -> Result<()> {
         serde_json::to_string_pretty(&report)?,
     )?;
     let file = out.join("gap-policy.png");
-    let root = BitMapBackend::new(&file, (1000, 650)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let g_max = policies
-        .iter()
-        .flat_map(|p| p.1.iter().map(|x| x.1))
-        .fold(0.0f32, f32::max)
-        * 1.05;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            "Gap policy (driver's settings) beside the certificate's steady-following gap",
-            ("sans-serif", 20),
-        )
-        .margin(12)
-        .x_label_area_size(35)
-        .y_label_area_size(55)
-        .build_cartesian_2d(0f32..35f32, 0f32..g_max)?;
-    chart
-        .configure_mesh()
-        .x_desc("speed, ego and leader alike [m/s]")
-        .y_desc("gap to the leader [m]")
-        .draw()?;
-    // Okabe-Ito, colour-blind safe.
-    let certified_colours = [
-        RGBColor(153, 153, 153),
-        RGBColor(230, 159, 0),
-        RGBColor(213, 94, 0),
-    ];
-    let policy_colours = [
-        RGBColor(86, 180, 233),
-        RGBColor(0, 158, 115),
-        RGBColor(0, 114, 178),
-        RGBColor(204, 121, 167),
-    ];
-    for ((name, points), colour) in series.iter().zip(certified_colours) {
-        chart
-            .draw_series(LineSeries::new(
-                points.iter().copied(),
-                colour.stroke_width(3),
-            ))?
-            .label(name.clone())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 14, y)], colour.stroke_width(3))
-            });
-    }
-    for ((time_gap, points), colour) in policies.iter().zip(policy_colours) {
-        chart
-            .draw_series(LineSeries::new(
-                points.iter().copied(),
-                colour.stroke_width(2),
-            ))?
-            .label(format!("gap policy, time gap {time_gap} s"))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 14, y)], colour.stroke_width(2))
-            });
-    }
-    chart
-        .configure_series_labels()
-        .border_style(BLACK)
-        .background_style(WHITE)
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()?;
-    root.present()?;
+    host_tests::plots::gap_policy(&file, &series, &policies)?;
     println!("{}", file.display());
     Ok(())
 }

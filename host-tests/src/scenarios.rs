@@ -95,7 +95,7 @@ pub struct Scenario {
     /// longer than the auto-resume window, as a driver would press it).
     #[serde(skip)]
     pub driver: Vec<(f32, DriverRequest)>,
-    /// What the criteria check on this scenario, besides safety and comfort.
+    /// What hjacc's own criteria check on this scenario, besides safety and comfort.
     pub check: Check,
 }
 

@@ -106,7 +106,7 @@ fn a_an_ego_accelerating_at_the_speed_limit_is_not_certified_and_its_neighbour_h
     };
     let mut hole = at(34.8);
     hole.cars[0].x = gap_for_front_margin(hole, 0.05);
-    assert!(!certified(&hole), "the issue's start is still certified");
+    assert!(!certified(&hole), "the reported start is still certified");
     let mut near = at(34.0);
     near.cars[0].x = gap_for_front_margin(near, 0.05);
     assert!(certified(&near));

@@ -18,12 +18,15 @@
 //!   rear table, cell by cell), the measurement error's cost ([`robust`]), the [`trusted`]
 //!   box of a level-set solve, and the [`exact`] values the schemes are tested against.
 //!
+//! - [`cli`]: what the command-line programs share.
+//!
 //! The modules are re-exported at the crate's root (`solver::verify`, `solver::rear`, ...),
 //! the paths its users (host-tests, the Python module, the examples) name.
 #![warn(missing_docs)]
 // Index loops read best in the numerical kernels, where several arrays share one index.
 #![allow(clippy::needless_range_loop)]
 
+pub mod cli;
 pub mod engine;
 pub mod error;
 pub mod games;
@@ -32,5 +35,5 @@ pub mod proof;
 
 pub use engine::{grid, hji, scheme, semi_lagrangian};
 pub use error::{ConfigError, SolverError};
-pub use pipeline::{compile, config, output, rear, run, sweep, verify_table};
+pub use pipeline::{compile, config, output, palette, rear, run, sweep, verify_table};
 pub use proof::{exact, robust, trusted, verify};

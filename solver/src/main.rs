@@ -157,23 +157,6 @@ impl Progress {
     }
 }
 
-/// Parses the command line; a mistake in it is one line naming the argument (clap's own
-/// message, without its usage block), and exit code 2. Help and version print as usual.
-fn parse_args() -> Args {
-    Args::try_parse().unwrap_or_else(|e| {
-        use clap::error::ErrorKind;
-        if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion)
-            || e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
-        {
-            e.exit()
-        }
-        let text = e.to_string();
-        let first = text.lines().next().unwrap_or("error: bad arguments");
-        eprintln!("{first} (see --help)");
-        std::process::exit(2)
-    })
-}
-
 /// Runs [`real_main`]; a user error (a bad config, an unwritable folder, an unproven table) is
 /// one clean message on stderr and exit code 1, with or without `RUST_BACKTRACE` (anyhow's
 /// `Debug` output would print a backtrace of this function, which tells a user nothing).
@@ -188,7 +171,7 @@ fn main() -> std::process::ExitCode {
 }
 
 fn real_main() -> Result<()> {
-    let args = parse_args();
+    let args: Args = solver::cli::parse_args();
     ensure_writable(&args.out)?;
     match &args.command {
         Some(Command::Verify(v)) => return run_verify(v, &args.out, args.quiet),

@@ -117,7 +117,144 @@ impl Model {
     }
 }
 
-pub(super) fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
+/// The certificate as a value: the table and the model it states, the sensors' bounds, the
+/// margins and the braking ramp, and nothing of the controller's state. It gives the front
+/// value in closed form, the rear value over a box of states, the error box of a measured rear
+/// track, and the certificate of a true state; the controller decides with it, and host-side
+/// tools judge states with it without a controller.
+#[derive(Clone)]
+pub struct Certifier<'t> {
+    table: Table<'t>,
+    pub(super) model: Model,
+    sensors: crate::sensing::SensorBounds,
+    front_margin: f32,
+    rear_margin: f32,
+    brake_jerk: f32,
+}
+
+impl<'t> Certifier<'t> {
+    /// The certifier of `table` for `config`: refused (with the reason) for a table that is not
+    /// a split three-car table covering every speed, whose band does not fit the vehicle's
+    /// envelope, or that carries no complete `solver verify` record for the configuration's
+    /// `rear_margin` and declared measurement error.
+    pub fn new(table: Table<'t>, config: &Config) -> Result<Self, Fault> {
+        let model = model_of(&table, config)?;
+        Ok(Certifier {
+            table,
+            model,
+            sensors: config.sensors,
+            front_margin: config.front_margin,
+            rear_margin: config.rear_margin,
+            brake_jerk: config.brake_jerk,
+        })
+    }
+
+    /// The table.
+    pub fn table(&self) -> &Table<'t> {
+        &self.table
+    }
+
+    /// The sensors' bounds the certificate covers.
+    pub fn sensors(&self) -> &crate::sensing::SensorBounds {
+        &self.sensors
+    }
+
+    /// The ego's band `[-beta, a_max]`, m/s^2.
+    pub fn band(&self) -> Bounds {
+        self.model.ego
+    }
+
+    /// The certificate at the true state `(gap_leader, leader_speed, gap_follower,
+    /// follower_speed, ego_speed)`, with the control step's domain rules: `None` outside the
+    /// domain. The ego is taken at rest in its actuator (acceleration zero, no delay) and
+    /// braking along the configured ramp.
+    pub fn certificate(&self, state: [f32; 5]) -> Option<Certificate> {
+        self.certificate_with_response(state, 0.0, 0.0)
+    }
+
+    /// [`Certifier::certificate`] for an ego whose acceleration is at most
+    /// `response_acceleration` for `response_time` seconds (its actuator's dead time and lag,
+    /// with the commands still in its pipeline), then ramps down from there at the configured
+    /// `brake_jerk` to beta: what a controller engaged at that acceleration does.
+    pub fn certificate_with_response(
+        &self,
+        state: [f32; 5],
+        response_time: f32,
+        response_acceleration: f32,
+    ) -> Option<Certificate> {
+        self.certificate_with_profile(
+            state,
+            response_time,
+            response_acceleration,
+            response_acceleration,
+            self.brake_jerk,
+        )
+    }
+
+    /// The certificate at a true state for an ego holding `hold` for `response` seconds, then
+    /// ramping down from `ramp_from` at `jerk` to beta.
+    pub(super) fn certificate_with_profile(
+        &self,
+        state: [f32; 5],
+        response: f32,
+        hold: f32,
+        ramp_from: f32,
+        jerk: f32,
+    ) -> Option<Certificate> {
+        let model = &self.model;
+        let [gap_leader, leader_speed, gap_follower, follower_speed, ego_speed] = state;
+        let rear = self
+            .rear_value(
+                (gap_follower, gap_follower),
+                (follower_speed, follower_speed),
+                (ego_speed, ego_speed),
+            )
+            .ok()?;
+        let front = front_value(
+            gap_leader,
+            leader_speed,
+            ego_speed,
+            &model.front(response, hold, ramp_from, jerk),
+        );
+        let peak = ego_speed + speed_rise(hold, response, ramp_from, jerk);
+        Some(self.certificate_of(front, rear, model.max_ego_speed - peak))
+    }
+
+    /// The certificate of a front value, a rear value and a speed headroom: each half as a
+    /// margin over its level.
+    pub fn certificate_of(&self, front: f32, rear: f32, speed: f32) -> Certificate {
+        Certificate {
+            front: front - self.front_margin,
+            rear: rear - self.model.error_bound - self.rear_margin,
+            speed,
+        }
+    }
+
+    /// The rear value over a box of rear states ([`rear_value`]).
+    pub fn rear_value(
+        &self,
+        gap: (f32, f32),
+        follower_speed: (f32, f32),
+        ego_speed: (f32, f32),
+    ) -> Result<f32, Fault> {
+        rear_value(&self.table, &self.model, gap, follower_speed, ego_speed)
+    }
+
+    /// The rear value of a measured follower track, for the ego's speed at the track's time in
+    /// `ego` (error included): the table's least value over the track's error box
+    /// ([`table_format::MeasurementError::rear_box`]), the follower's speed held in the human's
+    /// `[0, max_speed]`.
+    pub fn rear_value_of_track(&self, track: Track, ego: (f32, f32)) -> Result<f32, Fault> {
+        let (lo, hi) = self.sensors.error.rear_box(track.gap, track.rel_speed, ego);
+        self.rear_value(
+            (lo[0], hi[0]),
+            (lo[1], math::min(hi[1], self.model.max_speed)),
+            (lo[2], hi[2]),
+        )
+    }
+}
+
+fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
     let envelope = &config.envelope;
     let header = table.header();
     let Game::ThreeCarSplit {
@@ -252,13 +389,10 @@ impl Controller<'_> {
         response_time: f32,
         response_acceleration: f32,
     ) -> Option<Certificate> {
-        let jerk = self.config.brake_jerk;
-        self.certificate_with_profile(
+        self.certifier.as_ref().ok()?.certificate_with_response(
             state,
             response_time,
             response_acceleration,
-            response_acceleration,
-            jerk,
         )
     }
 
@@ -285,49 +419,10 @@ impl Controller<'_> {
         });
         let (response, ramp_from) = profile(now_us, ramp, dead_time_us, lag, jerk);
         let hold = math::max(math::max(pending, last), ramp_from);
-        self.certificate_with_profile(state, response, hold, ramp_from, jerk)
-    }
-
-    fn certificate_with_profile(
-        &self,
-        state: [f32; 5],
-        response: f32,
-        hold: f32,
-        ramp_from: f32,
-        jerk: f32,
-    ) -> Option<Certificate> {
-        let (table, model) = self.table.as_ref().ok()?;
-        let [gap_leader, leader_speed, gap_follower, follower_speed, ego_speed] = state;
-        let rear = rear_value(
-            table,
-            model,
-            (gap_follower, gap_follower),
-            (follower_speed, follower_speed),
-            (ego_speed, ego_speed),
-        )
-        .ok()?;
-        let front = front_value(
-            gap_leader,
-            leader_speed,
-            ego_speed,
-            &model.front(response, hold, ramp_from, jerk),
-        );
-        let peak = ego_speed + speed_rise(hold, response, ramp_from, jerk);
-        Some(self.certificate_of(front, rear, model.max_ego_speed - peak, model))
-    }
-
-    pub(super) fn certificate_of(
-        &self,
-        front: f32,
-        rear: f32,
-        speed: f32,
-        model: &Model,
-    ) -> Certificate {
-        Certificate {
-            front: front - self.config.front_margin,
-            rear: rear - model.error_bound - self.config.rear_margin,
-            speed,
-        }
+        self.certifier
+            .as_ref()
+            .ok()?
+            .certificate_with_profile(state, response, hold, ramp_from, jerk)
     }
 
     /// What the actuator may be doing before the controller's own commands are known: the
@@ -396,7 +491,7 @@ impl Controller<'_> {
     /// following gap, m (the nominal law's gap policy keeps room over it). `+inf` without a
     /// table.
     pub fn steady_gap(&self, speed: f32) -> f32 {
-        let Ok((_, model)) = &self.table else {
+        let Ok(Certifier { model, .. }) = &self.certifier else {
             return f32::INFINITY;
         };
         let c = &self.config;

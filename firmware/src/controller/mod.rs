@@ -261,7 +261,9 @@ pub use crate::config::{
     MIN_PERIOD_US, TIME_GAP_SETTINGS,
 };
 pub use crate::driver::{DriverError, DriverRequest, DriverState};
-pub use certificate::{Certificate, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE};
+pub use certificate::{
+    Certificate, Certifier, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
+};
 pub use command::{Command, Event, Mode};
 pub use faults::Fault;
 
@@ -274,7 +276,7 @@ use crate::iso15622;
 use crate::math;
 use crate::sensing::TrackState;
 
-use certificate::{model_of, LeaderMemo, Model, Ramp, RearMemo};
+use certificate::{LeaderMemo, Ramp, RearMemo};
 
 /// How long [`Mode::Override`] is still reported after the look-ahead's last trim of the law's
 /// command, microseconds: the label does not chatter while the law rides the look-ahead's edge.
@@ -292,7 +294,7 @@ use tracks::EGO_HISTORY;
 /// searches look ahead with one).
 #[derive(Clone)]
 pub struct Controller<'t> {
-    table: Result<(Table<'t>, Model), Fault>,
+    certifier: Result<Certifier<'t>, Fault>,
     config: Config,
     mode: Mode,
     /// The last command's takeover request.
@@ -341,14 +343,14 @@ impl<'t> Controller<'t> {
     /// three-car table, leaves the controller in the minimum-risk manoeuvre for good, with the
     /// reason in every command.
     pub fn new(table_bytes: &'t [u8], config: Config) -> Self {
-        let table = if config.is_valid() {
+        let certifier = if config.is_valid() {
             Table::parse(table_bytes)
                 .map_err(Fault::Table)
-                .and_then(|t| model_of(&t, &config).map(|m| (t, m)))
+                .and_then(|t| Certifier::new(t, &config))
         } else {
             Err(Fault::InvalidConfig)
         };
-        if let Err(fault) = &table {
+        if let Err(fault) = &certifier {
             log_warn!("table refused: {}", fault);
         }
         let mut config = config;
@@ -356,7 +358,7 @@ impl<'t> Controller<'t> {
         config.mrm_gentle_deceleration =
             math::clamp(config.mrm_gentle_deceleration, 0.5, config.mrm_deceleration);
         Controller {
-            table,
+            certifier,
             config,
             mode: Mode::MinimumRisk,
             takeover: true,
@@ -387,12 +389,12 @@ impl<'t> Controller<'t> {
     /// controller ends it.
     pub fn latch_minimum_risk(&mut self, fault: Fault) {
         log_warn!("minimum-risk manoeuvre latched: {}", fault);
-        self.table = Err(fault);
+        self.certifier = Err(fault);
     }
 
     /// The table, if it was accepted.
     pub fn table(&self) -> Option<&Table<'t>> {
-        self.table.as_ref().ok().map(|(t, _)| t)
+        self.certifier.as_ref().ok().map(Certifier::table)
     }
 
     /// The configuration in force (decelerations clamped to their limits).
@@ -494,7 +496,7 @@ impl<'t> Controller<'t> {
                 self.log(Event::DriverRequestRefused { at_us: now, error });
             }
         }
-        let model = self.table.as_ref().ok().map(|(_, m)| *m);
+        let model = self.certifier.as_ref().ok().map(|c| c.model);
         let floor = model.map(|m| self.ramp_floor(now, &m));
         let command = if !self.driver.engaged {
             self.standby(inputs)
@@ -577,7 +579,7 @@ impl<'t> Controller<'t> {
     fn standby(&mut self, inputs: &Inputs) -> Command {
         let now = inputs.now_us;
         if let (Ok(model), Ok(v)) = (
-            self.table.as_ref().map(|(_, m)| *m),
+            self.certifier.as_ref().map(|c| c.model),
             self.check_ego_speed(&inputs.ego_speed, now),
         ) {
             self.remember_ego_speed(inputs.ego_speed.timestamp_us, v);
@@ -608,7 +610,7 @@ impl<'t> Controller<'t> {
             Some(fault),
         );
         command.takeover = true;
-        let Ok((_, model)) = &self.table else {
+        let Ok(Certifier { model, .. }) = &self.certifier else {
             return command;
         };
         let planned = math::clamp(command.acceleration, model.ego.min, model.ego.max);
@@ -650,8 +652,8 @@ impl<'t> Controller<'t> {
     }
 
     fn decide(&mut self, inputs: &Inputs) -> Command {
-        let model = match &self.table {
-            Ok((_, m)) => *m,
+        let model = match &self.certifier {
+            Ok(c) => c.model,
             Err(f) => return self.minimum_risk(inputs, *f),
         };
         let now = inputs.now_us;
@@ -765,9 +767,10 @@ impl<'t> Controller<'t> {
                 return command;
             }
         };
-        let margin = self
-            .certificate_of(front.value, rear, front.headroom, &model)
-            .margin();
+        let margin = match &self.certifier {
+            Ok(c) => c.certificate_of(front.value, rear, front.headroom).margin(),
+            Err(_) => f32::NAN,
+        };
         // Diagnostics: the state itself is no longer certified (logged once per excursion).
         let outside = margin.is_nan() || margin <= 0.0;
         if outside && !self.margin_lost {

@@ -2,7 +2,7 @@
 //! measurement with the ego's speed at its time, the follower's rear value), their ages and
 //! states, and the cut-in test.
 
-use super::certificate::{rear_value, LeaderMemo, Model, RearMemo};
+use super::certificate::{LeaderMemo, Model, RearMemo};
 use super::history::seconds;
 use super::{Controller, Event, Fault};
 use crate::inputs::{Measurement, Track};
@@ -159,8 +159,7 @@ impl Controller<'_> {
         model: &Model,
     ) -> TrackState {
         let newer = self.is_new_measurement(m, self.rear.map(|r| (r.at_us, r.track)), now);
-        if let (true, Ok((table, _))) = (newer, &self.table) {
-            let sensors = &self.config.sensors;
+        if let (true, Ok(certifier)) = (newer, &self.certifier) {
             let (ego_low, ego_high) = self.ego_speed_interval_at(m.timestamp_us, model);
             // Where every step since before the track's time kept a speed headroom of zero or
             // more, the ego's true speed has stayed within the domain (module docs: the ego's
@@ -170,18 +169,7 @@ impl Controller<'_> {
             } else {
                 ego_high
             };
-            let (lo, hi) =
-                sensors
-                    .error
-                    .rear_box(m.value.gap, m.value.rel_speed, (ego_low, ego_high));
-            // The follower's speed is held in the human's `[0, max_speed]`.
-            let value = rear_value(
-                table,
-                model,
-                (lo[0], hi[0]),
-                (lo[1], math::min(hi[1], model.max_speed)),
-                (lo[2], hi[2]),
-            );
+            let value = certifier.rear_value_of_track(m.value, (ego_low, ego_high));
             self.rear = Some(RearMemo {
                 at_us: m.timestamp_us,
                 track: m.value,

@@ -9,11 +9,13 @@
 //! - `plots`: what a level-set run draws, and where;
 //! - [`table_plots`]: what a split table certifies, and verify's verdicts over it;
 //! - [`proof_plots`]: the proof's verdicts and the measured states under error, drawn;
-//! - [`output`]: the files (`.npy`, JSON, tables) and the plots' drawing.
+//! - [`output`]: the files (`.npy`, JSON, tables) and the plots' drawing;
+//! - [`palette`]: the plots' colours, once.
 
 pub mod compile;
 pub mod config;
 pub mod output;
+pub mod palette;
 mod plots;
 pub mod proof_plots;
 pub mod rear;

@@ -16,25 +16,7 @@ use crate::pipeline::output::{self, CellMap, PlotAxis};
 use crate::proof::exact;
 use crate::proof::trusted::IndexBox;
 
-// Okabe and Ito's colour-blind-safe palette, and two greys. Blue and vermillion
-// differ in hue and lightness for every common colour-vision deficiency; yellow is far lighter
-// than both; the reddish purple of the exact boundary differs from all three.
-/// Okabe-Ito blue: the safe set, and braking.
-pub(crate) const BLUE: RGBColor = RGBColor(0, 114, 178);
-/// Okabe-Ito vermillion: accelerating.
-pub(crate) const VERMILLION: RGBColor = RGBColor(213, 94, 0);
-/// Okabe-Ito yellow: a tie, either input.
-pub(crate) const YELLOW: RGBColor = RGBColor(240, 228, 66);
-/// Okabe-Ito reddish purple: the exact boundary.
-pub(crate) const PURPLE: RGBColor = RGBColor(204, 121, 167);
-/// Okabe-Ito bluish green: a second curve.
-pub(crate) const GREEN: RGBColor = RGBColor(0, 158, 115);
-/// Okabe-Ito orange: a third curve.
-pub(crate) const ORANGE: RGBColor = RGBColor(230, 159, 0);
-/// Light grey: in the constraint set, not safe (not certified).
-pub(crate) const LIGHT_GREY: RGBColor = RGBColor(222, 222, 222);
-/// Dark grey: outside the trusted box, where the solver's numbers carry no claim.
-pub(crate) const DARK_GREY: RGBColor = RGBColor(140, 140, 140);
+use super::palette::{BLUE, DARK_GREY, LIGHT_GREY, PURPLE, VERMILLION, YELLOW};
 
 /// The label of the cells outside the trusted box, in every map: no colour there says "safe"
 /// or "certified".

@@ -2,6 +2,7 @@
 //! states the firmware's test passes under measurement error. The proof returns data
 //! ([`crate::proof`]); this room draws it.
 
+use super::palette::{BLUE, DARK_GREY, GREEN, LIGHT_GREY, ORANGE, PURPLE, SKY_BLUE, VERMILLION};
 use crate::error::SolverError;
 use crate::proof::robust::Robustness;
 use crate::proof::verify::{RearTable, Reason, Report, Verdict};
@@ -24,13 +25,12 @@ pub fn verdicts(
     let speeds = centre(table.axis(1), nj);
     // Severity order: not certified, proven, not checked, tangency, resolution, collision.
     let legend: [(&str, RGBColor); 6] = [
-        // Okabe and Ito's colour-blind-safe palette, greys apart.
-        ("not certified", RGBColor(222, 222, 222)),
-        ("proven", RGBColor(0, 158, 115)),
-        ("not checked (the budget ran out)", RGBColor(140, 140, 140)),
-        ("unproven: tangency", RGBColor(230, 159, 0)),
-        ("unproven: resolution", RGBColor(213, 94, 0)),
-        ("unproven: collision", RGBColor(204, 121, 167)),
+        ("not certified", LIGHT_GREY),
+        ("proven", GREEN),
+        ("not checked (the budget ran out)", DARK_GREY),
+        ("unproven: tangency", ORANGE),
+        ("unproven: resolution", VERMILLION),
+        ("unproven: collision", PURPLE),
     ];
     let severity = |v: &Verdict| match v {
         Verdict::NotCertified => 0,
@@ -82,12 +82,12 @@ pub fn verdicts(
     let title = "verify: (gap, follower speed) columns over every ego speed".to_string();
     let path = dir.join("verdicts-worst.png");
     let over_speeds: [(&str, RGBColor); 7] = [
-        ("certified at no ego speed", RGBColor(222, 222, 222)),
+        ("certified at no ego speed", LIGHT_GREY),
         (
             "proven at some ego speeds, not certified at the others",
-            RGBColor(86, 180, 233),
+            SKY_BLUE,
         ),
-        ("proven at every ego speed", RGBColor(0, 114, 178)),
+        ("proven at every ego speed", BLUE),
         legend[2],
         legend[3],
         legend[4],
@@ -145,10 +145,9 @@ pub fn robustness(
         return Ok(dir.to_path_buf());
     };
     let legend: [(&str, RGBColor); 3] = [
-        // Okabe and Ito's colour-blind-safe palette.
-        ("not certified", RGBColor(222, 222, 222)),
-        ("certified with exact sensors only", RGBColor(230, 159, 0)),
-        ("certified with the declared error", RGBColor(0, 114, 178)),
+        ("not certified", LIGHT_GREY),
+        ("certified with exact sensors only", ORANGE),
+        ("certified with the declared error", BLUE),
     ];
     let cell = |i: usize, j: usize| {
         Some(if passes(last, i, j) {

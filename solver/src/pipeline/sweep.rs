@@ -810,8 +810,7 @@ fn plot_summary(s: &SweepSummary, path: &Path) -> Result<(), SolverError> {
         })
         .draw()
         .map_err(|e| err(&e))?;
-    let proven = RGBColor(0, 114, 178);
-    let refused = RGBColor(213, 94, 0);
+    let (proven, refused) = (super::palette::BLUE, super::palette::VERMILLION);
     let bar = |i: usize, p: &PointResult| {
         [
             (0.0, SegmentValue::Exact(row(i))),

@@ -20,7 +20,7 @@ use table_format::front::front_value;
 use table_format::{Game, Table};
 
 use super::output::{self, CellMap, PlotAxis};
-use super::plots::{BLUE, GREEN, LIGHT_GREY, ORANGE, VERMILLION};
+use super::palette::{BLUE, GREEN, LIGHT_GREY, ORANGE, VERMILLION};
 use crate::error::SolverError;
 use crate::proof::verify::{RearTable, Report};
 
