@@ -4,7 +4,8 @@
 use crate::math;
 use crate::sensing::SensorBounds;
 
-/// Tuning of the controller. Units: SI.
+/// Tuning of the controller, grouped by what each part is for: the nominal law, the
+/// certificate, the plant it covers, the fallback. Units: SI.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Config {
@@ -13,6 +14,22 @@ pub struct Config {
     /// An ego-speed measurement older than this many periods is stale (the radar tracks' age
     /// is covered up to `sensors.max_track_age_us`).
     pub stale_periods: u32,
+    /// The nominal ACC law's settings and gains.
+    pub law: LawConfig,
+    /// What the certificate demands: its margins and the braking ramp.
+    pub certificate: CertificateConfig,
+    /// The vehicle the certificate covers: the actuator's delays and the envelope.
+    pub plant: PlantConfig,
+    /// The minimum-risk manoeuvre.
+    pub fallback: FallbackConfig,
+    /// The sensors' error bounds and timing the certificate covers ([`crate::sensing`]).
+    pub sensors: SensorBounds,
+}
+
+/// The nominal ACC law: the driver's settings at start, the gap policy and the gains.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LawConfig {
     /// The speed set-point at start, m/s (the driver changes it at run time:
     /// [`DriverRequest`](crate::DriverRequest)).
     pub set_speed: f32,
@@ -48,6 +65,12 @@ pub struct Config {
     /// microseconds; later it waits for the driver's resume (ISO 15622's full-speed-range
     /// type).
     pub auto_resume_us: u32,
+}
+
+/// What the certificate demands of a state and of the override.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CertificateConfig {
     /// The jerk of the braking ramp the certificate's actuator model assumes, m/s^3: the
     /// override ramps its braking down at this rate, never faster, and the look-ahead accounts
     /// for the ramp. At most ISO 15622's limit at speed (2.5 m/s^3, the default), every
@@ -61,12 +84,12 @@ pub struct Config {
     pub front_margin: f32,
     /// The rear value (m, after the table's error bound) a certified state has.
     pub rear_margin: f32,
-    /// Minimum-risk deceleration, m/s^2 (positive, at most 4).
-    pub mrm_deceleration: f32,
-    /// Minimum-risk deceleration when the follower is close and closing, m/s^2 (positive).
-    pub mrm_gentle_deceleration: f32,
-    /// "Close" for the follower in the minimum-risk manoeuvre, m.
-    pub follower_close_gap: f32,
+}
+
+/// The vehicle the certificate covers: the actuator's dead time and lag, and the envelope.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PlantConfig {
     /// The actuator's dead time the certificate covers, microseconds (at most
     /// [`MAX_DEAD_TIME_US`]): a command acts this long after it is issued.
     pub actuator_dead_time_us: u32,
@@ -75,8 +98,18 @@ pub struct Config {
     pub actuator_lag_us: u32,
     /// The vehicle's own limits, whatever the table says.
     pub envelope: Envelope,
-    /// The sensors' error bounds and timing the certificate covers ([`crate::sensing`]).
-    pub sensors: SensorBounds,
+}
+
+/// The minimum-risk manoeuvre.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FallbackConfig {
+    /// Minimum-risk deceleration, m/s^2 (positive, at most 4).
+    pub mrm_deceleration: f32,
+    /// Minimum-risk deceleration when the follower is close and closing, m/s^2 (positive).
+    pub mrm_gentle_deceleration: f32,
+    /// "Close" for the follower in the minimum-risk manoeuvre, m.
+    pub follower_close_gap: f32,
 }
 
 /// How many time-gap settings a driver chooses from.
@@ -145,46 +178,48 @@ impl Config {
     /// lag within their limits, finite non-negative margins and gains.
     pub fn is_valid(&self) -> bool {
         let finite_non_negative = [
-            self.set_speed,
-            self.standstill_gap,
-            self.gap_room_time,
-            self.gap_room,
-            self.gap_gain,
-            self.rel_speed_gain,
-            self.speed_gain,
-            self.speed_integral_gain,
-            self.feedforward_gain,
-            self.stop_deceleration,
-            self.front_margin,
-            self.rear_margin,
-            self.mrm_deceleration,
-            self.mrm_gentle_deceleration,
-            self.follower_close_gap,
+            self.law.set_speed,
+            self.law.standstill_gap,
+            self.law.gap_room_time,
+            self.law.gap_room,
+            self.law.gap_gain,
+            self.law.rel_speed_gain,
+            self.law.speed_gain,
+            self.law.speed_integral_gain,
+            self.law.feedforward_gain,
+            self.law.stop_deceleration,
+            self.certificate.front_margin,
+            self.certificate.rear_margin,
+            self.fallback.mrm_deceleration,
+            self.fallback.mrm_gentle_deceleration,
+            self.fallback.follower_close_gap,
         ]
         .iter()
         .all(|x| math::is_finite(*x) && *x >= 0.0);
         let gaps_ordered = self
+            .law
             .time_gaps
             .windows(2)
             .all(|w| w.iter().all(|g| math::is_finite(*g)) && w.first() <= w.last());
         let time_gaps = gaps_ordered
             && self
+                .law
                 .time_gaps
                 .first()
                 .is_some_and(|g| *g >= crate::iso15622::MIN_TIME_GAP)
-            && self.time_gaps.last().is_some_and(|g| *g <= 5.0)
-            && usize::from(self.time_gap_setting) < TIME_GAP_SETTINGS;
+            && self.law.time_gaps.last().is_some_and(|g| *g <= 5.0)
+            && usize::from(self.law.time_gap_setting) < TIME_GAP_SETTINGS;
         // A jerk of at least 0.5 m/s^3 (a ramp of 11 s to 3.5 m/s^2 at most), or no ramp.
-        let jerk = self.brake_jerk >= 0.5;
+        let jerk = self.certificate.brake_jerk >= 0.5;
         finite_non_negative
             && time_gaps
             && jerk
-            && self.stop_deceleration >= 0.3
+            && self.law.stop_deceleration >= 0.3
             && (MIN_PERIOD_US..=MAX_PERIOD_US).contains(&self.period_us)
             && (1..=MAX_STALE_PERIODS).contains(&self.stale_periods)
-            && self.actuator_dead_time_us <= MAX_DEAD_TIME_US
-            && self.actuator_lag_us <= MAX_ACTUATOR_LAG_US
-            && self.envelope.is_valid()
+            && self.plant.actuator_dead_time_us <= MAX_DEAD_TIME_US
+            && self.plant.actuator_lag_us <= MAX_ACTUATOR_LAG_US
+            && self.plant.envelope.is_valid()
             && self.sensors.is_valid()
     }
 }
@@ -205,8 +240,11 @@ impl Config {
     /// the rest of the configuration the default.
     pub fn bang_bang() -> Self {
         Config {
-            brake_jerk: f32::INFINITY,
-            override_policy: OverridePolicy::BangBang,
+            certificate: CertificateConfig {
+                brake_jerk: f32::INFINITY,
+                override_policy: OverridePolicy::BangBang,
+                ..CertificateConfig::default()
+            },
             ..Config::default()
         }
     }
@@ -214,11 +252,13 @@ impl Config {
     /// The time gap of `setting`, s (the last one for a setting past the end).
     pub fn time_gap(&self, setting: u8) -> f32 {
         let last = self
+            .law
             .time_gaps
             .last()
             .copied()
             .unwrap_or(crate::iso15622::MIN_TIME_GAP);
-        self.time_gaps
+        self.law
+            .time_gaps
             .get(usize::from(setting))
             .copied()
             .unwrap_or(last)
@@ -230,6 +270,18 @@ impl Default for Config {
         Config {
             period_us: 20_000,
             stale_periods: 5,
+            law: LawConfig::default(),
+            certificate: CertificateConfig::default(),
+            plant: PlantConfig::default(),
+            fallback: FallbackConfig::default(),
+            sensors: SensorBounds::default(),
+        }
+    }
+}
+
+impl Default for LawConfig {
+    fn default() -> Self {
+        LawConfig {
             set_speed: 30.0,
             time_gaps: [1.0, 1.4, 1.8, 2.2],
             time_gap_setting: 2,
@@ -243,17 +295,37 @@ impl Default for Config {
             feedforward_gain: 0.5,
             stop_deceleration: 1.0,
             auto_resume_us: 3_000_000,
+        }
+    }
+}
+
+impl Default for CertificateConfig {
+    fn default() -> Self {
+        CertificateConfig {
             brake_jerk: crate::iso15622::jerk_limit(f32::INFINITY),
             override_policy: OverridePolicy::Graded,
             front_margin: table_format::front::DEFAULT_FRONT_MARGIN,
             rear_margin: 0.0,
-            mrm_deceleration: 2.0,
-            mrm_gentle_deceleration: 1.0,
-            follower_close_gap: 15.0,
+        }
+    }
+}
+
+impl Default for PlantConfig {
+    fn default() -> Self {
+        PlantConfig {
             actuator_dead_time_us: MAX_DEAD_TIME_US,
             actuator_lag_us: MAX_ACTUATOR_LAG_US,
             envelope: Envelope::default(),
-            sensors: SensorBounds::default(),
+        }
+    }
+}
+
+impl Default for FallbackConfig {
+    fn default() -> Self {
+        FallbackConfig {
+            mrm_deceleration: 2.0,
+            mrm_gentle_deceleration: 1.0,
+            follower_close_gap: 15.0,
         }
     }
 }

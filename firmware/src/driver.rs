@@ -55,8 +55,8 @@ impl DriverState {
     pub(super) fn new(config: &Config) -> Self {
         DriverState {
             engaged: true,
-            set_speed: config.set_speed,
-            time_gap_setting: config.time_gap_setting,
+            set_speed: config.law.set_speed,
+            time_gap_setting: config.law.time_gap_setting,
             resume_requested: false,
         }
     }

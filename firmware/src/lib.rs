@@ -44,9 +44,9 @@ pub mod math;
 pub mod sensing;
 
 pub use controller::{
-    Certificate, Certifier, Command, Config, Controller, DriverError, DriverRequest, DriverState,
-    Event, Fault, Mode, OverridePolicy, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE,
-    SPEED_TOLERANCE,
+    Certificate, CertificateConfig, Certifier, Command, Config, Controller, DriverError,
+    DriverRequest, DriverState, Event, FallbackConfig, Fault, LawConfig, Mode, OverridePolicy,
+    PlantConfig, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
 };
 pub use inputs::{Actuator, Clock, Inputs, Measurement, Sensors, Track, Watchdog};
 pub use sensing::{SensorBounds, TrackState};

@@ -2,8 +2,8 @@
 
 use firmware::table_format::{self, Game, MeasurementError, Table};
 use firmware::{
-    Command, Config, Controller, Fault, Inputs, Measurement, Mode, SensorBounds, Track,
-    DEFAULT_TABLE,
+    CertificateConfig, Command, Config, Controller, FallbackConfig, Fault, Inputs, LawConfig,
+    Measurement, Mode, PlantConfig, SensorBounds, Track, DEFAULT_TABLE,
 };
 use proptest::prelude::*;
 
@@ -36,9 +36,12 @@ fn inputs(leader: (f32, f32), follower: (f32, f32), ego_speed: f32) -> Inputs {
 /// theirs below).
 fn ideal() -> Config {
     Config {
-        actuator_dead_time_us: 0,
-        actuator_lag_us: 0,
         sensors: SensorBounds::EXACT,
+        plant: PlantConfig {
+            actuator_dead_time_us: 0,
+            actuator_lag_us: 0,
+            ..Config::default().plant
+        },
         ..Config::default()
     }
 }
@@ -161,9 +164,12 @@ fn a_margin_larger_than_the_front_value_overrides_the_same_state() {
     assert_eq!(cmd.mode, Mode::Nominal);
     let c = controller();
     let front = c.certificate([60.0, 25.0, 40.0, 25.0, 25.0]).unwrap().front
-        + Config::default().front_margin;
+        + Config::default().certificate.front_margin;
     let strict = Config {
-        front_margin: front + 1.0,
+        certificate: CertificateConfig {
+            front_margin: front + 1.0,
+            ..ideal().certificate
+        },
         ..ideal()
     };
     let cmd = Controller::new(DEFAULT_TABLE, strict).step(&state);
@@ -401,11 +407,14 @@ fn minimum_risk_minds_the_follower_and_its_limits() {
     };
     assert_eq!(controller().step(&bad).acceleration, -1.0);
     let harsh = Config {
-        mrm_deceleration: 9.0,
+        fallback: FallbackConfig {
+            mrm_deceleration: 9.0,
+            ..ideal().fallback
+        },
         ..ideal()
     };
     let mut c = Controller::new(DEFAULT_TABLE, harsh);
-    assert_eq!(c.config().mrm_deceleration, 4.0);
+    assert_eq!(c.config().fallback.mrm_deceleration, 4.0);
     // ... and then into the band, like every command.
     let bad = inputs((f32::NAN, 0.0), (40.0, 0.0), 25.0);
     assert_eq!(c.step(&bad).acceleration, band_and_leader().0);
@@ -551,11 +560,17 @@ fn the_measurements_age_is_inside_the_look_ahead() {
 fn a_configuration_outside_the_certificates_limits_is_refused() {
     for bad in [
         Config {
-            actuator_dead_time_us: 150_000,
+            plant: PlantConfig {
+                actuator_dead_time_us: 150_000,
+                ..Config::default().plant
+            },
             ..Config::default()
         },
         Config {
-            actuator_lag_us: 400_000,
+            plant: PlantConfig {
+                actuator_lag_us: 400_000,
+                ..Config::default().plant
+            },
             ..Config::default()
         },
         Config {
@@ -567,11 +582,17 @@ fn a_configuration_outside_the_certificates_limits_is_refused() {
             ..Config::default()
         },
         Config {
-            front_margin: -1e9,
+            certificate: CertificateConfig {
+                front_margin: -1e9,
+                ..Config::default().certificate
+            },
             ..Config::default()
         },
         Config {
-            rear_margin: f32::NAN,
+            certificate: CertificateConfig {
+                rear_margin: f32::NAN,
+                ..Config::default().certificate
+            },
             ..Config::default()
         },
     ] {
@@ -633,9 +654,12 @@ fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
     // A vehicle that may brake at only 3 m/s^2: the table's 3.5 does not fit, and clamping it
     // would void the certificate, so the table is refused.
     let soft = Config {
-        envelope: Envelope {
-            min_acceleration: -3.0,
-            ..Envelope::default()
+        plant: PlantConfig {
+            envelope: Envelope {
+                min_acceleration: -3.0,
+                ..Envelope::default()
+            },
+            ..ideal().plant
         },
         ..ideal()
     };
@@ -645,10 +669,16 @@ fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
     assert_eq!(fault_of(cmd), Fault::TableOutsideEnvelope);
     // A harsh minimum-risk deceleration (4 m/s^2) is held to the envelope too, table or not.
     let harsh = Config {
-        mrm_deceleration: 4.0,
-        envelope: Envelope {
-            min_acceleration: -3.0,
-            ..Envelope::default()
+        fallback: FallbackConfig {
+            mrm_deceleration: 4.0,
+            ..ideal().fallback
+        },
+        plant: PlantConfig {
+            envelope: Envelope {
+                min_acceleration: -3.0,
+                ..Envelope::default()
+            },
+            ..ideal().plant
         },
         ..ideal()
     };
@@ -659,9 +689,12 @@ fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
     );
     // The envelope's speed limit narrows the certified domain below the table's 35 m/s.
     let slow = Config {
-        envelope: Envelope {
-            max_speed: 20.0,
-            ..Envelope::default()
+        plant: PlantConfig {
+            envelope: Envelope {
+                max_speed: 20.0,
+                ..Envelope::default()
+            },
+            ..ideal().plant
         },
         ..ideal()
     };
@@ -669,9 +702,12 @@ fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
     assert_eq!(cmd.fault, Some(Fault::OutsideDomain { axis: 2 }));
     // An envelope that cannot brake is not a configuration.
     let bad = Config {
-        envelope: Envelope {
-            min_acceleration: 0.0,
-            ..Envelope::default()
+        plant: PlantConfig {
+            envelope: Envelope {
+                min_acceleration: 0.0,
+                ..Envelope::default()
+            },
+            ..ideal().plant
         },
         ..ideal()
     };
@@ -796,7 +832,10 @@ fn a_table_without_a_complete_proof_for_the_configured_margin_is_refused() {
     // With the margin the proof was for, it loads.
     let at_margin = table_format::with_verification(&split, complete_record(0.2)).unwrap();
     let config = Config {
-        rear_margin: 0.2,
+        certificate: CertificateConfig {
+            rear_margin: 0.2,
+            ..ideal().certificate
+        },
         ..ideal()
     };
     assert!(Controller::new(&at_margin, config).table().is_some());
@@ -897,8 +936,11 @@ fn no_command_may_take_the_ego_past_the_speed_domain() {
         i
     };
     let config = Config {
-        set_speed: 40.0,
         sensors: SensorBounds::EXACT,
+        law: LawConfig {
+            set_speed: 40.0,
+            ..Config::default().law
+        },
         ..Config::default()
     };
     let cmd = Controller::new(DEFAULT_TABLE, config).step(&clear(34.5));
@@ -1034,7 +1076,7 @@ proptest! {
         let state = if front_half {
             // The front value is `gap - c` here: `near` metres above the margin.
             let c = -front_value(0.0, vl, ve, &braking_now());
-            [config.front_margin + near + c.max(0.0), vl, f32::INFINITY, 0.0, ve]
+            [config.certificate.front_margin + near + c.max(0.0), vl, f32::INFINITY, 0.0, ve]
         } else {
             [f32::INFINITY, vl, gf, vf, ve]
         };
@@ -1243,7 +1285,10 @@ fn a_follower_track_that_ages_keeps_its_rear_value() {
 #[test]
 fn a_speed_kept_in_the_domain_keeps_the_rear_box_in_it() {
     let config = Config {
-        set_speed: 40.0,
+        law: LawConfig {
+            set_speed: 40.0,
+            ..datasheet().law
+        },
         ..datasheet()
     };
     let s = config.sensors;
@@ -1274,8 +1319,11 @@ fn a_speed_kept_in_the_domain_keeps_the_rear_box_in_it() {
 #[test]
 fn the_speed_cap_counts_what_the_lag_still_passes_on() {
     let config = Config {
-        set_speed: 40.0,
         sensors: SensorBounds::EXACT,
+        law: LawConfig {
+            set_speed: 40.0,
+            ..Config::default().law
+        },
         ..Config::default()
     };
     let mut c = Controller::new(DEFAULT_TABLE, config);

@@ -4,8 +4,8 @@
 //! what is checked is the controller's own behaviour.
 
 use firmware::{
-    Config, Controller, DriverError, DriverRequest, Event, Inputs, Measurement, Mode, SensorBounds,
-    Track, DEFAULT_TABLE,
+    CertificateConfig, Config, Controller, DriverError, DriverRequest, Event, Inputs, LawConfig,
+    Measurement, Mode, SensorBounds, Track, DEFAULT_TABLE,
 };
 
 const NOW: u64 = 10_000_000;
@@ -187,7 +187,7 @@ fn cancel_resume_and_set() {
     let cmd = l.step(&mut c, 0.0);
     assert_eq!(cmd.mode, Mode::Nominal, "{cmd:?}");
     assert!(cmd.acceleration.abs() <= 0.2 + 0.05 + 1e-5, "{cmd:?}");
-    assert_eq!(c.driver().set_speed, Config::default().set_speed);
+    assert_eq!(c.driver().set_speed, Config::default().law.set_speed);
     let mut i = l.inputs();
     i.driver = Some(DriverRequest::Engage);
     c.step(&i);
@@ -223,7 +223,7 @@ fn stop_hold_and_go() {
             }
         }
         let (from, at) = (slow_since.unwrap(), stopped_at.unwrap());
-        let standstill = Config::default().standstill_gap;
+        let standstill = Config::default().law.standstill_gap;
         assert!(
             (at - from) as f32 * H < 3.0,
             "{} s below 1 m/s",
@@ -255,21 +255,27 @@ fn stop_hold_and_go() {
 fn the_gap_policy_keeps_room_over_the_certificate() {
     for setting in 0..firmware::controller::TIME_GAP_SETTINGS as u8 {
         let config = Config {
-            time_gap_setting: setting,
+            law: LawConfig {
+                time_gap_setting: setting,
+                ..Config::default().law
+            },
             ..Config::default()
         };
         let c = Controller::new(DEFAULT_TABLE, config);
         for k in 0..=140 {
             let v = k as f32 * 0.25;
-            let room = config.gap_room_time * v + config.gap_room;
+            let room = config.law.gap_room_time * v + config.law.gap_room;
             assert!(c.desired_gap(v) >= c.steady_gap(v) + room - 1e-3, "{v}");
-            assert!(c.desired_gap(v) >= config.standstill_gap + config.time_gap(setting) * v);
+            assert!(c.desired_gap(v) >= config.law.standstill_gap + config.time_gap(setting) * v);
         }
     }
     let step = Controller::new(
         DEFAULT_TABLE,
         Config {
-            brake_jerk: f32::INFINITY,
+            certificate: CertificateConfig {
+                brake_jerk: f32::INFINITY,
+                ..Config::default().certificate
+            },
             ..Config::default()
         },
     );

@@ -666,8 +666,8 @@ impl CampaignSettings {
     /// cut-in.
     pub fn covered(&self) -> bool {
         self.cut_in.is_none()
-            && self.actuator.dead_time * 1e6 <= self.config.actuator_dead_time_us as f32 + 0.5
-            && self.actuator.lag * 1e6 <= self.config.actuator_lag_us as f32 + 0.5
+            && self.actuator.dead_time * 1e6 <= self.config.plant.actuator_dead_time_us as f32 + 0.5
+            && self.actuator.lag * 1e6 <= self.config.plant.actuator_lag_us as f32 + 0.5
     }
 }
 

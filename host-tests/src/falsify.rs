@@ -203,8 +203,8 @@ impl<'t> Setting<'t> {
             config,
             tolerances: Tolerances::default(),
             plant: ActuatorModel {
-                dead_time: config.actuator_dead_time_us as f32 * 1e-6,
-                lag: config.actuator_lag_us as f32 * 1e-6,
+                dead_time: config.plant.actuator_dead_time_us as f32 * 1e-6,
+                lag: config.plant.actuator_lag_us as f32 * 1e-6,
             },
         }
     }
@@ -307,7 +307,10 @@ impl<'t> Setting<'t> {
     ) -> Option<Start> {
         let m = &self.model;
         let vmax = m.max_speed;
-        let band = (m.band_min, self.config.envelope.max_acceleration.min(2.0));
+        let band = (
+            m.band_min,
+            self.config.plant.envelope.max_acceleration.min(2.0),
+        );
         let gap_max = self.table.axis_bounds(0).map_or(150.0, |b| b.max);
         for _ in 0..2_000 {
             let mut speed = || rng.random_range(0.0..=vmax);

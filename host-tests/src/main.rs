@@ -573,7 +573,7 @@ fn scenarios(out: &std::path::Path, only: Option<&str>) -> Result<()> {
         .map(|(scenario, config, follower)| {
             let plotted = PLOTTED.iter().any(|p| scenario.name.contains(p))
                 && *follower
-                && config.override_policy == firmware::OverridePolicy::Graded;
+                && config.certificate.override_policy == firmware::OverridePolicy::Graded;
             let mut trace = plotted.then(Trace::new);
             let result = run(&table, bytes, *config, scenario, *follower, trace.as_mut());
             (result, trace, scenario.name.clone())
@@ -672,14 +672,20 @@ fn gap_policy(out: &std::path::Path) -> Result<()> {
         (
             "no ramp",
             firmware::Config {
-                brake_jerk: f32::INFINITY,
+                certificate: firmware::CertificateConfig {
+                    brake_jerk: f32::INFINITY,
+                    ..firmware::Config::default().certificate
+                },
                 ..firmware::Config::default()
             },
         ),
         (
             "ramp at 5 m/s^3",
             firmware::Config {
-                brake_jerk: 5.0,
+                certificate: firmware::CertificateConfig {
+                    brake_jerk: 5.0,
+                    ..firmware::Config::default().certificate
+                },
                 ..firmware::Config::default()
             },
         ),
@@ -701,7 +707,10 @@ fn gap_policy(out: &std::path::Path) -> Result<()> {
     let mut policies = Vec::new();
     for setting in 0..firmware::controller::TIME_GAP_SETTINGS as u8 {
         let config = firmware::Config {
-            time_gap_setting: setting,
+            law: firmware::LawConfig {
+                time_gap_setting: setting,
+                ..firmware::Config::default().law
+            },
             ..firmware::Config::default()
         };
         let c = firmware::Controller::new(bytes, config);
@@ -739,7 +748,8 @@ fn gap_policy(out: &std::path::Path) -> Result<()> {
     // ego 0-35 m/s by 0.5 m/s) certified for an ego at rest in its actuator with the declared
     // delays, braking along each configuration's ramp.
     let declared = firmware::Config::default();
-    let response = (declared.actuator_dead_time_us + declared.actuator_lag_us) as f32 * 1e-6;
+    let response =
+        (declared.plant.actuator_dead_time_us + declared.plant.actuator_lag_us) as f32 * 1e-6;
     let mut shares = Vec::new();
     for (name, config) in configs {
         let c = firmware::Certifier::new(table_format::Table::parse(bytes)?, &config)

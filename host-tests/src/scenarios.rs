@@ -29,7 +29,7 @@
 //!   actuator delivers: outside the certificate's model (which assumes an actuator that tracks
 //!   the acceleration over ground), so they run without a leader and are judged on speed.
 
-use firmware::{Config, DriverRequest, Mode};
+use firmware::{Config, DriverRequest, LawConfig, Mode};
 use serde::Serialize;
 use table_format::Table;
 
@@ -499,20 +499,24 @@ pub fn run(
 ) -> Option<ScenarioResult> {
     let model = HumanModel::of(table)?;
     let config = Config {
-        set_speed: scenario.set_speed,
+        law: LawConfig {
+            set_speed: scenario.set_speed,
+            ..config.law
+        },
         ..config
     };
     let probe = firmware::Controller::new(bytes, config);
     let v0 = scenario.ego_speed;
     let max_speed = model.max_speed;
-    let response = (config.actuator_dead_time_us + config.actuator_lag_us) as f32 * 1e-6;
+    let response =
+        (config.plant.actuator_dead_time_us + config.plant.actuator_lag_us) as f32 * 1e-6;
     let leader_start = scenario.lead.as_ref().map(|l| {
         let v = l.speed_at(0.0).min(max_speed);
         // The gap policy's distance at the ego's speed when the source's start is shorter, and
         // farther still until the start is certified with the law's room (a driver engaging
         // closer would engage into the override's emergency braking).
         let mut gap = l.gap.max(probe.desired_gap(v0));
-        let room = config.gap_room_time * v0 + config.gap_room;
+        let room = config.law.gap_room_time * v0 + config.law.gap_room;
         while probe
             .certificate_with_response([gap, v, 1e4, v0, v0], response, 0.0)
             .is_some_and(|c| c.front < room)
@@ -558,8 +562,8 @@ pub fn run(
         channels: [radar, radar, crate::sim::Channel::IDEAL],
     };
     let actuator = ActuatorModel {
-        dead_time: config.actuator_dead_time_us as f32 * 1e-6,
-        lag: config.actuator_lag_us as f32 * 1e-6,
+        dead_time: config.plant.actuator_dead_time_us as f32 * 1e-6,
+        lag: config.plant.actuator_lag_us as f32 * 1e-6,
     };
     let start = Start {
         cars: [leader, ego, follower],
@@ -693,7 +697,7 @@ pub fn run(
         }
         Check::Stops => match (stop_started, stopped_at) {
             (Some(from), Some((at, gap))) => {
-                let error = gap - config.standstill_gap;
+                let error = gap - config.law.standstill_gap;
                 (
                     at - from < 3.0 && error.abs() <= 0.5,
                     vec![at - from, error],
@@ -710,7 +714,7 @@ pub fn run(
         name: scenario.name.clone(),
         source: scenario.source,
         follower: with_follower,
-        policy: match config.override_policy {
+        policy: match config.certificate.override_policy {
             firmware::OverridePolicy::Graded => "graded",
             _ => "bang_bang",
         },

@@ -5,7 +5,7 @@
 //! ages. (D) is `solver verify`'s sample bound (its own tests), (E) the simulator's clock
 //! (`host_tests::sim`'s tests).
 
-use firmware::{Config, Controller, DEFAULT_TABLE};
+use firmware::{Config, Controller, PlantConfig, DEFAULT_TABLE};
 use host_tests::falsify::{Case, FollowerRule, Method, Schedule, Setting, StartKind};
 use host_tests::humans::HumanModel;
 use host_tests::sim::{ActuatorModel, Car, SensorModel};
@@ -179,7 +179,10 @@ fn the_search_finds_a_planted_hole() {
     use host_tests::falsify::{search, Budget};
     let table = table();
     let config = Config {
-        actuator_lag_us: 100_000,
+        plant: PlantConfig {
+            actuator_lag_us: 100_000,
+            ..Config::default().plant
+        },
         ..Config::default()
     };
     let mut setting = Setting::within_model(

@@ -143,9 +143,9 @@ impl<'t> Certifier<'t> {
             table,
             model,
             sensors: config.sensors,
-            front_margin: config.front_margin,
-            rear_margin: config.rear_margin,
-            brake_jerk: config.brake_jerk,
+            front_margin: config.certificate.front_margin,
+            rear_margin: config.certificate.rear_margin,
+            brake_jerk: config.certificate.brake_jerk,
         })
     }
 
@@ -230,7 +230,12 @@ impl<'t> Certifier<'t> {
         }
     }
 
-    /// The rear value over a box of rear states ([`rear_value`]).
+    /// The rear value over a box of rear states: the intervals of `gap_follower`, the
+    /// follower's speed and the ego's speed (`(lowest, highest)`). The table's least value over
+    /// the box inside the grid ([`Table::least_over_box`]: exact for the multilinear
+    /// interpolation, one lookup for a point), the last gap face's smallest value beyond it,
+    /// and [`Fault::OutsideDomain`] below the grid or above the speed range;
+    /// [`Fault::RearBoxTooWide`] for a box the step does not evaluate.
     pub fn rear_value(
         &self,
         gap: (f32, f32),
@@ -255,7 +260,7 @@ impl<'t> Certifier<'t> {
 }
 
 fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
-    let envelope = &config.envelope;
+    let envelope = &config.plant.envelope;
     let header = table.header();
     let Game::ThreeCarSplit {
         ego,
@@ -279,7 +284,7 @@ fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
     match header.verification {
         Some(v)
             if v.is_complete()
-                && v.rear_margin == config.rear_margin
+                && v.rear_margin == config.certificate.rear_margin
                 && v.verifier >= table_format::REAR_SAMPLE_VERIFIER => {}
         _ => return Err(Fault::TableNotVerified),
     }
@@ -410,7 +415,7 @@ impl Controller<'_> {
         lag: f32,
         pending: f32,
     ) -> Option<Certificate> {
-        let jerk = self.config.brake_jerk;
+        let jerk = self.config.certificate.brake_jerk;
         let h = u64::from(self.config.period_us);
         let last = self.last_command?;
         let ramp = self.ramp.unwrap_or(Ramp {
@@ -449,7 +454,7 @@ impl Controller<'_> {
     /// What commands older than five lag time constants can still add through the lag, at
     /// most: e^-5 of the band's width (none without a lag).
     pub(super) fn lag_tail(&self, model: &Model) -> f32 {
-        if self.config.actuator_lag_us > 0 {
+        if self.config.plant.actuator_lag_us > 0 {
             LAG_TAIL * (model.ego.max - model.ego.min)
         } else {
             0.0
@@ -475,7 +480,7 @@ impl Controller<'_> {
     /// The hardest braking the ramp allows now: the committed ramp's command for the period
     /// from `now` (module docs: the braking ramp), at least beta.
     pub(super) fn ramp_floor(&self, now: u64, model: &Model) -> f32 {
-        let jerk = self.config.brake_jerk;
+        let jerk = self.config.certificate.brake_jerk;
         if !math::is_finite(jerk) {
             return model.ego.min;
         }
@@ -497,18 +502,18 @@ impl Controller<'_> {
         let c = &self.config;
         let sensors = &c.sensors;
         let h = seconds(u64::from(c.period_us));
-        let dead = seconds(u64::from(c.actuator_dead_time_us));
-        let lag = seconds(u64::from(c.actuator_lag_us));
+        let dead = seconds(u64::from(c.plant.actuator_dead_time_us));
+        let lag = seconds(u64::from(c.plant.actuator_lag_us));
         let age = seconds(u64::from(sensors.latency_us) + u64::from(sensors.cycle_us));
         let (ego_low, ego_high) = sensors.ego_speed(speed);
         let leader_low = math::max(ego_low + sensors.range_rate(0.0).0, 0.0);
         let tail = self.lag_tail(model);
-        let jerk = c.brake_jerk;
+        let jerk = c.certificate.brake_jerk;
         let front = model.front(age + h + dead + lag, tail, 0.0, jerk);
         // The front value is the gap plus a function of the speeds; the measured gap `m` has
         // its least true gap at `(m - e) / (1 + r)` (sensing's module docs).
         let offset = front_value(0.0, leader_low, ego_high, &front);
-        let needed = c.front_margin - offset;
+        let needed = c.certificate.front_margin - offset;
         needed * (1.0 + sensors.error.range_relative) + sensors.error.range
     }
 
@@ -530,9 +535,9 @@ impl Controller<'_> {
     ) -> FrontCheck {
         let c = &self.config;
         let h_us = u64::from(c.period_us);
-        let dead_us = u64::from(c.actuator_dead_time_us);
-        let lag = seconds(u64::from(c.actuator_lag_us));
-        let jerk = c.brake_jerk;
+        let dead_us = u64::from(c.plant.actuator_dead_time_us);
+        let lag = seconds(u64::from(c.plant.actuator_lag_us));
+        let jerk = c.certificate.brake_jerk;
         let t_m = leader.at_us;
         // The worst point of the error box (module docs): the least gap, the slowest leader
         // (the ego's lowest speed at `t_m` plus the least range rate), the fastest ego; the
@@ -613,7 +618,7 @@ impl Controller<'_> {
             (lo, true)
         };
         let capped = math::min(proposal, speed_cap);
-        let margin_front = c.front_margin;
+        let margin_front = c.certificate.front_margin;
         let at_capped = ahead(capped);
         let passes = room && at_capped > margin_front;
         let certified = value > margin_front && headroom >= 0.0;
@@ -621,7 +626,8 @@ impl Controller<'_> {
         let command = if passes {
             capped
         } else {
-            let graded = c.override_policy == OverridePolicy::Graded && room && capped > floor;
+            let graded =
+                c.certificate.override_policy == OverridePolicy::Graded && room && capped > floor;
             let gentler = if graded {
                 least_braking(capped, at_capped, floor, value, margin_front, |u| {
                     ahead(u) > margin_front

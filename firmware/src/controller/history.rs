@@ -113,7 +113,7 @@ impl Controller<'_> {
     /// lag time constants, microseconds.
     pub(super) fn command_span_us(&self) -> u64 {
         let c = &self.config;
-        u64::from(c.actuator_dead_time_us) + 5 * u64::from(c.actuator_lag_us)
+        u64::from(c.plant.actuator_dead_time_us) + 5 * u64::from(c.plant.actuator_lag_us)
     }
 
     /// The oldest time a later step's `pending` can ask about: the kept measurements' times

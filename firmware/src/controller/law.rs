@@ -122,8 +122,8 @@ impl Law {
 
     /// The desired gap at speed `v`, m (module docs: the gap policy).
     pub(super) fn desired_gap(config: &Config, time_gap: f32, steady_gap: f32, v: f32) -> f32 {
-        let driver = config.standstill_gap + time_gap * v;
-        let certified = steady_gap + config.gap_room_time * v + config.gap_room;
+        let driver = config.law.standstill_gap + time_gap * v;
+        let certified = steady_gap + config.law.gap_room_time * v + config.law.gap_room;
         math::max(driver, certified)
     }
 
@@ -141,7 +141,7 @@ impl Law {
         let speed_error = x.set_speed - v;
         // The proportional part within the comfort limits, then the integral on top: once it has
         // learnt a grade, the acceleration over ground is the proportional part's.
-        let proportional = c.speed_gain * speed_error;
+        let proportional = c.law.speed_gain * speed_error;
         let bounded = math::clamp(
             proportional,
             SPEED_LAW_BRAKING,
@@ -180,7 +180,7 @@ impl Law {
         let mut integral = self.integral;
         if let Some((proposal, error)) = self.speed_law {
             if math::abs(issued - proposal) <= 1e-4 {
-                integral += config.speed_integral_gain * error * period;
+                integral += config.law.speed_integral_gain * error * period;
             }
         }
         // Back-calculation: where the certificate (or its speed cap) trimmed the speed law's
@@ -227,7 +227,7 @@ impl Law {
         let (leader_speed, leader_acceleration) = self
             .leader
             .map_or((v + track.rel_speed, 0.0), |e| (e.speed, e.acceleration));
-        let beyond = track.gap - c.standstill_gap;
+        let beyond = track.gap - c.law.standstill_gap;
         let stopped = v < STANDSTILL;
         // The stop: held until the leader moves off, then (after `auto_resume_us`) until the
         // driver resumes.
@@ -236,7 +236,7 @@ impl Law {
         }
         if let Some(since) = self.stopped_since_us {
             let leader_gone = leader_speed >= STOPPED || beyond >= 1.0;
-            let waited = x.now_us.saturating_sub(since) > u64::from(c.auto_resume_us);
+            let waited = x.now_us.saturating_sub(since) > u64::from(c.law.auto_resume_us);
             if !stopped || (leader_gone && (!waited || x.resume)) {
                 self.stopped_since_us = None;
             } else {
@@ -250,22 +250,22 @@ impl Law {
             // The actuator's delays are anticipated: the distance left is what remains after
             // the dead time and the lag at the present speed. Towards a stopped car the law
             // accelerates gently at most.
-            let b = c.stop_deceleration;
-            let delay = (c.actuator_dead_time_us + c.actuator_lag_us) as f32 * 1e-6;
+            let b = c.law.stop_deceleration;
+            let delay = (c.plant.actuator_dead_time_us + c.plant.actuator_lag_us) as f32 * 1e-6;
             let d = math::max(beyond - v * delay, 0.0);
             let profile = math::max(math::sqrt(2.0 * b * d), 0.05);
             let a = -b * v / profile + STOP_GAIN * (profile - v);
             return math::min(a, STOP_APPROACH);
         }
         let desired = Law::desired_gap(c, x.time_gap, x.steady_gap, v);
-        let feedforward = c.feedforward_gain * math::clamp(leader_acceleration, -3.5, 1.0);
+        let feedforward = c.law.feedforward_gain * math::clamp(leader_acceleration, -3.5, 1.0);
         // The speed to close at: linear in the gap error near the policy (the classic law's
         // `gap_gain e + rel_speed_gain rel_speed`), and no faster than a braking at
         // `stop_deceleration` can take back over the error far from it (module docs).
         let error = track.gap - desired;
-        let k = c.gap_gain / math::max(c.rel_speed_gain, 1e-3);
+        let k = c.law.gap_gain / math::max(c.law.rel_speed_gain, 1e-3);
         let closing = if error > 0.0 {
-            math::min(k * error, math::sqrt(2.0 * c.stop_deceleration * error))
+            math::min(k * error, math::sqrt(2.0 * c.law.stop_deceleration * error))
         } else {
             k * error
         };
@@ -279,6 +279,6 @@ impl Law {
         } else {
             CLOSING_ACCELERATION
         };
-        math::min(c.rel_speed_gain * (track.rel_speed + closing), cap) + feedforward
+        math::min(c.law.rel_speed_gain * (track.rel_speed + closing), cap) + feedforward
     }
 }

@@ -256,9 +256,9 @@ mod law;
 mod tracks;
 
 pub use crate::config::{
-    Config, Envelope, OverridePolicy, CLOCK_RECOVERY_PERIODS, ISO_15622_LIMITS,
-    MAX_ACTUATOR_LAG_US, MAX_DEAD_TIME_US, MAX_PERIOD_US, MAX_STALE_PERIODS, MAX_STEP_GAP_PERIODS,
-    MIN_PERIOD_US, TIME_GAP_SETTINGS,
+    CertificateConfig, Config, Envelope, FallbackConfig, LawConfig, OverridePolicy, PlantConfig,
+    CLOCK_RECOVERY_PERIODS, ISO_15622_LIMITS, MAX_ACTUATOR_LAG_US, MAX_DEAD_TIME_US, MAX_PERIOD_US,
+    MAX_STALE_PERIODS, MAX_STEP_GAP_PERIODS, MIN_PERIOD_US, TIME_GAP_SETTINGS,
 };
 pub use crate::driver::{DriverError, DriverRequest, DriverState};
 pub use certificate::{
@@ -354,9 +354,12 @@ impl<'t> Controller<'t> {
             log_warn!("table refused: {}", fault);
         }
         let mut config = config;
-        config.mrm_deceleration = math::clamp(config.mrm_deceleration, 0.5, 4.0);
-        config.mrm_gentle_deceleration =
-            math::clamp(config.mrm_gentle_deceleration, 0.5, config.mrm_deceleration);
+        config.fallback.mrm_deceleration = math::clamp(config.fallback.mrm_deceleration, 0.5, 4.0);
+        config.fallback.mrm_gentle_deceleration = math::clamp(
+            config.fallback.mrm_gentle_deceleration,
+            0.5,
+            config.fallback.mrm_deceleration,
+        );
         Controller {
             certifier,
             config,
@@ -434,7 +437,7 @@ impl<'t> Controller<'t> {
         let ego_speed = self.ego_history.back().map(|e| e.1);
         let was_engaged = self.driver.engaged;
         self.driver
-            .apply(request, ego_speed, self.config.envelope.max_speed)?;
+            .apply(request, ego_speed, self.config.plant.envelope.max_speed)?;
         if was_engaged && !self.driver.engaged {
             self.forget_commands();
         }
@@ -516,7 +519,7 @@ impl<'t> Controller<'t> {
             self.decide(inputs)
         };
         let mut command = Command {
-            acceleration: self.config.envelope.clamp(command.acceleration),
+            acceleration: self.config.plant.envelope.clamp(command.acceleration),
             ..command
         };
         // Braking faster than ISO 15622's jerk limit allows: an emergency (module docs).
@@ -554,7 +557,7 @@ impl<'t> Controller<'t> {
         // from the last command, since `c` is below its floor), or at beta for a command at
         // beta. A command above the floor passed the look-ahead (or is not certified at all).
         let c = command.acceleration;
-        let jerk = self.config.brake_jerk;
+        let jerk = self.config.certificate.brake_jerk;
         let h = seconds(u64::from(self.config.period_us));
         self.ramp = match (model, floor) {
             (Some(m), Some(floor)) if c <= floor => Some(self.ramp.unwrap_or(Ramp {
@@ -642,12 +645,12 @@ impl<'t> Controller<'t> {
             self.rear.map(|r| r.track)
         };
         let close_and_closing = follower.is_some_and(|t| {
-            math::is_finite(t.gap) && t.gap < c.follower_close_gap && t.rel_speed < 0.0
+            math::is_finite(t.gap) && t.gap < c.fallback.follower_close_gap && t.rel_speed < 0.0
         });
         if close_and_closing {
-            c.mrm_gentle_deceleration
+            c.fallback.mrm_gentle_deceleration
         } else {
-            c.mrm_deceleration
+            c.fallback.mrm_deceleration
         }
     }
 
@@ -730,7 +733,8 @@ impl<'t> Controller<'t> {
         };
         let pending = self.pending(leader.at_us.min(t_e), &model);
         let front = self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, proposal);
-        self.front_chain = (front.value > self.config.front_margin && front.headroom >= 0.0)
+        self.front_chain = (front.value > self.config.certificate.front_margin
+            && front.headroom >= 0.0)
             || (self.front_chain && !front.jumped);
         self.speed_kept_from_us = if front.headroom >= 0.0 {
             self.speed_kept_from_us.or(Some(t_e))
@@ -751,7 +755,7 @@ impl<'t> Controller<'t> {
             (None, true) => Mode::Override,
             (None, false) => Mode::Nominal,
         };
-        let front_certified = front.value > self.config.front_margin;
+        let front_certified = front.value > self.config.certificate.front_margin;
         let mut command = with_tracks(Command::bare(front.command, mode, lost));
         command.takeover = lost.is_some() || !front_certified;
         // Outside the rear table's domain the front override (and the speed cap) still act:
