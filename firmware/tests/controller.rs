@@ -739,9 +739,7 @@ fn split_table_unverified(ego: (f32, f32)) -> Vec<u8> {
     let trusted: Vec<Bounds> = axes.iter().map(|a| Bounds::new(a.min, a.max)).collect();
     let Game::ThreeCarSplit {
         leader,
-        follower_clip,
-        idm,
-        time_gap,
+        follower,
         max_speed,
         ..
     } = Table::parse(DEFAULT_TABLE).unwrap().header().game
@@ -752,9 +750,7 @@ fn split_table_unverified(ego: (f32, f32)) -> Vec<u8> {
         game: Game::ThreeCarSplit {
             ego: Bounds::new(ego.0, ego.1),
             leader,
-            follower_clip,
-            idm,
-            time_gap,
+            follower,
             max_speed,
         },
         min_gap: 0.0,

@@ -79,9 +79,12 @@ impl HumanModel {
             Game::ThreeCarSplit {
                 ego,
                 leader,
-                follower_clip,
-                idm,
-                time_gap,
+                follower:
+                    table_format::FollowerModel::Idm {
+                        clip: follower_clip,
+                        idm,
+                        time_gap,
+                    },
                 max_speed,
             } => Some(HumanModel {
                 band_min: ego.min,

@@ -115,9 +115,9 @@ def _game(c):
         else:
             raise TableError("unknown follower speed variant %d" % speed)
         return game
-    if index in (3, 4):
+    if index == 3:
         return {
-            "kind": "ThreeCarIdmSpeeds" if index == 3 else "ThreeCarSplit",
+            "kind": "ThreeCarIdmSpeeds",
             "ego": c.bounds(),
             "leader": c.bounds(),
             "follower_clip": c.bounds(),
@@ -125,6 +125,20 @@ def _game(c):
             "time_gap": c.bounds(),
             "max_speed": c.f32(),
         }
+    if index == 4:
+        game = {"kind": "ThreeCarSplit", "ego": c.bounds(), "leader": c.bounds()}
+        # The follower model (format version 5): an enum, one variant so far.
+        follower = c.varint()
+        if follower != 0:
+            raise TableError("unknown follower model %d" % follower)
+        game["follower"] = {
+            "kind": "Idm",
+            "clip": c.bounds(),
+            "idm": c.idm(),
+            "time_gap": c.bounds(),
+        }
+        game["max_speed"] = c.f32()
+        return game
     raise TableError("unknown game variant %d" % index)
 
 

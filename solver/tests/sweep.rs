@@ -50,11 +50,10 @@ fn a_sweep_solves_each_table_once_and_measures_every_point() {
     // The second table was solved with the follower braking at 8.
     let bytes = std::fs::read(out.join("sweep-test").join(&c.table.name).join("table.bin"))
         .expect("the table");
-    let Game::ThreeCarSplit { follower_clip, .. } = Table::parse(&bytes).unwrap().header().game
-    else {
+    let Game::ThreeCarSplit { follower, .. } = Table::parse(&bytes).unwrap().header().game else {
         panic!("a split table")
     };
-    assert_eq!(follower_clip.min, -8.0);
+    assert_eq!(follower.clip().min, -8.0);
     let dir = out.join("sweep-test");
     let csv = std::fs::read_to_string(dir.join("sweep.csv")).expect("sweep.csv");
     assert_eq!(csv.lines().count(), 5, "{csv}");

@@ -207,8 +207,8 @@ pub enum Game {
     /// and a front closed form, for one braking level `beta = -ego.min`.
     ///
     /// The table holds the rear value `W_beta` on three axes in absolute speeds: `gap_follower`
-    /// (m), `follower_speed` (m/s), `ego_speed` (m/s), every speed in `[0, max_speed]`: an IDM
-    /// follower (time gap adversarial in `time_gap`, output clipped to `follower_clip`) behind an
+    /// (m), `follower_speed` (m/s), `ego_speed` (m/s), every speed in `[0, max_speed]`: a follower
+    /// by its model ([`FollowerModel`]: the IDM with an adversarial time gap) behind an
     /// ego whose acceleration anywhere in the band `ego = [-beta, a_max]` is adversarial too, so
     /// the value bounds the rear gap for as long as the ego keeps its acceleration in the band,
     /// whatever else it does. The front value needs no table: it is
@@ -220,15 +220,49 @@ pub enum Game {
         ego: Bounds,
         /// The leader's acceleration bounds, m/s^2: `min` is its hardest braking.
         leader: Bounds,
+        /// The follower the rear value is solved and proven against (since format version 5).
+        follower: FollowerModel,
+        /// The largest speed of any vehicle, m/s.
+        max_speed: f32,
+    },
+}
+
+/// The follower behind the ego in a split table's rear game: the model the rear value is
+/// solved and proven against. A new follower model is a new variant (the files it touches are
+/// listed in `docs/numerics.md`, "Adding a follower model").
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FollowerModel {
+    /// The Intelligent Driver Model with an adversarial desired time gap (the paper's
+    /// alternative), [`crate::idm`]: the IDM's output clipped to `clip`, its time gap anywhere
+    /// in `time_gap` at every instant.
+    Idm {
         /// The follower's IDM output is clipped to these bounds, m/s^2.
-        follower_clip: Bounds,
+        clip: Bounds,
         /// The follower's IDM.
         idm: IdmParameters,
         /// The adversarial time gap's range, s.
         time_gap: Bounds,
-        /// The largest speed of any vehicle, m/s.
-        max_speed: f32,
     },
+}
+
+impl FollowerModel {
+    /// The bounds the follower's acceleration is clipped to, m/s^2.
+    pub fn clip(&self) -> Bounds {
+        match self {
+            FollowerModel::Idm { clip, .. } => *clip,
+        }
+    }
+
+    fn validate(&self) -> bool {
+        match self {
+            FollowerModel::Idm {
+                clip,
+                idm,
+                time_gap,
+            } => idm_follower_is_valid(clip, time_gap, idm),
+        }
+    }
 }
 
 /// The game without its parameters, for checks such as "the firmware expects a three-car table".
@@ -356,16 +390,14 @@ impl Game {
             Game::ThreeCarSplit {
                 ego,
                 leader,
-                follower_clip,
-                idm,
-                time_gap,
+                follower,
                 max_speed,
             } => {
                 ego.is_valid()
                     && ego.min < 0.0
                     && leader.is_valid()
                     && leader.min < 0.0
-                    && idm_follower_is_valid(follower_clip, time_gap, idm)
+                    && follower.validate()
                     && max_speed.is_finite()
                     && *max_speed > 0.0
             }

@@ -57,8 +57,8 @@ mod writer;
 
 pub use error::Error;
 pub use header::{
-    Axis, Bounds, ErrorBound, FollowerSpeed, Game, GameKind, Header, Horizon, HorizonStatus,
-    IdmParameters, PolicyEncoding, Quantization, Spacing, Verification, MAX_DIMS,
+    Axis, Bounds, ErrorBound, FollowerModel, FollowerSpeed, Game, GameKind, Header, Horizon,
+    HorizonStatus, IdmParameters, PolicyEncoding, Quantization, Spacing, Verification, MAX_DIMS,
 };
 pub use sensing::{MeasurementError, SensorBounds};
 pub use table::{EgoAction, Lookup, Table, BOX_INTERIOR};

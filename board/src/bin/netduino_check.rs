@@ -451,7 +451,8 @@ fn main() -> ! {
 /// frame's words (computed as the board does), and a reset.
 fn fault_exit() -> ! {
     let counter = target::kept_request_counter();
-    let words = last_resort::minimum_risk_frame(Config::default().fallback.mrm_deceleration, counter);
+    let words =
+        last_resort::minimum_risk_frame(Config::default().fallback.mrm_deceleration, counter);
     target::keep_request_counter(counter.wrapping_add(1));
     black_box(words);
     target::set_fault_marker();

@@ -229,7 +229,8 @@ fn fault_exit() -> ! {
 /// running; waits a bounded time for a mailbox to free up.
 fn send_last_frame() {
     let counter = target::kept_request_counter();
-    let words = last_resort::minimum_risk_frame(Config::default().fallback.mrm_deceleration, counter);
+    let words =
+        last_resort::minimum_risk_frame(Config::default().fallback.mrm_deceleration, counter);
     target::keep_request_counter(counter.wrapping_add(1));
     // SAFETY: the handler is the only code running from here to the reset; the registers are
     // CAN1's, written as the reference manual's "transmit" procedure describes.

@@ -287,9 +287,12 @@ impl AnyGame {
             }),
             G::ThreeCarSplit {
                 ego,
-                follower_clip,
-                idm,
-                time_gap,
+                follower:
+                    table_format::FollowerModel::Idm {
+                        clip: follower_clip,
+                        idm,
+                        time_gap,
+                    },
                 max_speed,
                 ..
             } => AnyGame::Rear(RearIdm {

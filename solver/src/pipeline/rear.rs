@@ -306,9 +306,11 @@ impl RearConfig {
         Game::ThreeCarSplit {
             ego: b(g.ego),
             leader: b(g.leader),
-            follower_clip: b(g.follower),
-            idm: idm_parameters(g.idm),
-            time_gap: b(g.time_gap),
+            follower: table_format::FollowerModel::Idm {
+                clip: b(g.follower),
+                idm: idm_parameters(g.idm),
+                time_gap: b(g.time_gap),
+            },
             max_speed: g.max_speed as f32,
         }
     }

@@ -32,9 +32,12 @@ impl RearModel {
         match *game {
             Game::ThreeCarSplit {
                 ego,
-                follower_clip,
-                idm,
-                time_gap,
+                follower:
+                    table_format::FollowerModel::Idm {
+                        clip: follower_clip,
+                        idm,
+                        time_gap,
+                    },
                 max_speed,
                 ..
             } => Some(RearModel {

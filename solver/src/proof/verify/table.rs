@@ -462,15 +462,11 @@ mod tests {
             &table_format::Game::ThreeCarSplit {
                 ego: table_format::Bounds::new(-3.5, 2.0),
                 leader: table_format::Bounds::new(-6.0, 2.0),
-                follower_clip: table_format::Bounds::new(-6.0, 2.0),
-                idm: table_format::IdmParameters {
-                    max_acceleration: 1.0,
-                    comfortable_deceleration: 1.5,
-                    desired_speed: 33.3,
-                    exponent: 4,
-                    jam_distance: 2.0,
+                follower: table_format::FollowerModel::Idm {
+                    clip: table_format::Bounds::new(-6.0, 2.0),
+                    idm: table_format::IdmParameters::HIGHWAY,
+                    time_gap: table_format::Bounds::new(1.0, 2.0),
                 },
-                time_gap: table_format::Bounds::new(1.0, 2.0),
                 max_speed: 35.0,
             },
             0.0,
