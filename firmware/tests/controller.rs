@@ -110,7 +110,7 @@ fn closing_fast_on_the_leader_brakes_at_the_certificates_level() {
     assert_eq!(cmd.acceleration, beta);
 }
 
-/// Issue 21: the jerk limit is inside the certificate, so near the margin the car starts
+/// The jerk limit is inside the certificate, so near the margin the car starts
 /// braking earlier, not harder. Both at 25 m/s, the gap 0.05 m above the margin for a braking
 /// ramp from the last command (zero), and the leader brakes at its model's hardest (6 m/s^2)
 /// to a stop: every command is within the ramp's 2.5 m/s^3 (0.05 m/s^2 per period), never
@@ -900,7 +900,7 @@ fn braking_now() -> table_format::front::FrontModel {
     table_format::front::FrontModel::step(leader_braking, -beta, 0.0, 0.0, 35.0)
 }
 
-/// Issue 19 (B): above the speed domain the rear half is unknown, not the front. An ego at
+/// Above the speed domain the rear half is unknown, not the front. An ego at
 /// 35.2 m/s, 0.05 m of front value above the margin behind a leader at 33 m/s: the nominal law
 /// asks for about -1.6 m/s^2, which the look-ahead refuses. Before, the command was that
 /// nominal law, uncertified; now it is the override's braking, still reported uncertified.
@@ -918,7 +918,7 @@ fn above_the_speed_domain_the_front_override_still_acts() {
     assert!(cmd.acceleration < -2.0, "{cmd:?}");
 }
 
-/// Issue 19 (A): the look-ahead keeps the ego's speed in the domain. A controller that has
+/// The look-ahead keeps the ego's speed in the domain. A controller that has
 /// issued nothing yet must assume the actuator may accelerate at the band's top through its
 /// dead time and lag (about 0.42 s): at 34.5 m/s that could reach 35.4 m/s, so even with the
 /// road clear it brakes; at 30 m/s it drives.
@@ -965,7 +965,7 @@ fn no_command_may_take_the_ego_past_the_speed_domain() {
     assert!((largest_speed - 34.5).abs() < 0.05, "{largest_speed}");
 }
 
-/// Issue 19 (C): a follower at exactly 35 m/s, its track 60 ms older than the ego's speed,
+/// A follower at exactly 35 m/s, its track 60 ms older than the ego's speed,
 /// behind an ego accelerating at 0.85 m/s^2. Subtracting the two as if taken at once gives
 /// 35.05 m/s, outside the domain; moved to the track's time within the ego's possible
 /// accelerations, the follower's speed is an interval inside it, and the state is certified.
@@ -1010,7 +1010,7 @@ fn the_minimum_risk_manoeuvre_brakes_harder_when_the_front_needs_it() {
     assert_eq!(cmd.acceleration, -2.0, "{cmd:?}");
 }
 
-// Issue 20: real sensors inside the argument.
+// Real sensors inside the argument.
 
 /// The default configuration's sensors on the ideal plant.
 fn datasheet() -> Config {
@@ -1056,7 +1056,7 @@ fn measured(
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(400))]
-    /// Issue 20 (2): a measurement that passes the firmware's test (a positive margin) certifies
+    /// A measurement that passes the firmware's test (a positive margin) certifies
     /// every true state its declared error allows. The true state's certificate is evaluated
     /// exactly; the measurement is anywhere in the error box, corners included. Each half is
     /// put under test on its own boundary: the front with no follower (the rear then far above
@@ -1124,7 +1124,7 @@ fn the_declared_error_costs_margin_not_the_certificate() {
     assert!(both > 10 * exact_only.max(1) / 2, "{both} {exact_only}");
 }
 
-/// Issue 20 (3): the look-ahead grows with the track's age, so an aging track slows the car
+/// The look-ahead grows with the track's age, so an aging track slows the car
 /// smoothly: the command never rises as the same measurement ages, the track is reported
 /// aging, and no minimum-risk manoeuvre runs within the covered age.
 #[test]
@@ -1169,7 +1169,7 @@ fn an_aging_track_slows_the_car_smoothly_within_the_covered_age() {
     assert!(modes.contains(&Mode::Override), "{modes:?}");
 }
 
-/// Issue 20 (3): beyond the covered age the fallback is certified: the minimum-risk
+/// Beyond the covered age the fallback is certified: the minimum-risk
 /// deceleration under the front half of the last good measurement, with its margin, for as
 /// long as the track stays lost; a track that comes back is checked, then the nominal law
 /// resumes.
@@ -1212,7 +1212,7 @@ fn a_lost_track_runs_a_certified_fallback_and_a_track_that_returns_is_checked() 
     assert!(cmd.margin.unwrap() > 0.0);
 }
 
-/// Issue 20 (4): a cut-in. A new vehicle 12 m ahead where the last track was 70 m: the
+/// A cut-in. A new vehicle 12 m ahead where the last track was 70 m: the
 /// firmware takes it as a new vehicle at once, brakes at beta in the same period (nothing
 /// gentler restores the front), and raises the takeover request.
 #[test]
@@ -1248,7 +1248,7 @@ fn a_cut_in_is_answered_in_the_period_it_is_seen() {
     assert_ne!(c.step(&closing).leader, firmware::TrackState::New);
 }
 
-/// Issue 20 (3): the rear value holds for ever from its measurement's time while every command
+/// The rear value holds for ever from its measurement's time while every command
 /// is in the band, so a follower track that is not refreshed keeps it: no uncertified period,
 /// the same rear value, however the ego's speed moves meanwhile.
 #[test]
@@ -1273,7 +1273,7 @@ fn a_follower_track_that_ages_keeps_its_rear_value() {
     }
 }
 
-/// Issue 20: near the domain's top, the ego's speed error and a follower track 8 ms older
+/// Near the domain's top, the ego's speed error and a follower track 8 ms older
 /// than the nearest ego measurement leave the rear box above 35 m/s (the ego may have been
 /// faster by beta x 8 ms); once the controller has kept the speed headroom at every step since
 /// before the track's time, the ego's true speed is known to be in the domain, and the rear
@@ -1335,7 +1335,7 @@ fn the_speed_cap_counts_what_the_lag_still_passes_on() {
     }
 }
 
-/// Issue 21's campaign found it: a follower 1.6 cm behind, measured below zero within the
+/// The campaign found it: a follower 1.6 cm behind, measured below zero within the
 /// declared range error (0.1 m), was refused as implausible, and the step ran an uncertified
 /// minimum-risk manoeuvre. Within the error the measurement is used (its box holds the truth);
 /// beyond it, it is refused.

@@ -236,7 +236,7 @@ impl<'t> Setting<'t> {
         } else {
             u * m.leader.1
         };
-        let (tmin, tmax) = m.time_gap;
+        let (tmin, tmax) = m.parameter_range();
         let time_gap = match rule {
             FollowerRule::Schedule => tmin + tau.clamp(0.0, 1.0) * (tmax - tmin),
             FollowerRule::WorstCase => {
@@ -259,9 +259,9 @@ impl<'t> Setting<'t> {
             }
         };
         let a_follower = m
-            .idm
+            .follower
             .acceleration(follower.v, follower.v - ego.v, ego.x - follower.x, time_gap)
-            .clamp(m.follower.0, m.follower.1);
+            .clamp(m.follower_clip().0, m.follower_clip().1);
         let limit = |a: f32, v: f32| {
             if a > 0.0 {
                 a.min(((m.max_speed - v) / h).max(0.0))

@@ -4,7 +4,7 @@
 
 use rand::Rng;
 use serde::Serialize;
-use table_format::{Game, IdmParameters, Table};
+use table_format::{FollowerModel, Game, Table};
 
 use crate::sim::Car;
 
@@ -60,12 +60,8 @@ impl Follower {
 pub struct HumanModel {
     /// The leader's acceleration bounds, m/s^2.
     pub leader: (f32, f32),
-    /// The follower's IDM output is clipped to these, m/s^2.
-    pub follower: (f32, f32),
-    /// The follower's IDM.
-    pub idm: IdmParameters,
-    /// The IDM time gap's range, s.
-    pub time_gap: (f32, f32),
+    /// The follower's model ([`FollowerModel`]: the IDM with its time gap in range).
+    pub follower: FollowerModel,
     /// Every speed lies in `[0, max_speed]`, m/s.
     pub max_speed: f32,
     /// The ego's band's lowest command, `-beta`, m/s^2.
@@ -73,25 +69,30 @@ pub struct HumanModel {
 }
 
 impl HumanModel {
+    /// The follower's clip, m/s^2: `(lowest, highest)`.
+    pub fn follower_clip(&self) -> (f32, f32) {
+        let c = self.follower.clip();
+        (c.min, c.max)
+    }
+
+    /// The range of the follower model's parameter (the IDM's time gap, s).
+    pub fn parameter_range(&self) -> (f32, f32) {
+        let r = self.follower.parameter_range();
+        (r.min, r.max)
+    }
+
     /// The model of a split table, `None` for any other game.
     pub fn of(table: &Table<'_>) -> Option<HumanModel> {
         match table.header().game {
             Game::ThreeCarSplit {
                 ego,
                 leader,
-                follower:
-                    table_format::FollowerModel::Idm {
-                        clip: follower_clip,
-                        idm,
-                        time_gap,
-                    },
+                follower,
                 max_speed,
             } => Some(HumanModel {
                 band_min: ego.min,
                 leader: (leader.min, leader.max),
-                follower: (follower_clip.min, follower_clip.max),
-                idm,
-                time_gap: (time_gap.min, time_gap.max),
+                follower,
                 max_speed,
             }),
             _ => None,
@@ -153,7 +154,7 @@ fn within_speed_limit(a: f32, v: f32, v_max: f32, h: f32) -> f32 {
 impl<'t> Humans<'t> {
     /// The hardest braking the model allows the leader and the follower (positive, m/s^2).
     pub fn hardest_braking(&self) -> (f32, f32) {
-        (-self.model.leader.0, -self.model.follower.0)
+        (-self.model.leader.0, -self.model.follower_clip().0)
     }
 
     /// The humans of one episode, with the model of the table's game (`None` for a table that
@@ -165,7 +166,7 @@ impl<'t> Humans<'t> {
         rng: &mut impl Rng,
     ) -> Option<Self> {
         let model = HumanModel::of(table)?;
-        let (tmin, tmax) = model.time_gap;
+        let (tmin, tmax) = model.parameter_range();
         let episode_time_gap = match follower {
             Follower::IdmRandom => rng.random_range(tmin..=tmax),
             _ => 0.5 * (tmin + tmax),
@@ -220,11 +221,11 @@ impl<'t> Humans<'t> {
                 self.random_accel
             }
         };
-        let (fmin, fmax) = m.follower;
-        let (tmin, tmax) = m.time_gap;
+        let (fmin, fmax) = m.follower_clip();
+        let (tmin, tmax) = m.parameter_range();
         let gap = ego.x - follower.x;
         let idm_with = |time_gap: f32| {
-            m.idm
+            m.follower
                 .acceleration(follower.v, follower.v - ego.v, gap, time_gap)
                 .clamp(fmin, fmax)
         };

@@ -535,12 +535,9 @@ pub fn run(
         },
     };
     let follower = if with_follower {
-        // The IDM's equilibrium gap, pushed back until the rear is certified.
+        // The follower's equilibrium gap, pushed back until the rear is certified.
         let v = v0;
-        let p = &model.idm;
-        let s_star = p.jam_distance + v * FOLLOWER_TIME_GAP;
-        let ratio = p.free_road_term(v);
-        let mut gap = s_star / (1.0 - ratio).max(0.1).sqrt();
+        let mut gap = model.follower.equilibrium_gap(v, FOLLOWER_TIME_GAP);
         while probe
             .certificate([1e4, v0, gap, v, v0])
             .is_none_or(|c| c.rear <= 0.0)
@@ -609,9 +606,9 @@ pub fn run(
         };
         let a_follower = if with_follower {
             model
-                .idm
+                .follower
                 .acceleration(f.v, f.v - e.v, e.x - f.x, FOLLOWER_TIME_GAP)
-                .clamp(model.follower.0, model.follower.1)
+                .clamp(model.follower_clip().0, model.follower_clip().1)
         } else {
             0.0
         };

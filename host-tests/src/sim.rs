@@ -512,7 +512,7 @@ mod tests {
         assert!((time - 0.4).abs() < 1e-5 && accel == 1.0, "{time} {accel}");
     }
 
-    /// Issue 19 (E): in `f32` seconds, from about 128 s on a fifth of the commands took force
+    /// In `f32` seconds, from about 128 s on a fifth of the commands took force
     /// 5 ms late. In microseconds every one takes force exactly one dead time after it is
     /// issued, at 300 s as at 0 s.
     #[test]

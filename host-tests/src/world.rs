@@ -516,7 +516,8 @@ impl<'t> World<'t> {
         let now_us = self.period * self.period_us;
         let t = self.time();
         let [leader, _, follower] = self.cars;
-        let (leader_braking, follower_braking) = (-self.model.leader.0, -self.model.follower.0);
+        let (leader_braking, follower_braking) =
+            (-self.model.leader.0, -self.model.follower_clip().0);
         if self.score.unavoidable_from.is_none()
             && humans_make_a_collision_unavoidable(
                 leader,

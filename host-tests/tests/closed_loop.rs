@@ -134,7 +134,7 @@ fn an_actuator_slower_than_declared_breaks_the_certificate_and_the_campaign_says
     );
 }
 
-/// Issue 20: the datasheets' radars (noise inside the declared bounds, uniform or at the worst
+/// The datasheets' radars (noise inside the declared bounds, uniform or at the worst
 /// corner, 50-80 ms cycles, 40-100 ms latency with jitter, 10% of refreshes lost, bursts up to
 /// the covered age) keep the certificate: no collision, no loss, no uncertified minimum-risk
 /// period; the certified fallback is exercised. The same radars with three times the declared

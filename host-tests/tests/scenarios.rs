@@ -1,4 +1,4 @@
-//! Issue 21's acceptance, as a test: the scenario suite ([`host_tests::scenarios`]) with the
+//! The drivable ACC's acceptance, as a test: the scenario suite ([`host_tests::scenarios`]) with the
 //! default configuration passes every scenario with and without a follower (no collision, no
 //! loss of the certificate, ISO 15622's limits in every scenario whose leader brakes no harder
 //! than the comfort braking, and each scenario's own criterion: steady following without the

@@ -9,22 +9,22 @@
 //! the printed plateau shows how much of that margin the grid's resolution keeps.
 use std::time::Instant;
 
-use solver::games::{Accel, Idm, RearIdm};
+use solver::games::{Accel, RearGame};
 use solver::grid::{Grid, GridAxis};
 use solver::semi_lagrangian::{iterate, Breakpoints};
+use table_format::{Bounds, FollowerModel, IdmParameters};
 
 fn main() {
-    let game = RearIdm {
+    let game = RearGame {
         ego: Accel {
             min: -3.5,
             max: 2.0,
         },
-        follower_clip: Accel {
-            min: -6.0,
-            max: 2.0,
+        follower: FollowerModel::Idm {
+            clip: Bounds::new(-6.0, 2.0),
+            idm: IdmParameters::HIGHWAY,
+            time_gap: Bounds::new(1.0, 2.0),
         },
-        idm: Idm::HIGHWAY,
-        time_gap: Accel { min: 1.0, max: 2.0 },
         max_speed: 8.0,
         min_gap: 0.0,
         follower_robustness: 0.0,
@@ -61,7 +61,7 @@ fn main() {
         return;
     }
     // The whole speed range, fine only near the rest point (small gaps, low speeds).
-    let full = RearIdm {
+    let full = RearGame {
         max_speed: 35.0,
         ..game
     };

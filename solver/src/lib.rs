@@ -35,5 +35,5 @@ pub mod proof;
 
 pub use engine::{grid, hji, scheme, semi_lagrangian};
 pub use error::{ConfigError, SolverError};
-pub use pipeline::{compile, config, output, palette, rear, run, sweep, verify_table};
+pub use pipeline::{compile, config, output, palette, paper, rear, run, sweep, verify_table};
 pub use proof::{exact, robust, trusted, verify};

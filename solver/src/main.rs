@@ -11,9 +11,10 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
+use solver::config::GameKindConfig;
 use solver::config::{builtin, builtin_rear, Config};
 use solver::rear::{run_rear_with, RearConfig, RearEvent, RearStopped};
-use solver::run::{run, Event};
+use solver::run::{run_solved, Event};
 
 /// HJI safety analysis of car following, compiled into firmware tables.
 #[derive(Parser, Debug)]
@@ -298,11 +299,14 @@ fn run_configs(args: &Args) -> Result<()> {
             })
             .collect::<Result<_>>()?
     };
+    // The paper's Fig. 3 needs the baseline's and the IDM formulation's runs on one grid.
+    let mut baseline = None;
+    let mut idm = None;
     for (source, config) in &configs {
         eprintln!("== {} ({source})", config.name);
         let mut progress = Progress::new(args.quiet, "solve");
         let mut limit = 1.0;
-        let summary = run(config, &args.out, &mut |event| match event {
+        let (summary, grid, values) = run_solved(config, &args.out, &mut |event| match event {
             Event::SolveStarted(label, until) => {
                 limit = until;
                 progress.restart(label);
@@ -348,6 +352,37 @@ fn run_configs(args: &Args) -> Result<()> {
             "  wrote {}",
             solver::run::folder(&args.out, config).display()
         );
+        let slot = match config.game.kind {
+            GameKindConfig::ThreeCarBaseline => &mut baseline,
+            GameKindConfig::ThreeCarIdm => &mut idm,
+            _ => continue,
+        };
+        if slot.is_none() {
+            *slot = Some((summary, grid, values));
+        }
+    }
+    if let (Some(b), Some(i)) = (&baseline, &idm) {
+        fn solved(
+            r: &(solver::run::Summary, solver::grid::Grid, Vec<f32>),
+        ) -> solver::paper::Solved<'_> {
+            solver::paper::Solved {
+                summary: &r.0,
+                grid: &r.1,
+                values: &r.2,
+            }
+        }
+        match solver::paper::fig3(&args.out, &solved(b), &solved(i))? {
+            Some(path) => println!(
+                "== the paper's Fig. 3 ({} beside {}): wrote {}",
+                b.0.name,
+                i.0.name,
+                path.display()
+            ),
+            None => println!(
+                "== the paper's Fig. 3: not drawn ({} has no trusted slice through its boundary)",
+                i.0.name
+            ),
+        }
     }
     Ok(())
 }

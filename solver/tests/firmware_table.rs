@@ -112,7 +112,7 @@ fn the_standstill_lemma_keeps_the_gap_but_not_the_certificate() {
     assert!((region - 0.756).abs() < 1e-3 && f64::from(gap) <= 0.5 * region);
     // Both brake to rest: the ego at beta, the follower at its clip.
     let beta = -model.ego_min;
-    let clip = -model.clip_min;
+    let clip = -model.clip_min();
     let (ve, vf) = (f64::from(ego), f64::from(follower));
     let rest = f64::from(gap) + ve * ve / (2.0 * beta) - vf * vf / (2.0 * clip);
     // The gap's least value is at the rest (the follower is the faster until it stops).

@@ -12,10 +12,11 @@ fn braking_follower() -> RearModel {
     RearModel {
         ego_min: 0.0,
         ego_max: 2.0,
-        clip_min: -6.0,
-        clip_max: -6.0,
-        idm: table_format::IdmParameters::HIGHWAY,
-        time_gap: Interval { lo: 1.0, hi: 2.0 },
+        follower: table_format::FollowerModel::Idm {
+            clip: table_format::Bounds::new(-6.0, -6.0),
+            idm: table_format::IdmParameters::HIGHWAY,
+            time_gap: table_format::Bounds::new(1.0, 2.0),
+        },
         max_speed: 4.0,
         min_gap: 0.0,
     }
@@ -289,10 +290,11 @@ fn deployment_model() -> RearModel {
     RearModel {
         ego_min: -3.5,
         ego_max: 2.0,
-        clip_min: -6.0,
-        clip_max: 2.0,
-        idm: table_format::IdmParameters::HIGHWAY,
-        time_gap: Interval { lo: 1.0, hi: 2.0 },
+        follower: table_format::FollowerModel::Idm {
+            clip: table_format::Bounds::new(-6.0, 2.0),
+            idm: table_format::IdmParameters::HIGHWAY,
+            time_gap: table_format::Bounds::new(1.0, 2.0),
+        },
         max_speed: 35.0,
         min_gap: 0.0,
     }
@@ -300,9 +302,9 @@ fn deployment_model() -> RearModel {
 
 /// The follower's clipped IDM acceleration at a point, as the model states it.
 fn idm(m: &RearModel, gap: f64, vf: f64, ve: f64, t: f64) -> f64 {
-    m.idm
+    m.follower
         .acceleration_f64(vf, vf - ve, gap, t)
-        .clamp(m.clip_min, m.clip_max)
+        .clamp(m.clip_min(), m.clip_max())
 }
 
 #[test]
@@ -344,11 +346,14 @@ fn reach_bounds_contain_sampled_trajectories() {
             let mut ve = rng.random_range(b.ego_speed.lo..=b.ego_speed.hi);
             let steps = 400;
             let dt = period / f64::from(steps);
-            let (mut ae, mut t) = (m.ego_min, m.time_gap.lo);
+            let (mut ae, mut t) = (m.ego_min, f64::from(m.follower.parameter_range().min));
             for _ in 0..steps {
                 if rng.random_bool(0.05) {
                     ae = rng.random_range(m.ego_min..=m.ego_max);
-                    t = rng.random_range(m.time_gap.lo..=m.time_gap.hi);
+                    t = rng.random_range(
+                        f64::from(m.follower.parameter_range().min)
+                            ..=f64::from(m.follower.parameter_range().max),
+                    );
                 }
                 let af = idm(&m, g, vf, ve, t);
                 let (de, ve1) = travel(ve, ae, dt, m.max_speed);

@@ -319,7 +319,7 @@ mod tests {
         assert!(front_value(f32::NAN, 0.0, 20.0, &m).is_nan());
     }
 
-    /// Issue 19 (A): an ego at 34.8 m/s with 0.4 s of response at +0.8 m/s^2 reaches
+    /// An ego at 34.8 m/s with 0.4 s of response at +0.8 m/s^2 reaches
     /// 35.12 m/s before it brakes. Held at 35 m/s, the value was 1.2 m too high, and a start
     /// that collides at 9.9 s was certified.
     #[test]

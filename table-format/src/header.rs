@@ -246,11 +246,95 @@ pub enum FollowerModel {
     },
 }
 
+/// What every follower model gives the games, the proof and the simulations: its acceleration
+/// at a point for one value of its adversarial parameter, and over a box of states for every
+/// value of it. The contract, which the rear game's adversary and the proof rely on: the
+/// acceleration is non-increasing in the parameter, so that the adversary's choice is an end of
+/// [`FollowerModel::parameter_range`].
 impl FollowerModel {
     /// The bounds the follower's acceleration is clipped to, m/s^2.
     pub fn clip(&self) -> Bounds {
         match self {
             FollowerModel::Idm { clip, .. } => *clip,
+        }
+    }
+
+    /// The range of the model's adversarial parameter (the IDM's desired time gap, s).
+    pub fn parameter_range(&self) -> Bounds {
+        match self {
+            FollowerModel::Idm { time_gap, .. } => *time_gap,
+        }
+    }
+
+    /// The model's (unclipped) acceleration of a follower at `speed` (>= 0), `gap` metres
+    /// behind its leader, approaching it at `approach_rate = speed - leader_speed`, for the
+    /// parameter `parameter`, m/s^2.
+    #[inline(always)]
+    pub fn acceleration(&self, speed: f32, approach_rate: f32, gap: f32, parameter: f32) -> f32 {
+        match self {
+            FollowerModel::Idm { idm, .. } => {
+                idm.acceleration(speed, approach_rate, gap, parameter)
+            }
+        }
+    }
+
+    /// [`FollowerModel::acceleration`] in `f64`, the proof's arithmetic.
+    pub fn acceleration_f64(
+        &self,
+        speed: f64,
+        approach_rate: f64,
+        gap: f64,
+        parameter: f64,
+    ) -> f64 {
+        match self {
+            FollowerModel::Idm { idm, .. } => {
+                idm.acceleration_f64(speed, approach_rate, gap, parameter)
+            }
+        }
+    }
+
+    /// Bounds `(lowest, highest)` of the (unclipped) acceleration over a box of gaps and speeds
+    /// (each `(lo, hi)`) and every parameter in range, widened outward for `f64` rounding.
+    pub fn acceleration_bounds(
+        &self,
+        gap: (f64, f64),
+        follower_speed: (f64, f64),
+        leader_speed: (f64, f64),
+    ) -> (f64, f64) {
+        match self {
+            FollowerModel::Idm { idm, time_gap, .. } => idm.acceleration_bounds(
+                gap,
+                follower_speed,
+                leader_speed,
+                (f64::from(time_gap.min), f64::from(time_gap.max)),
+            ),
+        }
+    }
+
+    /// The gap `G` at and below which the model asks for `braking` (m/s^2, negative) or harder
+    /// whatever the speeds and the parameter, m; `None` where there is none. For the IDM,
+    /// `a (1 - (s0 / G)^2) <= braking` with `s* >= s0`: `G = s0 / sqrt(1 - braking / a)`.
+    pub fn braking_gap(&self, braking: f64) -> Option<f64> {
+        match self {
+            FollowerModel::Idm { idm, .. } => {
+                let ratio = 1.0 - braking / f64::from(idm.max_acceleration);
+                (braking < 0.0 && ratio > 1.0)
+                    .then(|| f64::from(idm.jam_distance) / libm::sqrt(ratio))
+            }
+        }
+    }
+
+    /// The gap at which a follower at `speed` behind a leader at the same speed holds its
+    /// speed, for the parameter `parameter`, m: for the IDM `s* / sqrt(1 - (v / v0)^delta)`,
+    /// with the free-road term held at most 0.9 (a follower at or above its desired speed
+    /// would hold no gap).
+    pub fn equilibrium_gap(&self, speed: f32, parameter: f32) -> f32 {
+        match self {
+            FollowerModel::Idm { idm, .. } => {
+                let desired = idm.jam_distance + speed * parameter;
+                let free = 1.0 - idm.free_road_term(speed);
+                desired / libm::sqrtf(if free > 0.1 { free } else { 0.1 })
+            }
         }
     }
 

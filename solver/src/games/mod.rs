@@ -39,14 +39,14 @@
 pub use crate::engine::dynamics::{Dynamics, Vector};
 
 mod idm;
-mod rear_idm;
+mod rear;
 mod three_car_baseline;
 mod three_car_idm;
 mod three_car_idm_speeds;
 mod two_car;
 
 pub use idm::{FollowerSpeedModel, Idm};
-pub use rear_idm::RearIdm;
+pub use rear::RearGame;
 pub use three_car_baseline::ThreeCarBaseline;
 pub use three_car_idm::ThreeCarIdm;
 pub use three_car_idm_speeds::ThreeCarIdmSpeeds;
@@ -218,8 +218,8 @@ pub enum AnyGame {
     Idm(ThreeCarIdm),
     /// See [`ThreeCarIdmSpeeds`].
     IdmSpeeds(ThreeCarIdmSpeeds),
-    /// See [`RearIdm`].
-    Rear(RearIdm),
+    /// See [`RearGame`].
+    Rear(RearGame),
 }
 
 impl AnyGame {
@@ -287,19 +287,12 @@ impl AnyGame {
             }),
             G::ThreeCarSplit {
                 ego,
-                follower:
-                    table_format::FollowerModel::Idm {
-                        clip: follower_clip,
-                        idm,
-                        time_gap,
-                    },
+                follower,
                 max_speed,
                 ..
-            } => AnyGame::Rear(RearIdm {
+            } => AnyGame::Rear(RearGame {
                 ego: Accel::from(ego),
-                follower_clip: Accel::from(follower_clip),
-                idm,
-                time_gap: Accel::from(time_gap),
+                follower,
                 max_speed,
                 min_gap,
                 follower_robustness: 0.0,

@@ -7,6 +7,7 @@
 //! - [`verify_table`]: `solver verify` on a table file, its report and plots;
 //! - [`compile`]: values to a quantized, interpolated table with its error bound;
 //! - `plots`: what a level-set run draws, and where;
+//! - [`paper`]: the paper's Fig. 3 from the baseline's and the IDM formulation's runs;
 //! - [`table_plots`]: what a split table certifies, and verify's verdicts over it;
 //! - [`proof_plots`]: the proof's verdicts and the measured states under error, drawn;
 //! - [`output`]: the files (`.npy`, JSON, tables) and the plots' drawing;
@@ -16,6 +17,7 @@ pub mod compile;
 pub mod config;
 pub mod output;
 pub mod palette;
+pub mod paper;
 mod plots;
 pub mod proof_plots;
 pub mod rear;

@@ -26,7 +26,7 @@ const UNTRUSTED: (&str, RGBColor) = (
 );
 
 /// The categories of a safe-set map.
-const SET_LEGEND: [(&str, RGBColor); 3] = [
+pub(crate) const SET_LEGEND: [(&str, RGBColor); 3] = [
     ("gaps above the minimum (l >= 0), not safe", LIGHT_GREY),
     (
         "safe: V > 0 (a safe input exists against every human input)",
@@ -114,7 +114,7 @@ pub(crate) struct Policy<'a> {
 
 /// A safe-set map's category: `None` outside the constraint set; the untrusted category
 /// outside the trusted box, whatever the value says.
-fn set_category(safe: bool, in_constraint: bool, trusted: bool) -> Option<usize> {
+pub(crate) fn set_category(safe: bool, in_constraint: bool, trusted: bool) -> Option<usize> {
     if !in_constraint {
         None
     } else if !trusted {
@@ -148,7 +148,7 @@ fn policy_category(
 
 /// A 4-D slice's held speeds in words: `rel_speed_leader = v_leader - v_ego` and
 /// `rel_speed_follower = v_ego - v_follower`.
-fn relative_speeds_text(rel_speed_leader: f64, rel_speed_follower: f64) -> String {
+pub(crate) fn relative_speeds_text(rel_speed_leader: f64, rel_speed_follower: f64) -> String {
     let say = |who: &str, faster_by: f64| {
         if faster_by.abs() < 0.05 {
             format!("{who} at the ego's speed")
@@ -449,9 +449,7 @@ pub(crate) fn plots(
 /// set's boundary: the one whose trusted gap nodes in the constraint set are split most evenly
 /// between safe and not safe (the most nodes on the rarer side). `None` when no slice has
 /// both. Speeds are the nodes' own (axes 1 and 3, and 4 on a 5-D grid), so the count is exact.
-///
-/// (Issue 22: the slice "with the most safe states" was all safe, and said nothing.)
-fn boundary_slice(
+pub(crate) fn boundary_slice(
     grid: &Grid,
     values: &[f32],
     trusted: Option<&[(f64, f64)]>,

@@ -78,7 +78,7 @@ pub fn verdicts(
     }
     // Over every ego speed: an unproven cell at any ego speed shows its reason; otherwise the
     // column says whether it is certified (and proven) at every ego speed, at some, or at none
-    // (issue 22: a "worst" map that left the uncertified cells out looked all proven).
+    // (a "worst" map that left the uncertified cells out looked all proven).
     let title = "verify: (gap, follower speed) columns over every ego speed".to_string();
     let path = dir.join("verdicts-worst.png");
     let over_speeds: [(&str, RGBColor); 7] = [

@@ -2,7 +2,7 @@
 //! axes -> a `ThreeCarSplit` table -> `verify` -> the table with the proof's record, its
 //! summary and the verify report.
 //!
-//! One responsibility: turn a rear config into files. The game is [`crate::games::RearIdm`],
+//! One responsibility: turn a rear config into files. The game is [`crate::games::RearGame`],
 //! the scheme [`crate::engine::semi_lagrangian`]; why the split and why that scheme is written there.
 //!
 //! # The table is the solver's value, not an approximation of it
@@ -15,11 +15,13 @@ use std::path::Path;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
-use table_format::{Axis, Bounds, Game, Horizon, HorizonStatus, Spacing, TableContents, ValueBits};
+use table_format::{
+    Axis, Bounds, FollowerModel, Game, Horizon, HorizonStatus, Spacing, TableContents, ValueBits,
+};
 
 use crate::engine::semi_lagrangian::{Breakpoints, Iteration};
 use crate::error::{ConfigError, SolverError};
-use crate::games::{Accel, RearIdm};
+use crate::games::{Accel, RearGame};
 use crate::pipeline::config::{
     check, check_memory, check_name, idm_parameters, locate, parse_toml, IdmConfig, Range,
     SAMPLED_BYTES_PER_NODE,
@@ -282,20 +284,28 @@ impl RearConfig {
     }
 
     /// The game as the engine sees it.
-    pub fn game(&self) -> RearIdm {
+    pub fn game(&self) -> RearGame {
         let g = &self.game;
-        let accel = |r: Range| Accel {
-            min: r.min as f32,
-            max: r.max as f32,
-        };
-        RearIdm {
-            ego: accel(g.ego),
-            follower_clip: accel(g.follower),
-            idm: idm_parameters(g.idm),
-            time_gap: accel(g.time_gap),
+        RearGame {
+            ego: Accel {
+                min: g.ego.min as f32,
+                max: g.ego.max as f32,
+            },
+            follower: self.follower_model(),
             max_speed: g.max_speed as f32,
             min_gap: g.min_gap as f32,
             follower_robustness: g.follower_robustness as f32,
+        }
+    }
+
+    /// The follower's model, as the config states it.
+    pub fn follower_model(&self) -> FollowerModel {
+        let g = &self.game;
+        let b = |r: Range| Bounds::new(r.min as f32, r.max as f32);
+        FollowerModel::Idm {
+            clip: b(g.follower),
+            idm: idm_parameters(g.idm),
+            time_gap: b(g.time_gap),
         }
     }
 
@@ -306,11 +316,7 @@ impl RearConfig {
         Game::ThreeCarSplit {
             ego: b(g.ego),
             leader: b(g.leader),
-            follower: table_format::FollowerModel::Idm {
-                clip: b(g.follower),
-                idm: idm_parameters(g.idm),
-                time_gap: b(g.time_gap),
-            },
+            follower: self.follower_model(),
             max_speed: g.max_speed as f32,
         }
     }

@@ -115,6 +115,15 @@ pub fn run(
     out: &Path,
     events: &mut dyn FnMut(Event<'_>),
 ) -> Result<Summary, SolverError> {
+    run_solved(config, out, events).map(|(summary, _, _)| summary)
+}
+
+/// [`run`], also returning the grid and the values (C order), for figures that combine runs.
+pub fn run_solved(
+    config: &Config,
+    out: &Path,
+    events: &mut dyn FnMut(Event<'_>),
+) -> Result<(Summary, Grid, Vec<f32>), SolverError> {
     config.validate()?;
     let started = Instant::now();
     let grid = grid_of(config)?;
@@ -297,7 +306,7 @@ pub fn run(
         slices_not_drawn_untrusted,
     };
     output::write_json(&dir.join("summary.json"), &summary)?;
-    Ok(summary)
+    Ok((summary, grid, solution.values))
 }
 
 /// `(horizon, share)` pairs written as `{"horizon_s": .., "share": ..}` objects, not

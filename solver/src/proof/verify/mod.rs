@@ -251,8 +251,8 @@ fn standstill_proves(m: &RearModel, b: &StateBox, z: Standstill) -> bool {
     } else {
         0.0
     };
-    let until = ego_stops.max(vf / m.clip_min.abs()) + 1.0;
-    let least = b.gap.lo + least_difference(ve, m.ego_min, vf, m.clip_min, until, m.max_speed);
+    let until = ego_stops.max(vf / m.clip_min().abs()) + 1.0;
+    let least = b.gap.lo + least_difference(ve, m.ego_min, vf, m.clip_min(), until, m.max_speed);
     b.gap.hi <= 0.5 * z.gap && vf <= z.exit_speed && widen_down(least) > m.min_gap
 }
 
@@ -519,8 +519,7 @@ fn verify_cell_with(
 /// asks for the follower's clip `a_min` or harder whatever the speeds; `None` if the model has
 /// no such gap.
 pub fn standstill_gap(m: &RearModel) -> Option<f64> {
-    let ratio = 1.0 - m.clip_min / f64::from(m.idm.max_acceleration);
-    (m.clip_min < 0.0 && ratio > 1.0).then(|| f64::from(m.idm.jam_distance) / ratio.sqrt())
+    m.follower.braking_gap(m.clip_min())
 }
 
 /// The standstill lemma's exit check (module docs): the largest follower speed `V` (a multiple

@@ -1,7 +1,7 @@
 //! The rear game's model as a table's header states it, and sound bounds of what one period
 //! can do from a box of states (the module docs of [`crate::proof::verify`] derive them).
 
-use table_format::{Game, IdmParameters};
+use table_format::{FollowerModel, Game};
 
 use super::interval::{widen_down, widen_up, Interval, StateBox};
 
@@ -12,14 +12,9 @@ pub struct RearModel {
     pub ego_min: f64,
     /// `a_max`, m/s^2.
     pub ego_max: f64,
-    /// The follower's clip, m/s^2.
-    pub clip_min: f64,
-    /// The follower's clip, m/s^2.
-    pub clip_max: f64,
-    /// The follower's IDM ([`table_format::idm`]: its interval form is the proof's).
-    pub idm: IdmParameters,
-    /// The time gap's range, s.
-    pub time_gap: Interval,
+    /// The follower's model, its clip and its parameter's range ([`FollowerModel`]: its
+    /// interval form is the proof's).
+    pub follower: FollowerModel,
     /// Every speed lies in `[0, max_speed]`, m/s.
     pub max_speed: f64,
     /// A collision is a gap at or below this, m.
@@ -32,21 +27,13 @@ impl RearModel {
         match *game {
             Game::ThreeCarSplit {
                 ego,
-                follower:
-                    table_format::FollowerModel::Idm {
-                        clip: follower_clip,
-                        idm,
-                        time_gap,
-                    },
+                follower,
                 max_speed,
                 ..
             } => Some(RearModel {
                 ego_min: f64::from(ego.min),
                 ego_max: f64::from(ego.max),
-                clip_min: f64::from(follower_clip.min),
-                clip_max: f64::from(follower_clip.max),
-                idm,
-                time_gap: Interval::new(f64::from(time_gap.min), f64::from(time_gap.max)),
+                follower,
                 max_speed: f64::from(max_speed),
                 min_gap: f64::from(min_gap),
             }),
@@ -54,21 +41,30 @@ impl RearModel {
         }
     }
 
-    /// Bounds of the follower's clipped IDM acceleration over a box of gaps and speeds and
-    /// every time gap in range ([`IdmParameters::acceleration_bounds`], the ego the
-    /// follower's leader), clipped; a NaN bound is the clip's lowest.
+    /// The follower's clip, lowest, m/s^2.
+    pub fn clip_min(&self) -> f64 {
+        f64::from(self.follower.clip().min)
+    }
+
+    /// The follower's clip, highest, m/s^2.
+    pub fn clip_max(&self) -> f64 {
+        f64::from(self.follower.clip().max)
+    }
+
+    /// Bounds of the follower's clipped acceleration over a box of gaps and speeds and every
+    /// parameter in range ([`FollowerModel::acceleration_bounds`], the ego the follower's
+    /// leader), clipped; a NaN bound is the clip's lowest.
     pub fn follower_acceleration(&self, b: &StateBox) -> Interval {
-        let (lo, hi) = self.idm.acceleration_bounds(
+        let (lo, hi) = self.follower.acceleration_bounds(
             (b.gap.lo, b.gap.hi),
             (b.follower_speed.lo, b.follower_speed.hi),
             (b.ego_speed.lo, b.ego_speed.hi),
-            (self.time_gap.lo, self.time_gap.hi),
         );
         let clamp = |x: f64| {
             if x.is_nan() {
-                self.clip_min
+                self.clip_min()
             } else {
-                x.clamp(self.clip_min, self.clip_max)
+                x.clamp(self.clip_min(), self.clip_max())
             }
         };
         Interval::new(clamp(lo), clamp(hi))
@@ -76,7 +72,12 @@ impl RearModel {
 
     /// Every state the box can reach over `[0, period]`, bounded (module docs).
     pub fn reach(&self, b: &StateBox, period: f64) -> Reach {
-        self.reach_within(b, period, Interval::new(self.clip_min, self.clip_max), 3)
+        self.reach_within(
+            b,
+            period,
+            Interval::new(self.clip_min(), self.clip_max()),
+            3,
+        )
     }
 
     /// [`RearModel::reach`] from a bound `accel` already known to hold for the follower's

@@ -1,4 +1,5 @@
-//! The rear game: an IDM follower behind an ego whose braking is bounded.
+//! The rear game: a follower, by its model ([`FollowerModel`]: the IDM with an adversarial
+//! time gap), behind an ego whose braking is bounded.
 //!
 //! # Why this game exists
 //! The three-car game in absolute speeds has the state
@@ -28,26 +29,25 @@
 //! `x' = v_e - v_f`, `v_f' = u_f`, `v_e' = u_e`, with `z = (x, v_f, v_e)` and
 //! `p = (p1, p2, p3)`: `p . f = p1 (v_e - v_f) + p2 u_f + p3 u_e`. Nobody maximises:
 //! - ego (adversarial here): `u_e = -beta` where `p3 > 0`, else `a_max`, within its speed limits;
-//! - follower: `u_f = clip(g(v_f, v_f - v_e, x, T))`, `T` adversarial in `[T_min, T_max]`;
-//!   `g` is non-increasing in `T`, so `T = T_max` where `p2 > 0` and `T_min` otherwise.
+//! - follower: `u_f = clip(g(v_f, v_f - v_e, x, T))`, its model's parameter `T` (the IDM's
+//!   time gap) adversarial in `[T_min, T_max]`; `g` is non-increasing in `T` (every model's
+//!   contract), so `T = T_max` where `p2 > 0` and `T_min` otherwise.
 //!
 //! Speeds stay in `[0, v_max]` through the input sets (a car at rest cannot brake, one at
 //! `v_max` cannot speed up), so nothing leaves through a speed face.
 
-use super::{Accel, Dynamics, Game, Idm, OptimalInputs, Vector};
+use table_format::FollowerModel;
+
+use super::{Accel, Dynamics, Game, OptimalInputs, Vector};
 use crate::engine::semi_lagrangian::SampledGame;
 
 /// The rear game of one braking level `beta` (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RearIdm {
+pub struct RearGame {
     /// The ego's acceleration band `[-beta, a_max]`, adversarial in this game.
     pub ego: Accel,
-    /// The follower's IDM output is clipped to these bounds.
-    pub follower_clip: Accel,
-    /// The follower's IDM.
-    pub idm: Idm,
-    /// `[T_min, T_max]`, s.
-    pub time_gap: Accel,
+    /// The follower's model, its clip and its adversarial parameter's range.
+    pub follower: FollowerModel,
     /// The largest speed of any vehicle, m/s.
     pub max_speed: f32,
     /// `l(z) = gap_follower - min_gap`.
@@ -58,29 +58,36 @@ pub struct RearIdm {
     pub follower_robustness: f32,
 }
 
-impl RearIdm {
-    /// The follower's clipped IDM acceleration, within its speed limits.
+impl RearGame {
+    /// The follower's clip.
     #[inline(always)]
-    pub fn follower_acceleration(&self, vf: f32, ve: f32, gap: f32, t: f32) -> f32 {
-        super::idm::clipped_idm(
-            &self.idm,
-            self.follower_clip,
-            self.max_speed,
-            vf,
-            ve,
-            gap,
-            t,
-        )
+    fn follower_clip(&self) -> Accel {
+        Accel::from(self.follower.clip())
     }
 
-    /// The adversary's time gap for co-state component `p2` (on `v_f`).
+    /// The range of the follower model's adversarial parameter.
+    #[inline(always)]
+    fn parameter_range(&self) -> Accel {
+        Accel::from(self.follower.parameter_range())
+    }
+
+    /// The follower's clipped acceleration for the parameter `t`, within its speed limits.
+    #[inline(always)]
+    pub fn follower_acceleration(&self, vf: f32, ve: f32, gap: f32, t: f32) -> f32 {
+        let g = self.follower.acceleration(vf.max(0.0), vf - ve, gap, t);
+        let clip = self.follower_clip().at_speed(vf, self.max_speed);
+        g.clamp(clip.min, clip.max)
+    }
+
+    /// The adversary's parameter for co-state component `p2` (on `v_f`): the acceleration is
+    /// non-increasing in it, so its largest value where `p2 > 0` and its smallest otherwise.
     #[inline(always)]
     pub fn adversarial_time_gap(&self, p2: f32) -> f32 {
-        super::idm::time_gap_against(self.time_gap, p2)
+        super::idm::time_gap_against(self.parameter_range(), p2)
     }
 }
 
-impl Dynamics for RearIdm {
+impl Dynamics for RearGame {
     fn dims(&self) -> usize {
         3
     }
@@ -104,7 +111,7 @@ impl Dynamics for RearIdm {
     fn dissipation(&self, z: &Vector, alpha: &mut Vector) {
         alpha[0] = (z[2] - z[1]).abs();
         alpha[1] = self
-            .follower_clip
+            .follower_clip()
             .at_speed(z[1], self.max_speed)
             .magnitude();
         alpha[2] = self.ego.at_speed(z[2], self.max_speed).magnitude();
@@ -147,13 +154,13 @@ impl Dynamics for RearIdm {
                 let mut a2 = 0f32;
                 if p2 + j2 > 0.0 {
                     a2 = a2.max(
-                        self.follower_acceleration(vf, ve, x, self.time_gap.max)
+                        self.follower_acceleration(vf, ve, x, self.parameter_range().max)
                             .abs(),
                     );
                 }
                 if p2 - j2 <= 0.0 {
                     a2 = a2.max(
-                        self.follower_acceleration(vf, ve, x, self.time_gap.min)
+                        self.follower_acceleration(vf, ve, x, self.parameter_range().min)
                             .abs(),
                     );
                 }
@@ -173,7 +180,7 @@ impl Dynamics for RearIdm {
     }
 }
 
-impl Game for RearIdm {
+impl Game for RearGame {
     fn optimal_inputs(&self, z: &Vector, p: &Vector) -> OptimalInputs {
         let t = self.adversarial_time_gap(p[1]);
         OptimalInputs {
@@ -199,7 +206,7 @@ impl Game for RearIdm {
 /// The sampled-data rear game: the ego's acceleration (one of `-beta`, `0`, `a_max`) and the
 /// follower's time gap (`T_min` or `T_max`) are held for a period; the follower's IDM is
 /// integrated in sub-steps of at most 50 ms within it (it reacts continuously).
-impl SampledGame for RearIdm {
+impl SampledGame for RearGame {
     fn dims(&self) -> usize {
         Dynamics::dims(self)
     }
@@ -214,21 +221,18 @@ impl SampledGame for RearIdm {
 
     fn advance(&self, z: &Vector, input: usize, h: f32) -> Vector {
         let ue = [self.ego.min, 0.0, self.ego.max][input % 3];
-        let t = if input < 3 {
-            self.time_gap.min
-        } else {
-            self.time_gap.max
-        };
+        let range = self.parameter_range();
+        let t = if input < 3 { range.min } else { range.max };
         let steps = (h / 0.05).ceil().max(1.0);
         let ds = h / steps;
         let vm = self.max_speed;
         let (mut x, mut vf, mut ve) = (z[0], z[1], z[2]);
         for _ in 0..steps as usize {
             let uf = if self.follower_robustness > 0.0 {
-                // The model's clipped IDM, pushed; `travel` holds the speed in [0, v_max] (a
+                // The model's clipped acceleration, pushed; `travel` holds the speed in [0, v_max] (a
                 // follower at rest whose IDM brakes harder than the push stays at rest).
-                let c = self.follower_clip;
-                self.idm
+                let c = self.follower_clip();
+                self.follower
                     .acceleration(vf.max(0.0), vf - ve, x, t)
                     .clamp(c.min, c.max)
                     + self.follower_robustness
@@ -273,18 +277,17 @@ pub fn travel(v: f32, a: f32, dt: f32, v_max: f32) -> (f32, f32) {
 mod tests {
     use super::*;
 
-    fn game() -> RearIdm {
-        RearIdm {
+    fn game() -> RearGame {
+        RearGame {
             ego: Accel {
                 min: -3.5,
                 max: 2.0,
             },
-            follower_clip: Accel {
-                min: -6.0,
-                max: 2.0,
+            follower: FollowerModel::Idm {
+                clip: table_format::Bounds::new(-6.0, 2.0),
+                idm: table_format::IdmParameters::HIGHWAY,
+                time_gap: table_format::Bounds::new(1.0, 2.0),
             },
-            idm: Idm::HIGHWAY,
-            time_gap: Accel { min: 1.0, max: 2.0 },
             max_speed: 35.0,
             min_gap: 0.0,
             follower_robustness: 0.0,
