@@ -374,31 +374,27 @@ fn speed_rise(hold: f32, response: f32, ramp_from: f32, jerk: f32) -> f32 {
     math::max(hold, 0.0) * math::max(response, 0.0) + during_ramp
 }
 
-impl Controller<'_> {
-    /// The certificate at the true state `(gap_leader, leader_speed, gap_follower,
-    /// follower_speed, ego_speed)`, with the same domain rules as the control step: `None`
-    /// outside the domain or without a table. For tests and campaigns, which judge the
-    /// certificate on the state the firmware cannot see exactly. The ego is taken at rest in
-    /// its actuator (acceleration zero, no delay) and braking along the controller's ramp.
-    pub fn certificate(&self, state: [f32; 5]) -> Option<Certificate> {
-        self.certificate_with_response(state, 0.0, 0.0)
+impl<'t> Controller<'t> {
+    /// The certifier of the controller's table, if it was accepted.
+    pub fn certifier(&self) -> Option<&Certifier<'t>> {
+        self.certifier.as_ref().ok()
     }
 
-    /// [`Controller::certificate`] for an ego whose acceleration is at most
-    /// `response_acceleration` for `response_time` seconds (its actuator's dead time and lag,
-    /// with the commands still in its pipeline), then ramps down from there at the
-    /// configured `brake_jerk` to beta: what a controller engaged at that acceleration does.
+    /// [`Certifier::certificate`] of the controller's table (`None` without one). For tests and
+    /// campaigns, which judge the certificate on the state the firmware cannot see exactly.
+    pub fn certificate(&self, state: [f32; 5]) -> Option<Certificate> {
+        self.certifier()?.certificate(state)
+    }
+
+    /// [`Certifier::certificate_with_response`] of the controller's table (`None` without one).
     pub fn certificate_with_response(
         &self,
         state: [f32; 5],
         response_time: f32,
         response_acceleration: f32,
     ) -> Option<Certificate> {
-        self.certifier.as_ref().ok()?.certificate_with_response(
-            state,
-            response_time,
-            response_acceleration,
-        )
+        self.certifier()?
+            .certificate_with_response(state, response_time, response_acceleration)
     }
 
     /// The certificate at the true state `state` at time `now_us`, for a real actuator with
