@@ -251,9 +251,7 @@ fn verify(
     }
     writable(&out)?;
     let run = py
-        .detach(|| {
-            solver::verify_table::verify_table(&table, &settings, &out, &mut |_, _| {})
-        })
+        .detach(|| solver::verify_table::verify_table(&table, &settings, &out, &mut |_, _| {}))
         .map_err(value_error)?;
     json_to_python(
         py,
