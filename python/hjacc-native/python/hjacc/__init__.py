@@ -62,7 +62,7 @@ def _tagged(value):
     ((kind, fields),) = value.items()
     out = {"kind": kind}
     for k, v in fields.items():
-        out[k] = _tagged(v) if k == "follower_speed" else v
+        out[k] = _tagged(v) if k in ("follower_speed", "follower") else v
     return out
 
 
