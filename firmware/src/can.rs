@@ -34,7 +34,8 @@ use embedded_can::{Frame, Id, StandardId};
 
 use crate::controller::{Command, Mode};
 use crate::driver::DriverRequest;
-use crate::inputs::{Actuator, Inputs, Measurement, Sensors, Track};
+use crate::hardware::{Actuator, Sensors};
+use crate::inputs::{Inputs, Measurement, Track};
 use crate::math;
 use crate::sensing::TrackState;
 

@@ -1,5 +1,6 @@
 //! What the control loop reads: radar tracks and the ego speed, each with its time stamp and
-//! validity, and the traits the hardware implements to deliver them and to take commands.
+//! validity. The traits the hardware implements to deliver them and to take commands are in
+//! [`crate::hardware`].
 
 /// A measured value with the time it was taken and the sensor's own validity flag.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -93,34 +94,4 @@ impl Inputs {
             now_us,
         }
     }
-}
-
-/// The source of the front and rear radar tracks and the ego speed (a radar fusion ECU on CAN,
-/// or a simulation).
-pub trait Sensors {
-    /// The transport's error.
-    type Error;
-    /// The latest inputs as of `now_us`. Measurements not refreshed keep their old time stamps;
-    /// the controller judges their age.
-    fn read(&mut self, now_us: u64) -> Result<Inputs, Self::Error>;
-}
-
-/// The longitudinal acceleration request to the powertrain and brakes.
-pub trait Actuator {
-    /// The transport's error.
-    type Error;
-    /// Requests `acceleration` m/s^2 (negative: braking).
-    fn request(&mut self, command: &crate::Command) -> Result<(), Self::Error>;
-}
-
-/// A monotonic clock.
-pub trait Clock {
-    /// Microseconds since an arbitrary start; never decreasing.
-    fn now_us(&mut self) -> u64;
-}
-
-/// A watchdog that resets the controller unless fed every period.
-pub trait Watchdog {
-    /// Feeds the watchdog.
-    fn feed(&mut self);
 }

@@ -38,6 +38,7 @@ pub mod can;
 pub mod config;
 pub mod controller;
 pub mod driver;
+pub mod hardware;
 pub mod inputs;
 pub mod iso15622;
 pub mod math;
@@ -48,7 +49,8 @@ pub use controller::{
     DriverRequest, DriverState, Event, FallbackConfig, Fault, LawConfig, Mode, OverridePolicy,
     PlantConfig, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
 };
-pub use inputs::{Actuator, Clock, Inputs, Measurement, Sensors, Track, Watchdog};
+pub use hardware::{Actuator, Clock, Sensors, Watchdog};
+pub use inputs::{Inputs, Measurement, Track};
 pub use sensing::{SensorBounds, TrackState};
 pub use table_format;
 

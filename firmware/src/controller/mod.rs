@@ -154,13 +154,11 @@
 //!   breakpoints per axis. Why at run time and not in a table eroded at compile time: the box
 //!   depends on the track's age, known only at run time (an eroded table must take its worst);
 //!   one table serves every declared sensor; the minimum is exact, not a second bound; and it is
-//!   computed once per follower measurement (below). Measured on the deployed table
-//!   (`solver verify`, `solver::robust`): 74.8% of the measured rear states pass with the
-//!   default error against 77.1% with exact sensors; every passing measurement's box lies in
-//!   cells the proof covers. Cost: the worst control step on the Cortex-M4F is 18,374
-//!   instructions (QEMU, docs/board.md), against a budget
-//!   of 20,000 (0.12 ms at one instruction per
-//!   cycle, 0.71 ms at six: 3.6% of the 20 ms period at 168 MHz).
+//!   computed once per follower measurement (below). The share of measured rear states that
+//!   pass with the declared error and with exact sensors is measured by `solver verify`
+//!   (docs/certificate.md); every passing measurement's box lies in cells the proof covers.
+//!   The worst control step's cost on the Cortex-M4F, against its budget of 20,000
+//!   instructions, is measured on QEMU (docs/board.md).
 //! - **Aging**: a measurement is argued from its own time, so its age is inside the argument.
 //!   The last plausible leader measurement is kept with the interval of the ego's speed at its
 //!   time (from the kept ego measurement nearest it); its look-ahead's response runs from then,
