@@ -31,10 +31,14 @@ pub fn widen_up(x: f64) -> f64 {
 }
 
 macro_rules! power {
-    ($name:ident, $t:ty) => {
-        /// `x^n` by squaring (`n >= 0`): the products `powi` makes, without a library call.
+    ($name:ident, $squaring:ident, $t:ty) => {
+        /// `x^n` by squaring (`n >= 0`): the products `powi` makes with an exponent known only
+        /// at run time (compiler-rt's `__powisf2`, the same products in the same order; the
+        /// test `the_point_forms_agree_and_match_the_formula` checks it), for targets without
+        /// `std`.
+        #[cfg_attr(feature = "std", allow(dead_code))]
         #[inline(always)]
-        fn $name(x: $t, n: u8) -> $t {
+        fn $squaring(x: $t, n: u8) -> $t {
             let (mut base, mut e, mut out): ($t, u8, $t) = (x, n, 1.0);
             while e > 0 {
                 if e & 1 == 1 {
@@ -47,10 +51,50 @@ macro_rules! power {
             }
             out
         }
+
+        /// `x^n`: `powi` with `std`, by squaring without; the same result either way.
+        #[inline(always)]
+        fn $name(x: $t, n: u8) -> $t {
+            #[cfg(feature = "std")]
+            {
+                x.powi(i32::from(n))
+            }
+            #[cfg(not(feature = "std"))]
+            {
+                $squaring(x, n)
+            }
+        }
     };
 }
-power!(power_f32, f32);
-power!(power_f64, f64);
+power!(power_f32, squaring_f32, f32);
+power!(power_f64, squaring_f64, f64);
+
+/// The square root, correctly rounded either way: the instruction (which the solver's loops
+/// vectorise) with `std`, libm's without.
+#[inline(always)]
+fn sqrt_f32(x: f32) -> f32 {
+    #[cfg(feature = "std")]
+    {
+        x.sqrt()
+    }
+    #[cfg(not(feature = "std"))]
+    {
+        libm::sqrtf(x)
+    }
+}
+
+/// [`sqrt_f32`] in `f64`.
+#[inline(always)]
+fn sqrt_f64(x: f64) -> f64 {
+    #[cfg(feature = "std")]
+    {
+        x.sqrt()
+    }
+    #[cfg(not(feature = "std"))]
+    {
+        libm::sqrt(x)
+    }
+}
 
 /// The point form, once, for each float type.
 macro_rules! point_form {
@@ -91,7 +135,7 @@ impl IdmParameters {
         point_form!(
             f32,
             power_f32,
-            libm::sqrtf,
+            sqrt_f32,
             self.max_acceleration,
             self.comfortable_deceleration,
             self.desired_speed,
@@ -109,7 +153,7 @@ impl IdmParameters {
         point_form!(
             f64,
             power_f64,
-            libm::sqrt,
+            sqrt_f64,
             f64::from(self.max_acceleration),
             f64::from(self.comfortable_deceleration),
             f64::from(self.desired_speed),
@@ -145,7 +189,7 @@ impl IdmParameters {
         let a = f64::from(self.max_acceleration);
         let (p, q) = (follower_speed.0.max(0.0), follower_speed.1.max(0.0));
         let (r, s) = leader_speed;
-        let c = 2.0 * libm::sqrt(a * f64::from(self.comfortable_deceleration));
+        let c = 2.0 * sqrt_f64(a * f64::from(self.comfortable_deceleration));
         let z = |v: f64, t: f64, vl: f64| v * t + v * (v - vl) / c;
         let vertex = (0.5 * (s - c * time_gap.0)).clamp(p, q);
         let z_lo = z(p, time_gap.0, s)
@@ -232,9 +276,17 @@ mod tests {
         // `__powisf2`, the same products in the same order).
         for x in [0.3f32, 0.99, 1.0, 0.0, 0.6006006] {
             let n = core::hint::black_box(4);
-            assert_eq!(power_f32(x, 4), core::hint::black_box(x).powi(n), "{x}");
-            assert_eq!(power_f32(x, 1), x);
-            assert_eq!(power_f32(x, 0), 1.0);
+            assert_eq!(squaring_f32(x, 4), core::hint::black_box(x).powi(n), "{x}");
+            let three = core::hint::black_box(3);
+            assert_eq!(
+                squaring_f64(f64::from(x), 3),
+                core::hint::black_box(f64::from(x)).powi(three),
+                "{x}"
+            );
+            assert_eq!(squaring_f32(x, 1), x);
+            assert_eq!(squaring_f32(x, 0), 1.0);
+            let (x, four) = (core::hint::black_box(x), core::hint::black_box(4u8));
+            assert_eq!(power_f32(x, four), squaring_f32(x, four));
         }
     }
 }
