@@ -258,10 +258,7 @@ impl<'t> Setting<'t> {
                 }
             }
         };
-        let a_follower = m
-            .follower
-            .acceleration(follower.v, follower.v - ego.v, ego.x - follower.x, time_gap)
-            .clamp(m.follower_clip().0, m.follower_clip().1);
+        let a_follower = m.follower_acceleration(follower.v, ego.v, ego.x - follower.x, time_gap);
         let limit = |a: f32, v: f32| {
             if a > 0.0 {
                 a.min(((m.max_speed - v) / h).max(0.0))

@@ -75,6 +75,26 @@ impl HumanModel {
         (c.min, c.max)
     }
 
+    /// The follower's clipped acceleration at `follower_speed`, `gap` metres behind a leader
+    /// at `leader_speed`, for the model's parameter `parameter`, m/s^2.
+    pub fn follower_acceleration(
+        &self,
+        follower_speed: f32,
+        leader_speed: f32,
+        gap: f32,
+        parameter: f32,
+    ) -> f32 {
+        let (lo, hi) = self.follower_clip();
+        self.follower
+            .acceleration(
+                follower_speed,
+                follower_speed - leader_speed,
+                gap,
+                parameter,
+            )
+            .clamp(lo, hi)
+    }
+
     /// The range of the follower model's parameter (the IDM's time gap, s).
     pub fn parameter_range(&self) -> (f32, f32) {
         let r = self.follower.parameter_range();
@@ -221,14 +241,9 @@ impl<'t> Humans<'t> {
                 self.random_accel
             }
         };
-        let (fmin, fmax) = m.follower_clip();
         let (tmin, tmax) = m.parameter_range();
         let gap = ego.x - follower.x;
-        let idm_with = |time_gap: f32| {
-            m.follower
-                .acceleration(follower.v, follower.v - ego.v, gap, time_gap)
-                .clamp(fmin, fmax)
-        };
+        let idm_with = |time_gap: f32| m.follower_acceleration(follower.v, ego.v, gap, time_gap);
         let a_follower = match self.follower {
             Follower::IdmFixed | Follower::IdmRandom => idm_with(self.episode_time_gap),
             Follower::IdmSwitching => {
@@ -249,7 +264,7 @@ impl<'t> Humans<'t> {
                     _ => idm_with(tmin),
                 }
             }
-            Follower::Unbounded => fmax,
+            Follower::Unbounded => m.follower_clip().1,
         };
         (
             within_speed_limit(a_leader, leader.v, m.max_speed, h),

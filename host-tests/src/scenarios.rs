@@ -605,10 +605,7 @@ pub fn run(
             None => 0.0,
         };
         let a_follower = if with_follower {
-            model
-                .follower
-                .acceleration(f.v, f.v - e.v, e.x - f.x, FOLLOWER_TIME_GAP)
-                .clamp(model.follower_clip().0, model.follower_clip().1)
+            model.follower_acceleration(f.v, e.v, e.x - f.x, FOLLOWER_TIME_GAP)
         } else {
             0.0
         };

@@ -154,16 +154,6 @@ impl<'t> Certifier<'t> {
         &self.table
     }
 
-    /// The sensors' bounds the certificate covers.
-    pub fn sensors(&self) -> &crate::sensing::SensorBounds {
-        &self.sensors
-    }
-
-    /// The ego's band `[-beta, a_max]`, m/s^2.
-    pub fn band(&self) -> Bounds {
-        self.model.ego
-    }
-
     /// The certificate at the true state `(gap_leader, leader_speed, gap_follower,
     /// follower_speed, ego_speed)`, with the control step's domain rules: `None` outside the
     /// domain. The ego is taken at rest in its actuator (acceleration zero, no delay) and

@@ -159,50 +159,18 @@ impl VerifyOptions {
 
     /// The proof's settings, or the first option a run cannot use, before anything runs.
     pub fn resolve(&self) -> Result<Settings, OptionError> {
-        let refuse = |option, reason: String| Err(OptionError { option, reason });
-        if self.period_ms.is_empty() || self.period_ms.iter().any(|p| !(p.is_finite() && *p > 0.0))
-        {
-            return refuse(
-                "period_ms",
-                "every period must be a positive number of milliseconds".into(),
-            );
-        }
+        let refuse = |option, reason: String| OptionError { option, reason };
+        // 0 means no limit here, so the budget's sign is checked before it becomes an Option.
         if !(self.budget_seconds.is_finite() && self.budget_seconds >= 0.0) {
-            return refuse(
+            return Err(refuse(
                 "budget_seconds",
                 format!(
                     "must be a finite number of seconds, 0 for no limit (got {})",
                     self.budget_seconds
                 ),
-            );
+            ));
         }
-        if !self.rear_margin.is_finite() {
-            return refuse("rear_margin", "must be a finite number of metres".into());
-        }
-        let error = self.measurement_error();
-        if let Some(bound) = error.invalid_bound() {
-            let option = match bound {
-                "range" => "range_error",
-                "range_relative" => "range_error_relative",
-                "range_rate" => "range_rate_error",
-                "ego_speed" => "ego_speed_error",
-                "ego_speed_relative" => "ego_speed_error_relative",
-                _ => "ego_age",
-            };
-            return refuse(
-                option,
-                format!(
-                    "a measurement error bound must be finite, not negative and within the \
-                     limits table_format::sensing declares (got {})",
-                    error
-                        .named()
-                        .iter()
-                        .find(|(n, _)| *n == bound)
-                        .map_or(f32::NAN, |b| b.1)
-                ),
-            );
-        }
-        Ok(Settings {
+        let settings = Settings {
             periods: self.period_ms.iter().map(|p| p * 1e-3).collect(),
             rear_margin: self.rear_margin,
             max_depth: self.depth,
@@ -211,48 +179,95 @@ impl VerifyOptions {
                 unproven_cells: (self.max_unproven > 0).then_some(self.max_unproven),
             },
             exhaustive: self.exhaustive,
-            measurement_error: error,
-        })
+            measurement_error: self.measurement_error(),
+        };
+        match invalid_setting(&settings) {
+            None => Ok(settings),
+            Some((setting, reason)) => Err(refuse(
+                match setting {
+                    Setting::Periods => "period_ms",
+                    Setting::Budget => "budget_seconds",
+                    Setting::RearMargin => "rear_margin",
+                    Setting::Error("range") => "range_error",
+                    Setting::Error("range_relative") => "range_error_relative",
+                    Setting::Error("range_rate") => "range_rate_error",
+                    Setting::Error("ego_speed") => "ego_speed_error",
+                    Setting::Error("ego_speed_relative") => "ego_speed_error_relative",
+                    Setting::Error(_) => "ego_age",
+                },
+                reason,
+            )),
+        }
     }
 }
 
-/// Checks what a run cannot use, before it starts: periods, the budget, the error bounds (for
-/// settings made without [`VerifyOptions`]).
-pub fn check_settings(settings: &Settings) -> Result<(), ConfigError> {
+/// A setting a run cannot use ([`invalid_setting`]).
+enum Setting {
+    Periods,
+    Budget,
+    RearMargin,
+    /// A bound of the measurement error, by its name in [`MeasurementError::named`].
+    Error(&'static str),
+}
+
+/// The first setting a run cannot use, and why: the one check behind [`check_settings`] and
+/// [`VerifyOptions::resolve`], each of which names the setting its own way.
+fn invalid_setting(settings: &Settings) -> Option<(Setting, String)> {
     if settings.periods.is_empty()
         || settings
             .periods
             .iter()
             .any(|p| !(p.is_finite() && *p > 0.0))
     {
-        return Err(ConfigError::new(
-            "periods",
-            "every period must be a positive number of seconds",
-        ));
+        return Some((Setting::Periods, "every period must be positive".into()));
     }
     if settings
         .budget
         .seconds
         .is_some_and(|s| !(s.is_finite() && s > 0.0))
     {
-        return Err(ConfigError::new(
-            "budget seconds",
-            "must be a positive, finite number of seconds",
+        return Some((
+            Setting::Budget,
+            "must be a positive, finite number of seconds".into(),
         ));
     }
     if !settings.rear_margin.is_finite() {
-        return Err(ConfigError::new(
-            "rear margin",
-            "must be a finite number of metres",
+        return Some((
+            Setting::RearMargin,
+            "must be a finite number of metres".into(),
         ));
     }
-    if let Some(bound) = settings.measurement_error.invalid_bound() {
-        return Err(ConfigError::new(
-            format!("measurement error {bound}"),
-            "must be finite, not negative and within its limit",
-        ));
+    let error = &settings.measurement_error;
+    let bound = error.invalid_bound()?;
+    let value = error
+        .named()
+        .iter()
+        .find(|(name, _)| *name == bound)
+        .map_or(f32::NAN, |b| b.1);
+    Some((
+        Setting::Error(bound),
+        format!(
+            "a measurement error bound must be finite, not negative and within the limits \
+             table_format::sensing declares (got {value})"
+        ),
+    ))
+}
+
+/// Checks what a run cannot use, before it starts: periods, the budget, the error bounds (for
+/// settings made without [`VerifyOptions`]).
+pub fn check_settings(settings: &Settings) -> Result<(), ConfigError> {
+    match invalid_setting(settings) {
+        None => Ok(()),
+        Some((setting, reason)) => Err(ConfigError::new(
+            match setting {
+                Setting::Periods => "periods".to_string(),
+                Setting::Budget => "budget seconds".to_string(),
+                Setting::RearMargin => "rear margin".to_string(),
+                Setting::Error(bound) => format!("measurement error {bound}"),
+            },
+            reason,
+        )),
     }
-    Ok(())
 }
 
 /// Proves the table at `path` and measures it under the settings' measurement error; writes
