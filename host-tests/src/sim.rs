@@ -223,6 +223,23 @@ pub enum Noise {
     /// The box's worst corner for the front on every measurement: gaps read long, range rates
     /// read opening, the ego's speed reads low.
     WorstCorner,
+    /// [`Noise::WorstCorner`] for the tracks, with the ego speed's error switching between its
+    /// two ends every `period_us` (low first, as at the worst corner): every switch moves the measured speed,
+    /// and every box built on it, by twice the error at once.
+    EgoSpeedFlipping {
+        /// How long the ego speed's error keeps one end, microseconds.
+        period_us: u32,
+    },
+    /// Every error switches between [`Noise::WorstCorner`]'s end of its bound and the other
+    /// end every `period_us`, all together (the worst corner first): the tracks and the ego's
+    /// speed jump by twice their errors at every switch.
+    CornersFlipping {
+        /// How long the errors keep one corner, microseconds.
+        period_us: u32,
+    },
+    /// Each error at one end of its bound or the other, drawn anew for every measurement: the
+    /// box's corners, in random order.
+    RandomCorners,
 }
 
 /// One sensor channel's timing and losses.
@@ -439,13 +456,27 @@ impl Sensors {
             Noise::None => [0.0; 5],
             Noise::Uniform => std::array::from_fn(|_| rng.random::<f32>() * 2.0 - 1.0),
             Noise::WorstCorner => [1.0, 1.0, 1.0, 1.0, -1.0],
+            Noise::EgoSpeedFlipping { period_us } => {
+                let other_end = (now_us / u64::from(period_us.max(1))) % 2 == 1;
+                [1.0, 1.0, 1.0, 1.0, if other_end { 1.0 } else { -1.0 }]
+            }
+            Noise::RandomCorners => {
+                std::array::from_fn(|_| if rng.random::<bool>() { 1.0 } else { -1.0 })
+            }
+            Noise::CornersFlipping { period_us } => {
+                let other_end = (now_us / u64::from(period_us.max(1))) % 2 == 1;
+                let s = if other_end { -1.0 } else { 1.0 };
+                [s, s, s, s, -s]
+            }
         };
         // The actuator's state at the low end of its error at the worst corner (the firmware
         // then assumes exactly the truth), anywhere in it otherwise.
         let actuator_error = match self.model.noise {
             Noise::None => 0.0,
-            Noise::Uniform => rng.random::<f32>() * 2.0 - 1.0,
-            Noise::WorstCorner => -1.0,
+            Noise::Uniform | Noise::RandomCorners => rng.random::<f32>() * 2.0 - 1.0,
+            Noise::WorstCorner | Noise::EgoSpeedFlipping { .. } | Noise::CornersFlipping { .. } => {
+                -1.0
+            }
         };
         let range = |g: f32, e: f32| g + e * (b.range + b.range_relative * g.max(0.0));
         let leader_track = Track {

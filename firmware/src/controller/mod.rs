@@ -46,10 +46,11 @@
 //! harder. `Config::bang_bang()` is the paper's policy instead: no ramp (`brake_jerk =
 //! f32::INFINITY`) and braking at `beta` whenever the look-ahead refuses.
 //!
-//! **Emergencies.** A state whose front is not certified at the error box's worst corner gets
-//! the ramp too when a step since the last engagement or cut-in was certified and the box's best
-//! corner still is (a certified measurement certifies the true state, and the ramp keeps it
-//! certified: measurement noise moves the corner, not the truth); otherwise (an engagement into an uncertified state, a cut-in, a leader
+//! **Emergencies.** A state whose front value or speed headroom is not certified at the error
+//! box's worst corner gets the ramp too when a step since the last engagement or cut-in was
+//! certified and the box's best corner still is, in both (a certified measurement certifies the
+//! true state, and the ramp keeps it certified: measurement noise moves the corner, not the
+//! truth); otherwise (an engagement into an uncertified state, a cut-in, a leader
 //! beyond its model) the command is `beta` at once: an emergency, flagged in
 //! [`Command::emergency`] with the takeover request whenever a command drops faster than
 //! ISO 15622's jerk limit.
