@@ -25,7 +25,11 @@ pub enum DriverRequest {
     TimeGap(u8),
 }
 
-/// Why a driver request was refused (the state is unchanged).
+/// Why a driver request was refused (the state is unchanged). Shown to the driver: the
+/// controller returns it from [`Controller::request`] and logs it
+/// ([`Event::DriverRequestRefused`](crate::Event::DriverRequestRefused)).
+///
+/// [`Controller::request`]: crate::Controller::request
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
@@ -34,6 +38,15 @@ pub enum DriverError {
     SetSpeedOutOfRange,
     /// The time-gap setting is not one of `Config::time_gaps`.
     NoSuchTimeGap,
+    /// Engagement (SET or resume from standby) refused: the state measured in the last standby
+    /// period is not certified (its margin is zero or below, or it is outside the table's
+    /// domain). Engaging there would leave the certificate nothing to keep and brake at once;
+    /// the car stays in standby, and the standby commands' margin says when it is certified.
+    NotCertified,
+    /// Engagement refused: no certificate could be evaluated in the last standby period (no
+    /// table, no plausible or a lost track, no good ego speed, or no standby period since the
+    /// last cancel). The car stays in standby.
+    CertificateUnknown,
 }
 
 /// The driver's state.

@@ -284,3 +284,63 @@ fn the_gap_policy_keeps_room_over_the_certificate() {
     let cost = ramp.steady_gap(30.0) - step.steady_gap(30.0);
     assert!((15.0..30.0).contains(&cost), "{cost}");
 }
+
+/// An engagement from standby into a state the certificate does not certify (here a stopped
+/// car 30 m ahead at 25 m/s) is refused with its reason, and the car stays in standby: engaged,
+/// the certificate would have nothing to keep and the first step would brake at beta. The
+/// standby commands carry the certificate's margin, so that the driver sees when the car can be
+/// engaged; once the road ahead is clear again, the same resume is taken.
+#[test]
+fn an_engagement_into_an_uncertified_state_is_refused_and_the_car_stays_in_standby() {
+    let mut c = Controller::new(DEFAULT_TABLE, exact());
+    let mut l = Loop {
+        gap: 1e4,
+        leader_speed: 25.0,
+        speed: 25.0,
+        k: 0,
+        reported: Some(0.0),
+    };
+    for _ in 0..50 {
+        l.step(&mut c, 0.0);
+    }
+    c.request(DriverRequest::Cancel).unwrap();
+    // No standby period since the cancel: nothing to judge an engagement by.
+    assert_eq!(
+        c.request(DriverRequest::Resume),
+        Err(DriverError::CertificateUnknown)
+    );
+    let cmd = l.step(&mut c, 0.0);
+    assert_eq!(cmd.mode, Mode::Standby);
+    assert!(cmd.margin.is_some_and(|m| m > 0.0), "{cmd:?}");
+    // A stopped car 30 m ahead.
+    l.gap = 30.0;
+    l.leader_speed = 0.0;
+    let cmd = l.step(&mut c, 0.0);
+    assert!(cmd.margin.is_some_and(|m| m <= 0.0), "{cmd:?}");
+    for request in [DriverRequest::Resume, DriverRequest::Engage] {
+        assert_eq!(c.request(request), Err(DriverError::NotCertified));
+    }
+    assert!(!c.driver().engaged);
+    // Through the step's inputs (CAN) too: refused, logged, and the step stays in standby.
+    let mut i = l.inputs();
+    i.driver = Some(DriverRequest::Resume);
+    let cmd = c.step(&i);
+    assert_eq!((cmd.mode, cmd.acceleration), (Mode::Standby, 0.0));
+    assert!(c.events().any(|e| matches!(
+        e,
+        Event::DriverRequestRefused {
+            error: DriverError::NotCertified,
+            ..
+        }
+    )));
+    // A SET speed is not an engagement: taken in standby.
+    c.request(DriverRequest::SetSpeed(20.0)).unwrap();
+    // The road clears: the resume is taken, and the next step drives.
+    l.gap = 1e4;
+    l.leader_speed = 25.0;
+    l.step(&mut c, 0.0);
+    c.request(DriverRequest::Resume).unwrap();
+    let cmd = l.step(&mut c, 0.0);
+    assert_eq!(cmd.mode, Mode::Nominal, "{cmd:?}");
+    assert!(!cmd.emergency);
+}

@@ -503,6 +503,55 @@ impl<'t> Controller<'t> {
         needed * (1.0 + sensors.error.range_relative) + sensors.error.range
     }
 
+    /// The front half of the certificate at a measured state (module docs: the delays, the
+    /// measurement error, the ego's speed): the front value at the error box's worst corner and
+    /// the speed headroom at its worst and best corners, for the committed ramp argued from the
+    /// leader's measurement and from the ego's.
+    pub(super) fn measured_front(
+        &self,
+        model: &Model,
+        leader: &LeaderMemo,
+        ego_speed: f32,
+        t_e: u64,
+        now: u64,
+        pending: f32,
+    ) -> MeasuredFront {
+        let c = &self.config;
+        let dead_us = u64::from(c.plant.actuator_dead_time_us);
+        let lag = seconds(u64::from(c.plant.actuator_lag_us));
+        let jerk = c.certificate.brake_jerk;
+        // The worst point of the error box: the least gap, the slowest leader (the ego's lowest
+        // speed at `t_m` plus the least range rate), the fastest ego; the front value is
+        // non-decreasing in the first two and non-increasing in the third.
+        let sensors = &c.sensors;
+        let gap = sensors.range(leader.track.gap).0;
+        let (ego_low, ego_high) = leader.ego;
+        let leader_at_m = math::max(ego_low + sensors.range_rate(leader.track.rel_speed).0, 0.0);
+        let (ego_now_low, ego_now_high) = sensors.ego_speed(ego_speed);
+        let committed = self.committed_ramp(now, model);
+        let (response, ramp_from) = profile(leader.at_us, committed, dead_us, lag, jerk);
+        let value = front_value(
+            gap,
+            leader_at_m,
+            ego_high,
+            &model.front(response, math::max(pending, ramp_from), ramp_from, jerk),
+        );
+        let (response_e, ramp_from_e) = profile(t_e, committed, dead_us, lag, jerk);
+        let rise = speed_rise(
+            math::max(pending, ramp_from_e),
+            response_e,
+            ramp_from_e,
+            jerk,
+        );
+        MeasuredFront {
+            value,
+            headroom: model.max_ego_speed - (ego_now_high + rise),
+            best_headroom: model.max_ego_speed - (ego_now_low + rise),
+            response,
+            ramp_from,
+        }
+    }
+
     /// The front half applied to a `proposal` (module docs: the delays, the measurement error,
     /// the ego's speed, the braking ramp): the certified front value and speed headroom of the
     /// state, and the command, which is the proposal under the speed cap if its look-ahead
@@ -525,35 +574,18 @@ impl<'t> Controller<'t> {
         let lag = seconds(u64::from(c.plant.actuator_lag_us));
         let jerk = c.certificate.brake_jerk;
         let t_m = leader.at_us;
-        // The worst point of the error box (module docs): the least gap, the slowest leader
-        // (the ego's lowest speed at `t_m` plus the least range rate), the fastest ego; the
-        // front value is non-decreasing in the first two and non-increasing in the third.
         let sensors = &c.sensors;
         let gap = sensors.range(leader.track.gap).0;
         let (ego_low, ego_high) = leader.ego;
         let leader_at_m = math::max(ego_low + sensors.range_rate(leader.track.rel_speed).0, 0.0);
         let ego_now = sensors.ego_speed(ego_speed).1;
-        // The certified front value and speed headroom: the committed ramp, argued from the
-        // leader's measurement and from the ego's.
-        let committed = self.committed_ramp(now, model);
-        let (response, ramp_from) = profile(t_m, committed, dead_us, lag, jerk);
-        let value = front_value(
-            gap,
-            leader_at_m,
-            ego_high,
-            &model.front(response, math::max(pending, ramp_from), ramp_from, jerk),
-        );
-        let (response_e, ramp_from_e) = profile(t_e, committed, dead_us, lag, jerk);
-        let rise = speed_rise(
-            math::max(pending, ramp_from_e),
-            response_e,
-            ramp_from_e,
-            jerk,
-        );
-        let headroom = model.max_ego_speed - (ego_now + rise);
-        // The same at the box's best corner (the slowest ego): the true state's headroom is no
-        // larger.
-        let best_headroom = model.max_ego_speed - (sensors.ego_speed(ego_speed).0 + rise);
+        let MeasuredFront {
+            value,
+            headroom,
+            best_headroom,
+            response,
+            ramp_from,
+        } = self.measured_front(model, leader, ego_speed, t_e, now, pending);
         // The look-ahead (module docs): `u` held for one period, then the ramp from `u`. Its
         // hold is `max(pending, u + tail)`: the lag averages every command ever issued, and the
         // window's older ones (up to the band's top) still pass `tail` on top of `u`.
@@ -677,6 +709,21 @@ impl<'t> Controller<'t> {
             jumped,
         }
     }
+}
+
+/// The front half at a measured state ([`Controller::measured_front`]).
+pub(super) struct MeasuredFront {
+    /// The certified front value at the error box's worst corner, m.
+    pub(super) value: f32,
+    /// The speed headroom at the box's worst corner (the fastest ego), m/s.
+    pub(super) headroom: f32,
+    /// The speed headroom at the box's best corner (the slowest ego): the true state's is no
+    /// larger, m/s.
+    pub(super) best_headroom: f32,
+    /// The committed ramp's response seen from the leader's measurement, s.
+    pub(super) response: f32,
+    /// Its ramp's value at the response's end, m/s^2.
+    pub(super) ramp_from: f32,
 }
 
 /// What the front half made of a proposed command ([`Controller::enforce_front`]).

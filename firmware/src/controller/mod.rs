@@ -106,7 +106,12 @@
 //! [`Controller::request`] or [`Inputs::driver`] (CAN frame `0x140`, [`crate::can`]). They change
 //! the driver's state only: the command history stays, so a new set speed brings no jab. A
 //! cancel puts the controller in [`Mode::Standby`] (it keeps observing the tracks) and forgets
-//! the commands, which the actuator's reported state covers at the next engagement.
+//! the commands, which the actuator's reported state covers at the next engagement. In standby
+//! the certificate of the measured state is evaluated every period as an engaged step would,
+//! and carried in the command's margin; an engagement (SET or resume) is taken only where it is
+//! positive, and refused otherwise with its reason ([`DriverError::NotCertified`],
+//! [`DriverError::CertificateUnknown`]): an engagement into an uncertified state would leave the
+//! certificate nothing to keep.
 //!
 //! # The domain
 //! The rear table covers `gap_follower` up to its last breakpoint, and speeds in
@@ -332,6 +337,9 @@ pub struct Controller<'t> {
     speed_kept_from_us: Option<u64>,
     /// The last plausible follower measurement, with its rear value at its time.
     rear: Option<RearMemo>,
+    /// The certificate of the state measured in the last standby period (reset whenever a
+    /// step is engaged): what an engagement is judged by.
+    standby_certificate: Result<Certificate, DriverError>,
     /// The latest ego-speed measurements `(time, speed)`, oldest first: the one nearest a
     /// track's time gives the ego's speed there.
     ego_history: Deque<(u64, f32), EGO_HISTORY>,
@@ -379,6 +387,7 @@ impl<'t> Controller<'t> {
             leader: None,
             speed_kept_from_us: None,
             rear: None,
+            standby_certificate: Err(DriverError::CertificateUnknown),
             ego_history: Deque::new(),
         }
     }
@@ -431,10 +440,22 @@ impl<'t> Controller<'t> {
     /// A request from the driver's controls (also taken from [`Inputs::driver`] in the step).
     /// Nothing but the driver's state changes: the command history stays, so the certificate
     /// keeps knowing what the actuator was told. A cancel forgets it (the driver drives until
-    /// the next engagement, which the actuator's reported state covers).
+    /// the next engagement, which the actuator's reported state covers). An engagement from
+    /// standby (SET or resume) is refused unless the state measured in the last standby period
+    /// is certified ([`DriverError::NotCertified`], [`DriverError::CertificateUnknown`]): the
+    /// car stays in standby.
     pub fn request(&mut self, request: DriverRequest) -> Result<(), DriverError> {
         let ego_speed = self.ego_history.back().map(|e| e.1);
         let was_engaged = self.driver.engaged;
+        // An engagement (not a SET or resume while engaged) needs a certified state: the one
+        // measured in the last standby period.
+        if !was_engaged && matches!(request, DriverRequest::Engage | DriverRequest::Resume) {
+            match self.standby_certificate {
+                Ok(c) if c.is_certified() => {}
+                Ok(_) => return Err(DriverError::NotCertified),
+                Err(e) => return Err(e),
+            }
+        }
         self.driver
             .apply(request, ego_speed, self.config.plant.envelope.max_speed)?;
         if was_engaged && !self.driver.engaged {
@@ -547,6 +568,7 @@ impl<'t> Controller<'t> {
         if command.mode == Mode::Standby {
             return command;
         }
+        self.standby_certificate = Err(DriverError::CertificateUnknown);
         // Every command goes to the actuator: the look-ahead of later steps must know it.
         let keep_from = self.keep_commands_from(now);
         self.issued.push(now, command.acceleration, keep_from);
@@ -578,19 +600,42 @@ impl<'t> Controller<'t> {
 
     /// Disengaged: no command for the actuator to follow; the tracks and the ego's speed are
     /// still observed, so that an engagement starts from known measurements.
+    ///
+    /// The certificate of the measured state is evaluated as an engaged step would (the front
+    /// at the error box's worst corner, with the committed ramp from what the actuator may be
+    /// doing; the rear over the box): an engagement is judged by it, and the command's margin
+    /// carries it, so that the driver sees when the car can be engaged.
     fn standby(&mut self, inputs: &Inputs) -> Command {
         let now = inputs.now_us;
-        if let (Ok(model), Ok(v)) = (
+        self.standby_certificate = Err(DriverError::CertificateUnknown);
+        let mut command = Command::bare(0.0, Mode::Standby, None);
+        let (Ok(model), Ok(v)) = (
             self.certifier.as_ref().map(|c| c.model),
             self.check_ego_speed(&inputs.ego_speed, now),
-        ) {
-            self.remember_ego_speed(inputs.ego_speed.timestamp_us, v);
-            let mut command = Command::bare(0.0, Mode::Standby, None);
-            command.leader = self.observe_leader(&inputs.leader, now, &model);
-            command.follower = self.observe_follower(&inputs.follower, now, &model);
+        ) else {
             return command;
-        }
-        Command::bare(0.0, Mode::Standby, None)
+        };
+        let t_e = inputs.ego_speed.timestamp_us;
+        self.remember_ego_speed(t_e, v);
+        command.leader = self.observe_leader(&inputs.leader, now, &model);
+        command.follower = self.observe_follower(&inputs.follower, now, &model);
+        let usable = |s: TrackState| !matches!(s, TrackState::Lost | TrackState::Missing);
+        let (Some(leader), Some(rear), true) = (
+            self.leader,
+            self.rear,
+            usable(command.leader) && usable(command.follower),
+        ) else {
+            return command;
+        };
+        let pending = self.pending(leader.at_us.min(t_e), &model);
+        let front = self.measured_front(&model, &leader, v, t_e, now, pending);
+        let certificate = match (&self.certifier, rear.value) {
+            (Ok(c), Ok(w)) => Ok(c.certificate_of(front.value, w, front.headroom)),
+            _ => Err(DriverError::NotCertified),
+        };
+        command.margin = certificate.ok().map(|c| c.margin());
+        self.standby_certificate = certificate;
+        command
     }
 
     /// The minimum-risk deceleration, reached from the last command at ISO 15622's jerk limit
