@@ -306,7 +306,7 @@ enum SensorsArg {
     /// Exact measurements, `--latency` periods old.
     Exact,
     /// The datasheets' radars at the firmware's declared error bounds, drawn per episode:
-    /// uniform or worst-corner noise, 50-80 ms cycles, 40-100 ms latency with jitter, 10% of
+    /// uniform, corner or corner-switching noise, 50-80 ms cycles, 40-100 ms latency with jitter, 10% of
     /// refreshes lost and bursts of losses up to the covered track age.
     Datasheet,
 }
@@ -776,7 +776,12 @@ fn gap_policy(out: &std::path::Path) -> Result<()> {
             serde_json::json!({"configuration": name, "front_certified_share_percent": share}),
         );
     }
-    let report = serde_json::json!({"by_speed": rows, "front_certified_share": shares});
+    let allowed = braking_the_follower_allows(bytes)?;
+    let report = serde_json::json!({
+        "by_speed": rows,
+        "front_certified_share": shares,
+        "braking_the_follower_allows": allowed,
+    });
     std::fs::write(
         out.join("gap-policy.json"),
         serde_json::to_string_pretty(&report)?,
@@ -785,4 +790,56 @@ fn gap_policy(out: &std::path::Path) -> Result<()> {
     host_tests::plots::gap_policy(&file, &series, &policies)?;
     println!("{}", file.display());
     Ok(())
+}
+
+/// The hardest braking a follower that reacts like a person allows the ego, at equal speeds
+/// with the follower 0.6, 1 and 2 s behind (`table_format::rear`): R157's careful driver, and a
+/// follower that brakes at the table's follower clip at once after the same 1.15 s. Printed as
+/// a table; returned for the report.
+fn braking_the_follower_allows(bytes: &[u8]) -> Result<serde_json::Value> {
+    use table_format::rear::{allowed_braking, ReactingFollower};
+    let table = table_format::Table::parse(bytes)?;
+    let model = host_tests::humans::HumanModel::of(&table)
+        .ok_or_else(|| anyhow::anyhow!("the default table is not a split table"))?;
+    let careful = ReactingFollower::careful_driver(model.max_speed);
+    let at_clip = ReactingFollower {
+        braking: -model.follower_clip().0,
+        jerk: f32::INFINITY,
+        ..careful
+    };
+    let followers = [
+        (
+            "careful driver (1.15 s, then 7.59 m/s^2 over 0.6 s)",
+            careful,
+        ),
+        ("1.15 s, then the model's clip at once", at_clip),
+    ];
+    let time_gaps = [0.6f32, 1.0, 2.0];
+    let ceiling = 12.0;
+    println!();
+    println!("The hardest ego braking [m/s^2] a follower reacting after 1.15 s allows, at equal speeds (12: any a car can do; -: none):");
+    println!("| speed [m/s] | follower | 0.6 s behind | 1 s behind | 2 s behind |");
+    println!("|---|---|---|---|---|");
+    let mut rows = Vec::new();
+    for v in [10.0f32, 20.0, 30.0] {
+        for (name, f) in followers {
+            let allowed: Vec<Option<f32>> = time_gaps
+                .iter()
+                .map(|&t| allowed_braking(t * v, v, v, &f, 0.0, ceiling))
+                .collect();
+            let cell = |b: &Option<f32>| b.map_or("-".to_string(), |b| format!("{b:.2}"));
+            println!(
+                "| {v:.0} | {name} | {} |",
+                allowed.iter().map(cell).collect::<Vec<_>>().join(" | ")
+            );
+            rows.push(serde_json::json!({
+                "speed_m_s": v,
+                "follower": name,
+                "by_time_gap": time_gaps.iter().zip(&allowed).map(|(t, b)| {
+                    serde_json::json!({"time_gap_s": t, "allowed_braking_m_s2": b})
+                }).collect::<Vec<_>>(),
+            }));
+        }
+    }
+    Ok(serde_json::Value::Array(rows))
 }

@@ -50,6 +50,7 @@ mod error;
 pub mod front;
 mod header;
 pub mod idm;
+pub mod rear;
 pub mod sensing;
 mod table;
 #[cfg(feature = "std")]
