@@ -70,7 +70,7 @@ impl Loop {
     }
 }
 
-/// The engagement jab, fixed: engaged at the gap policy's distance behind a car at
+/// No jab at engagement: engaged at the gap policy's distance behind a car at
 /// 20 m/s, with the actuator reporting that the car neither accelerates nor brakes, the first
 /// 0.8 s stay within ISO 15622's braking jerk at 20 m/s (2.5 m/s^3, 0.05 m/s^2 a period) of
 /// that. Not reported, the band's top (2 m/s^2) must be assumed, and the same engagement

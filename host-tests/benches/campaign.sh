@@ -2,7 +2,7 @@
 # The full safety campaign (a benchmark, not a test): EPISODES per (leader, follower) group, 15
 # groups, 12 of them with humans that keep to the model (1,700 each: 20,400 episodes), over
 # 120 s and over 300 s, with the datasheets' radars at the firmware's declared error bounds
-# (uniform or worst-corner noise, 50-80 ms cycles, 40-100 ms latency with jitter, 10% of the
+# (uniform, corner or corner-switching noise, 50-80 ms cycles, 40-100 ms latency with jitter, 10% of the
 # refreshes lost, bursts of losses up to the covered track age of 1 s) and the actuator at the
 # firmware's declared limits (dead time 100 ms, lag 0.3 s); then the same groups with a leader
 # and with a follower cutting in (outside the model, reported apart). Writes out/campaign-*

@@ -307,15 +307,20 @@ impl SensorModel {
     }
 
     /// The radars of the datasheets (`table_format::sensing`), drawn for one episode: the error inside
-    /// `bounds` (uniform, or the worst corner a third of the time), radar cycles of 50-80 ms,
+    /// `bounds` (uniform a third of the time; else, in equal shares, the worst corner, random
+    /// corners, the ego speed's error or every error switching corners every 20-500 ms: the
+    /// noise that moves the error box's corners the most), radar cycles of 50-80 ms,
     /// latencies of 40-100 ms with up to 30 ms of jitter per channel, 10% of the refreshes lost
     /// at random and bursts of losses (one every 20 s on average) up to `burst_max_us`; the
     /// ego's speed every 20 ms, 0-20 ms old, never lost.
     pub fn datasheet(bounds: SensorBounds, burst_max_us: u32, rng: &mut impl Rng) -> Self {
-        let noise = if rng.random::<f32>() < 1.0 / 3.0 {
-            Noise::WorstCorner
-        } else {
-            Noise::Uniform
+        let period_us = rng.random_range(20_000..=500_000);
+        let noise = match rng.random_range(0..6) {
+            0 | 1 => Noise::Uniform,
+            2 => Noise::WorstCorner,
+            3 => Noise::RandomCorners,
+            4 => Noise::EgoSpeedFlipping { period_us },
+            _ => Noise::CornersFlipping { period_us },
         };
         let mut radar = || Channel {
             cycle_us: rng.random_range(50_000..=80_000),
