@@ -544,6 +544,10 @@ impl<'t> Controller<'t> {
             jerk,
         );
         MeasuredFront {
+            gap,
+            leader_speed: leader_at_m,
+            ego_speed: ego_high,
+            ego_now: ego_now_high,
             value,
             headroom: model.max_ego_speed - (ego_now_high + rise),
             best_headroom: model.max_ego_speed - (ego_now_low + rise),
@@ -575,11 +579,12 @@ impl<'t> Controller<'t> {
         let jerk = c.certificate.brake_jerk;
         let t_m = leader.at_us;
         let sensors = &c.sensors;
-        let gap = sensors.range(leader.track.gap).0;
-        let (ego_low, ego_high) = leader.ego;
-        let leader_at_m = math::max(ego_low + sensors.range_rate(leader.track.rel_speed).0, 0.0);
-        let ego_now = sensors.ego_speed(ego_speed).1;
+        let (ego_low, _) = leader.ego;
         let MeasuredFront {
+            gap,
+            leader_speed: leader_at_m,
+            ego_speed: ego_high,
+            ego_now,
             value,
             headroom,
             best_headroom,
@@ -713,6 +718,14 @@ impl<'t> Controller<'t> {
 
 /// The front half at a measured state ([`Controller::measured_front`]).
 pub(super) struct MeasuredFront {
+    /// The error box's worst corner at the leader's measurement: the least gap, m,
+    pub(super) gap: f32,
+    /// the slowest leader, m/s,
+    pub(super) leader_speed: f32,
+    /// and the fastest ego, m/s.
+    pub(super) ego_speed: f32,
+    /// The fastest ego at its own measurement, m/s.
+    pub(super) ego_now: f32,
     /// The certified front value at the error box's worst corner, m.
     pub(super) value: f32,
     /// The speed headroom at the box's worst corner (the fastest ego), m/s.
