@@ -19,7 +19,7 @@ use table_format::Table;
 use crate::humans::{Follower, HumanModel, Humans, Leader};
 use crate::sim::{ActuatorModel, Car, SensorModel};
 pub use crate::world::{state_of, CutInKind, CutInScore, Half, ModeName, Trace, TracePoint};
-use crate::world::{Start, Tolerances, World};
+use crate::world::{EmergencyCauses, Start, Tolerances, World};
 
 /// The sensors of an episode.
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -94,6 +94,8 @@ pub struct Outcome {
     pub leader_hardest_braking: f32,
     /// Periods whose command broke the jerk limit because the certificate needed it.
     pub emergency_periods: u64,
+    /// Those periods by cause.
+    pub emergencies: EmergencyCauses,
     /// The engagement itself was an emergency ([`crate::world::Score::engaged_in_emergency`]).
     pub engaged_in_emergency: bool,
     /// The initial state `(gap_leader, leader_speed, gap_follower, follower_speed, ego_speed)`.
@@ -138,6 +140,7 @@ impl Outcome {
             iso: s.iso,
             leader_hardest_braking: s.leader_hardest_braking,
             emergency_periods: s.emergency_periods,
+            emergencies: s.emergencies,
             engaged_in_emergency: s.engaged_in_emergency,
             initial,
             initial_margin,
@@ -375,6 +378,8 @@ pub struct GroupSummary {
     /// Periods whose command broke the jerk limit because the certificate needed it
     /// (emergencies), over the group.
     pub emergency_periods: u64,
+    /// Those periods by cause.
+    pub emergencies: EmergencyCauses,
     /// Mean number of leader stops to standstill per episode.
     pub mean_leader_stops: f32,
     /// Starts at standstill (ego speed zero).
@@ -499,6 +504,11 @@ pub fn run_group(
             .map(|(_, o)| o.iso.worst())
             .fold(0.0, f32::max),
         emergency_periods: outcomes.iter().map(|(_, o)| o.emergency_periods).sum(),
+        emergencies: outcomes
+            .iter()
+            .fold(EmergencyCauses::default(), |sum, (_, o)| {
+                sum.add(&o.emergencies)
+            }),
         mean_leader_stops: mean(&|o| o.leader_stops as f32),
         standstill_starts: count(&|o| o.initial[4] == 0.0),
         worst_seed: worst,
@@ -686,6 +696,8 @@ pub struct CampaignTotals {
     pub uncertified_minimum_risk_periods: u64,
     /// Their periods of the certified fallback.
     pub fallback_periods: u64,
+    /// Their emergency periods by cause.
+    pub emergencies: EmergencyCauses,
     /// Cut-ins over every group.
     pub cut_ins: usize,
     /// Cut-ins with an uncertified front not braked at beta within one period.
@@ -795,6 +807,7 @@ pub fn run_campaign(
         totals.certificate_losses += s.certificate_losses;
         totals.uncertified_minimum_risk_periods += s.uncertified_minimum_risk_periods;
         totals.fallback_periods += s.fallback_periods;
+        totals.emergencies = totals.emergencies.add(&s.emergencies);
     }
     for c in groups.iter().filter_map(|s| s.cut_ins) {
         totals.cut_ins += c.episodes;

@@ -408,7 +408,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     println!(
-        "| leader | follower | in model | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | min margin [m] (front, rear) | min gap front [m] | min gap rear [m] | override | uncertified min-risk periods | fallback periods (episodes) | oldest track [s] (front, rear) | leader stops | standstill starts | max jerk [m/s^3] | ISO 15622 held (episodes whose leader braked at most 3.5 m/s^2, engaged without an emergency) | worst ISO ratio there | emergency periods (engagements that were one) |"
+        "| leader | follower | in model | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | min margin [m] (front, rear) | min gap front [m] | min gap rear [m] | override | uncertified min-risk periods | fallback periods (episodes) | oldest track [s] (front, rear) | leader stops | standstill starts | max jerk [m/s^3] | ISO 15622 held (episodes whose leader braked at most 3.5 m/s^2, engaged without an emergency) | worst ISO ratio there | emergency periods: engagement / cut-in / uncertified truth / certified truth (engagements that were one) |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut plotted: Result<()> = Ok(());
@@ -420,7 +420,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
             let l = summary.certificate_losses_by_mode;
             bar.suspend(|| {
                 println!(
-                    "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {} | {} ({}) | {:.2}, {:.2} | {:.1} | {} | {:.0} | {} of {} | {:.2} | {} ({}) |",
+                    "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {} | {} ({}) | {:.2}, {:.2} | {:.1} | {} | {:.0} | {} of {} | {:.2} | {} / {} / {} / {} ({}) |",
                     summary.leader,
                     summary.follower,
                     summary.in_model,
@@ -453,7 +453,10 @@ fn campaign(args: CampaignArgs) -> Result<()> {
                     summary.iso_scope.1,
                     summary.iso_scope.0,
                     summary.iso_worst_in_scope,
-                    summary.emergency_periods,
+                    summary.emergencies.engagement,
+                    summary.emergencies.cut_in,
+                    summary.emergencies.uncertified_truth,
+                    summary.emergencies.certified_truth,
                     summary.engaged_in_emergency
                 )
             });
@@ -519,6 +522,12 @@ fn campaign(args: CampaignArgs) -> Result<()> {
         t.uncertified_minimum_risk_periods,
         t.fallback_periods,
         t.in_model_episodes
+    );
+    let e = &t.emergencies;
+    println!(
+        "emergency periods there: {} at engagement, {} after a cut-in, {} with the true state \
+         uncertified, {} with it certified (made by the measurement or the delays' bounds)",
+        e.engagement, e.cut_in, e.uncertified_truth, e.certified_truth
     );
     if settings.cut_in.is_some() {
         println!(

@@ -150,6 +150,8 @@ pub struct Score {
     /// Periods whose command broke ISO 15622's jerk limit because the certificate needed it
     /// ([`firmware::Command::emergency`]).
     pub emergency_periods: u64,
+    /// The emergency periods by cause, as the world sees it ([`EmergencyCauses`]).
+    pub emergencies: EmergencyCauses,
     /// The worst of ISO 15622's checks after the first second ([`crate::iso::IsoCheck`]).
     pub iso: crate::iso::IsoWorst,
     /// Periods run.
@@ -177,6 +179,38 @@ pub struct Score {
     pub max_track_age: [f32; 2],
     /// What became of a cut-in, if the episode had one.
     pub cut_in: Option<CutInScore>,
+}
+
+/// The emergency periods ([`firmware::Command::emergency`]) by cause, judged with what the world
+/// knows and the firmware does not: the true state. Each period counts once, under the first
+/// cause that holds, in this order.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct EmergencyCauses {
+    /// At engagement: the first period, and the unbroken run of emergencies from it (a start
+    /// whose measured state the firmware cannot certify).
+    pub engagement: u64,
+    /// Within 5 s of a cut-in (outside the model).
+    pub cut_in: u64,
+    /// The true state was not certified along the braking the firmware was committed to when
+    /// the period began: the certificate needed it (a leader beyond its model, or the truth at
+    /// the certified set's edge after an engagement).
+    pub uncertified_truth: u64,
+    /// The true state was certified along that braking: the measurement's error box, its age
+    /// or the delays' bounds made an emergency the truth did not need. The firmware aims at
+    /// none.
+    pub certified_truth: u64,
+}
+
+impl EmergencyCauses {
+    /// The sum of `other` and these.
+    pub fn add(&self, other: &EmergencyCauses) -> EmergencyCauses {
+        EmergencyCauses {
+            engagement: self.engagement + other.engagement,
+            cut_in: self.cut_in + other.cut_in,
+            uncertified_truth: self.uncertified_truth + other.uncertified_truth,
+            certified_truth: self.certified_truth + other.certified_truth,
+        }
+    }
 }
 
 /// A vehicle that cuts in: a new leader ahead of the ego, or a new follower behind it.
@@ -228,6 +262,7 @@ impl Score {
             min_gap_follower: f32::INFINITY,
             periods_by_mode: [0; 5],
             emergency_periods: 0,
+            emergencies: EmergencyCauses::default(),
             iso: crate::iso::IsoWorst::default(),
             periods: 0,
             max_jerk: 0.0,
@@ -323,6 +358,8 @@ pub struct World<'t> {
     /// The road's grade under the ego (rise over run; positive uphill). Outside the model:
     /// the certificate assumes an actuator that tracks the acceleration over ground.
     grade: f32,
+    /// Every period so far was an emergency (an engagement into an uncertified measurement).
+    engagement_run: bool,
 }
 
 impl<'t> World<'t> {
@@ -355,6 +392,7 @@ impl<'t> World<'t> {
             cut_in: None,
             iso: crate::iso::IsoCheck::new(1.0),
             grade: 0.0,
+            engagement_run: false,
         }
     }
 
@@ -562,10 +600,26 @@ impl<'t> World<'t> {
         s.periods_by_mode[mode_index] += 1;
         if command.emergency {
             s.emergency_periods += 1;
-            if self.period == 0 {
-                s.engaged_in_emergency = true;
+            // The true state's margin when the period began, along the braking the firmware
+            // was committed to then (the last period's certificate).
+            let truth_before = self.last.and_then(|(_, c)| c).map(|c| c.margin());
+            let h = self.period_us as f32 * 1e-6;
+            let since_cut_in = self
+                .cut_in
+                .map(|(at, _)| self.period.saturating_sub(at) as f32 * h);
+            let e = &mut s.emergencies;
+            if self.period == 0 || self.engagement_run {
+                s.engaged_in_emergency |= self.period == 0;
+                e.engagement += 1;
+            } else if since_cut_in.is_some_and(|t| t <= 5.0) {
+                e.cut_in += 1;
+            } else if truth_before.is_some_and(|m| m > 0.0) {
+                e.certified_truth += 1;
+            } else {
+                e.uncertified_truth += 1;
             }
         }
+        self.engagement_run = command.emergency && (self.period == 0 || self.engagement_run);
         s.periods += 1;
         if command.mode == Mode::MinimumRisk {
             if command.margin.is_some() {

@@ -235,3 +235,67 @@ fn flipping_corners_in_stop_and_go_make_no_emergency() {
         &emergencies[..emergencies.len().min(5)]
     );
 }
+
+/// The world tells emergencies apart by cause, with the truth the firmware cannot see: an
+/// engagement whose state is not certified, a cut-in, and (with the paper's bang-bang policy,
+/// which jumps to beta whenever its look-ahead refuses) emergencies the true state did not need.
+#[test]
+fn emergencies_are_told_apart_by_cause() {
+    let table = Table::parse(firmware::DEFAULT_TABLE).unwrap();
+    let model = HumanModel::of(&table).unwrap();
+    let world = |config: Config, state: [f32; 5]| {
+        World::new(
+            firmware::DEFAULT_TABLE,
+            config,
+            model,
+            Start {
+                cars: cars(state),
+                engaged_acceleration: 0.0,
+            },
+            SensorModel::IDEAL,
+            ACTUATOR_AT_LIMITS,
+            Tolerances::default(),
+            1,
+        )
+    };
+    let follow = |w: &World<'_>| {
+        let [_, e, f] = w.cars();
+        model.follower_acceleration(f.v, e.v, e.x - f.x, 1.0)
+    };
+    // Engaged 40 m behind a stopped car at 20 m/s: not certified, beta at once.
+    let mut w = world(Config::default(), [40.0, 0.0, 1e3, 20.0, 20.0]);
+    drive(&mut w, 3.0, |w| (0.0, follow(w)));
+    let e = w.score().emergencies;
+    assert!(e.engagement > 0, "{e:?}");
+    assert_eq!((e.cut_in, e.certified_truth), (0, 0), "{e:?}");
+    // Steady following, then a car cuts in 8 m ahead, 5 m/s slower.
+    let probe = firmware::Controller::new(firmware::DEFAULT_TABLE, Config::default());
+    let mut w = world(
+        Config::default(),
+        [probe.desired_gap(20.0), 20.0, 1e3, 20.0, 20.0],
+    );
+    drive(&mut w, 5.0, |w| (0.0, follow(w)));
+    w.cut_in(host_tests::world::CutInKind::Leader, 8.0, -5.0);
+    drive(&mut w, 5.0, |w| (0.0, follow(w)));
+    let e = w.score().emergencies;
+    assert!(e.cut_in > 0, "{e:?}");
+    assert_eq!((e.engagement, e.certified_truth), (0, 0), "{e:?}");
+    // The bang-bang policy behind a leader braking as hard as the model allows, from the gap
+    // policy's distance: its override jumps to beta while the truth is certified.
+    let mut w = world(
+        Config::bang_bang(),
+        [probe.desired_gap(20.0), 20.0, 1e3, 20.0, 20.0],
+    );
+    let seen = drive(&mut w, 20.0, |w| {
+        let leader = w.cars()[0];
+        (if leader.v > 0.0 { -6.0 } else { 0.0 }, follow(w))
+    });
+    let e = w.score().emergencies;
+    assert!(!seen.lost && !seen.collided, "{seen:?}");
+    assert!(e.certified_truth > 0, "{e:?}");
+    assert_eq!(
+        (e.engagement, e.cut_in, e.uncertified_truth),
+        (0, 0, 0),
+        "{e:?}"
+    );
+}
