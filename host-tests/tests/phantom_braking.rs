@@ -298,4 +298,54 @@ fn emergencies_are_told_apart_by_cause() {
         (0, 0, 0),
         "{e:?}"
     );
+    // A leader braking at 9.8 m/s^2, beyond its model's 6, 1 m beyond the certificate's
+    // steady gap: the truth leaves the certified set and the firmware, seeing that not even
+    // the best corner is certified, brakes at beta.
+    let mut w = world(
+        Config::default(),
+        [probe.steady_gap(20.0) + 1.0, 20.0, 1e3, 20.0, 20.0],
+    );
+    drive(&mut w, 10.0, |w| {
+        let leader = w.cars()[0];
+        (if leader.v > 0.0 { -9.8 } else { 0.0 }, follow(w))
+    });
+    let e = w.score().emergencies;
+    assert!(e.uncertified_truth > 0, "{e:?}");
+    assert_eq!(
+        (e.engagement, e.cut_in, e.certified_truth),
+        (0, 0, 0),
+        "{e:?}"
+    );
+}
+
+/// Campaign episodes (a leader braking as hard as its model allows, the datasheet radars) that
+/// braked at beta while the true state was certified: seeds 1, 35, 120 and 179, because the
+/// test of the truth re-applied the delays' hold of the largest recent command (+2 m/s^2, while
+/// the ramp was down at -1.7) from every new measurement; seed 321, because a measurement on
+/// the exact edge of what the leader could have closed to was taken, by `f32` rounding, for a
+/// new vehicle, and the certified chain was dropped.
+#[test]
+fn campaign_episodes_that_braked_with_the_truth_certified_no_longer_do() {
+    use host_tests::campaign::{run_episode, Episode, Sensing};
+    use host_tests::{Follower, Leader};
+    let table = Table::parse(firmware::DEFAULT_TABLE).unwrap();
+    for seed in [1, 35, 120, 179, 321] {
+        let e = Episode {
+            leader: Leader::HardBrake,
+            follower: Follower::IdmFixed,
+            seconds: 20.0,
+            sensors: Sensing::Datasheet,
+            cut_in: None,
+            actuator: ACTUATOR_AT_LIMITS,
+            config: Config::default(),
+            seed,
+        };
+        let o = run_episode(&table, firmware::DEFAULT_TABLE, &e, None).unwrap();
+        assert!(!o.collided && o.certificate_lost.is_none(), "seed {seed}");
+        assert_eq!(
+            o.emergencies.certified_truth, 0,
+            "seed {seed}: {:?}",
+            o.emergencies
+        );
+    }
 }

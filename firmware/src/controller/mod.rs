@@ -48,9 +48,11 @@
 //!
 //! **Emergencies.** A state whose front value or speed headroom is not certified at the error
 //! box's worst corner gets the ramp too when a step since the last engagement or cut-in was
-//! certified and the box's best corner still is, in both (a certified measurement certifies the
-//! true state, and the ramp keeps it certified: measurement noise moves the corner, not the
-//! truth); otherwise (an engagement into an uncertified state, a cut-in, a leader
+//! certified or issued a command that passed the look-ahead, and the box's best corner, with the
+//! ego following the ramp's commands at once, still is (a certified measurement or a passed
+//! look-ahead certifies the true state, and the ramp keeps it certified: measurement noise
+//! moves the corner, not the truth; the best corner bounds the true value from above, so where
+//! it fails the truth is not certified); otherwise (an engagement into an uncertified state, a cut-in, a leader
 //! beyond its model) the command is `beta` at once: an emergency, flagged in
 //! [`Command::emergency`] with the takeover request whenever a command drops faster than
 //! ISO 15622's jerk limit.
@@ -326,8 +328,9 @@ pub struct Controller<'t> {
     /// it).
     overridden_at_us: Option<u64>,
     /// Every step since the last engagement, cut-in or jump to beta kept a certified front
-    /// (measured, or its ramp after one): the true state is certified while the ramp is
-    /// followed, whatever the measurement noise does to the error box's corner.
+    /// (measured, a command that passed the look-ahead, or the ramp after either): the true
+    /// state is certified while the ramp is followed, whatever the measurement noise does to
+    /// the error box's corner.
     front_chain: bool,
     /// The last plausible leader measurement, with the ego's speed interval at its time.
     leader: Option<LeaderMemo>,
@@ -779,6 +782,7 @@ impl<'t> Controller<'t> {
         let front = self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, proposal);
         self.front_chain = (front.value > self.config.certificate.front_margin
             && front.headroom >= 0.0)
+            || front.passed
             || (self.front_chain && !front.jumped);
         self.speed_kept_from_us = if front.headroom >= 0.0 {
             self.speed_kept_from_us.or(Some(t_e))

@@ -9,6 +9,11 @@ use crate::inputs::{Measurement, Track};
 use crate::math;
 use crate::sensing::{self, TrackState};
 
+/// How far below the least range the old vehicle can have closed to a new measurement must be
+/// to be another vehicle, m: `f32` rounding of the bound's few terms at up to 150 m is below
+/// a millimetre.
+const NEW_VEHICLE_ROUNDING: f32 = 0.01;
+
 /// Ego-speed measurements kept to find the one nearest a track's time: 16 periods, 320 ms at
 /// the default period, more than the radar's latency and cycle.
 pub(super) const EGO_HISTORY: usize = 16;
@@ -130,7 +135,8 @@ impl Controller<'_> {
     }
 
     /// Whether a new leader measurement cannot be the vehicle of the last one: its range is
-    /// below the least the old vehicle can have closed to (the old range's lowest, closing at
+    /// below the least the old vehicle can have closed to (by more than
+    /// [`NEW_VEHICLE_ROUNDING`]) (the old range's lowest, closing at
     /// the old range rate's lowest, the relative speed falling at most at the leader's hardest
     /// braking plus the ego's largest acceleration), or a vehicle appears where there was none.
     pub(super) fn is_another_vehicle(
@@ -147,7 +153,11 @@ impl Controller<'_> {
         let closing = model.leader_braking + model.ego.max;
         let least = sensors.range(old.track.gap).0 + sensors.range_rate(old.track.rel_speed).0 * dt
             - 0.5 * closing * dt * dt;
-        sensors.range(new.value.gap).1 < least
+        // Less a centimetre of `f32` rounding: a leader braking as hard as its model allows
+        // while the ego accelerates at the band's top, measured at opposite corners of the
+        // error box, sits exactly on this bound, and a rounding below it took the same car for
+        // a new one (and its certified chain with it).
+        sensors.range(new.value.gap).1 < least - NEW_VEHICLE_ROUNDING
     }
 
     /// Takes this period's follower measurement if it is plausible and newer than the one
