@@ -115,7 +115,15 @@ pub struct Outcome {
     /// know; the same commands before it, the same actuator, the same humans) collides too, so
     /// that the humans alone had made it unavoidable.
     pub cut_in_unavoidable: Option<bool>,
+    /// The same at [`EMERGENCY_BRAKING`]: whether a car braking as hard as it can from the first
+    /// track (through the same actuator) collides too.
+    pub cut_in_unavoidable_at_emergency: Option<bool>,
 }
+
+/// A car's full braking, m/s^2: the emergency authority the cut-in counterfactual is judged at
+/// (dry asphalt, tyre-road friction about 0.8; ad-rss-lib's parameter notes take 8 m/s^2 as the
+/// braking driving schools teach).
+pub const EMERGENCY_BRAKING: f32 = 8.0;
 
 impl Outcome {
     /// The outcome of an episode from its score.
@@ -149,6 +157,7 @@ impl Outcome {
             max_track_age: s.max_track_age,
             cut_in: s.cut_in,
             cut_in_unavoidable: None,
+            cut_in_unavoidable_at_emergency: None,
         }
     }
 }
@@ -288,21 +297,25 @@ pub fn run_episode(
         }
     }
     let mut outcome = Outcome::of(&world, initial, initial_margin);
-    if let (true, Some((mut counterfactual, record))) = (outcome.collided, snapshot) {
-        let beta = model.band_min;
+    if let (true, Some((counterfactual, record))) = (outcome.collided, snapshot) {
         let delivered = outcome
             .cut_in
             .and_then(|c| c.delivered_after)
             .map_or(0, |s| (s / h).round() as usize);
-        let mut collided = false;
-        for (k, (a_leader, a_follower, command)) in record.into_iter().enumerate() {
-            let command = if k < delivered { command } else { beta };
-            if !counterfactual.step_with(a_leader, a_follower, Some(command), None) {
-                collided = true;
-                break;
-            }
-        }
-        outcome.cut_in_unavoidable = Some(collided);
+        // The same world from the cut-in, the same commands until the first track, then
+        // `braking`: whether it collides too.
+        let collides_braking_at = |braking: f32| {
+            let mut world = counterfactual.clone();
+            record
+                .iter()
+                .enumerate()
+                .any(|(k, &(a_leader, a_follower, command))| {
+                    let command = if k < delivered { command } else { braking };
+                    !world.step_with(a_leader, a_follower, Some(command), None)
+                })
+        };
+        outcome.cut_in_unavoidable = Some(collides_braking_at(model.band_min));
+        outcome.cut_in_unavoidable_at_emergency = Some(collides_braking_at(-EMERGENCY_BRAKING));
     }
     Some(outcome)
 }
@@ -421,6 +434,14 @@ pub struct CutInSummary {
     /// Of those, the ones that braking at beta from the cut-in on would not have avoided
     /// either: the humans alone had made them unavoidable.
     pub unavoidable: usize,
+    /// Leader cut-ins UN R157 requires avoiding ([`crate::world::r157_requires_avoiding`]).
+    pub r157_preventable: usize,
+    /// Collisions that braking at [`EMERGENCY_BRAKING`] from the first track would not have
+    /// avoided either.
+    pub unavoidable_at_emergency: usize,
+    /// Collisions that were preventable, by R157's rule or at the emergency authority, and
+    /// were not prevented. The aim is none.
+    pub preventable_not_prevented: usize,
 }
 
 /// Runs `episodes` episodes of one group in parallel, seeds `seed..seed + episodes`.
@@ -563,6 +584,22 @@ fn cut_in_summary(outcomes: &[(u64, Outcome)]) -> CutInSummary {
             .iter()
             .filter(|(o, _)| o.cut_in_unavoidable == Some(true))
             .count(),
+        r157_preventable: cuts
+            .iter()
+            .filter(|(_, c)| c.r157_preventable == Some(true))
+            .count(),
+        unavoidable_at_emergency: cuts
+            .iter()
+            .filter(|(o, _)| o.cut_in_unavoidable_at_emergency == Some(true))
+            .count(),
+        preventable_not_prevented: cuts
+            .iter()
+            .filter(|(o, c)| {
+                o.collided
+                    && (c.r157_preventable == Some(true)
+                        || o.cut_in_unavoidable_at_emergency == Some(false))
+            })
+            .count(),
     }
 }
 
@@ -704,6 +741,11 @@ pub struct CampaignTotals {
     pub cut_ins_braked_late: usize,
     /// Collisions after a cut-in that braking at beta from the first track would have avoided.
     pub cut_in_collisions_avoidable: usize,
+    /// Collisions after a cut-in that braking at [`EMERGENCY_BRAKING`] would not have avoided.
+    pub cut_in_collisions_unavoidable_at_emergency: usize,
+    /// Collisions after a cut-in that were preventable (R157's rule, or at the emergency
+    /// authority) and were not prevented.
+    pub cut_in_collisions_preventable: usize,
 }
 
 /// What a campaign found: `campaign.json`.
@@ -813,6 +855,8 @@ pub fn run_campaign(
         totals.cut_ins += c.episodes;
         totals.cut_ins_braked_late += c.front_uncertified - c.beta_within_one_period;
         totals.cut_in_collisions_avoidable += c.collisions - c.unavoidable;
+        totals.cut_in_collisions_unavoidable_at_emergency += c.unavoidable_at_emergency;
+        totals.cut_in_collisions_preventable += c.preventable_not_prevented;
     }
     CampaignReport {
         episodes_per_group: settings.episodes,

@@ -247,6 +247,24 @@ pub struct CutInScore {
     pub front_certified_at_delivery: Option<bool>,
     /// The hardest command in the 5 s after the cut-in, m/s^2.
     pub hardest_command: f32,
+    /// A leader cut-in that UN R157 requires an automated car to avoid
+    /// ([`r157_requires_avoiding`]), judged at the intrusion; `None` for a follower. The rule
+    /// has the new car keep its speed; the closed loop's new leaders drive by the leader's
+    /// model afterwards, braking too.
+    pub r157_preventable: Option<bool>,
+}
+
+/// The deceleration R157's cut-in rule assumes, m/s^2.
+const R157_CUT_IN_DECELERATION: f32 = 6.0;
+
+/// UN R157's cut-in rule: a car cutting in `gap` metres ahead with the ego closing on it at
+/// `closing_speed` (m/s; `v_ego - v_new`) must be avoided when its lateral motion was visible
+/// for at least 0.72 s and the time to collision at the lane intrusion exceeds
+/// `closing_speed / (2 * 6 m/s^2) + 0.35 s`. The closed loop's cut-ins have no lateral phase:
+/// the cut-in is the intrusion, and its lateral motion is taken as visible long enough.
+pub fn r157_requires_avoiding(gap: f32, closing_speed: f32) -> bool {
+    closing_speed <= 0.0
+        || gap / closing_speed > closing_speed / (2.0 * R157_CUT_IN_DECELERATION) + 0.35
 }
 
 impl Score {
@@ -427,6 +445,8 @@ impl<'t> World<'t> {
             beta_periods: None,
             front_certified_at_delivery: None,
             hardest_command: f32::INFINITY,
+            r157_preventable: (kind == CutInKind::Leader)
+                .then(|| r157_requires_avoiding(gap, -rel_speed)),
         });
     }
 

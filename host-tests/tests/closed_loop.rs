@@ -192,3 +192,49 @@ fn sensors_within_their_declared_bounds_keep_the_certificate_and_beyond_them_are
         "errors beyond the declared bounds were never caught"
     );
 }
+
+/// UN R157's cut-in rule, by hand: 10 m ahead closing at 5 m/s gives 2 s to collision against
+/// `5 / 12 + 0.35 = 0.77 s` (to be avoided); 5 m closing at 10 m/s gives 0.5 s against 1.18 s
+/// (not required); a car pulling away is always to be avoided.
+#[test]
+fn r157s_cut_in_rule() {
+    use host_tests::world::r157_requires_avoiding;
+    assert!(r157_requires_avoiding(10.0, 5.0));
+    assert!(!r157_requires_avoiding(5.0, 10.0));
+    assert!(r157_requires_avoiding(5.0, -1.0));
+    // The boundary: 0.767 s at 5 m/s is 3.83 m.
+    assert!(r157_requires_avoiding(3.84, 5.0) && !r157_requires_avoiding(3.82, 5.0));
+}
+
+/// Leader cut-ins are scored three ways: against braking at beta from the first track (the
+/// humans alone made the collision unavoidable), at the emergency authority, and by R157's rule;
+/// a collision is preventable and not prevented where either of the last two says it could have
+/// been avoided.
+#[test]
+fn cut_in_collisions_are_scored_at_the_emergency_authority_and_by_r157() {
+    let t = table();
+    let template = Episode {
+        leader: Leader::StopAndGo,
+        follower: Follower::IdmFixed,
+        seconds: 40.0,
+        sensors: late(),
+        cut_in: Some(host_tests::world::CutInKind::Leader),
+        actuator: ACTUATOR_AT_LIMITS,
+        config: Config::default(),
+        seed: 3,
+    };
+    let (s, outcomes) = run_group(&t, firmware::DEFAULT_TABLE, template, 120, &|| {});
+    let c = s.cut_ins.expect("cut-ins were scored");
+    println!("{c:?}");
+    assert!(c.episodes > 100 && c.collisions > 0, "{c:?}");
+    for (_, o) in &outcomes {
+        let Some(cut) = o.cut_in else { continue };
+        assert_eq!(o.cut_in_unavoidable.is_some(), o.collided);
+        assert_eq!(o.cut_in_unavoidable_at_emergency.is_some(), o.collided);
+        assert!(cut.r157_preventable.is_some());
+    }
+    // Braking at 8 m/s^2 avoids some of what 3.5 could not.
+    assert!(c.unavoidable_at_emergency < c.collisions, "{c:?}");
+    assert!(c.preventable_not_prevented >= c.collisions - c.unavoidable_at_emergency);
+    assert!(c.preventable_not_prevented <= c.collisions);
+}
