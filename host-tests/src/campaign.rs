@@ -147,7 +147,7 @@ impl Outcome {
             leader_stops: s.leader_stops,
             iso: s.iso,
             leader_hardest_braking: s.leader_hardest_braking,
-            emergency_periods: s.emergency_periods,
+            emergency_periods: s.emergencies.total(),
             emergencies: s.emergencies,
             engaged_in_emergency: s.engaged_in_emergency,
             initial,

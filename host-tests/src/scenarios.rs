@@ -720,7 +720,7 @@ pub fn run(
         iso: s.iso,
         mode_switches: switches,
         override_periods: s.periods_by_mode[1],
-        emergency_periods: s.emergency_periods,
+        emergency_periods: s.emergencies.total(),
         takeover_periods,
         min_gap_leader_m: s.min_gap_leader,
         check: scenario.check,

@@ -147,10 +147,8 @@ pub struct Score {
     pub min_gap_follower: f32,
     /// Periods per firmware mode: nominal, override, minimum risk, uncertified, standby.
     pub periods_by_mode: [u64; 5],
-    /// Periods whose command broke ISO 15622's jerk limit because the certificate needed it
-    /// ([`firmware::Command::emergency`]).
-    pub emergency_periods: u64,
-    /// The emergency periods by cause, as the world sees it ([`EmergencyCauses`]).
+    /// The periods whose command broke ISO 15622's jerk limit because the certificate needed it
+    /// ([`firmware::Command::emergency`]), by cause as the world sees it.
     pub emergencies: EmergencyCauses,
     /// The worst of ISO 15622's checks after the first second ([`crate::iso::IsoCheck`]).
     pub iso: crate::iso::IsoWorst,
@@ -202,6 +200,11 @@ pub struct EmergencyCauses {
 }
 
 impl EmergencyCauses {
+    /// Every emergency period, whatever its cause.
+    pub fn total(&self) -> u64 {
+        self.engagement + self.cut_in + self.uncertified_truth + self.certified_truth
+    }
+
     /// The sum of `other` and these.
     pub fn add(&self, other: &EmergencyCauses) -> EmergencyCauses {
         EmergencyCauses {
@@ -279,7 +282,6 @@ impl Score {
             min_gap_leader: f32::INFINITY,
             min_gap_follower: f32::INFINITY,
             periods_by_mode: [0; 5],
-            emergency_periods: 0,
             emergencies: EmergencyCauses::default(),
             iso: crate::iso::IsoWorst::default(),
             periods: 0,
@@ -619,7 +621,6 @@ impl<'t> World<'t> {
         };
         s.periods_by_mode[mode_index] += 1;
         if command.emergency {
-            s.emergency_periods += 1;
             // The true state's margin when the period began, along the braking the firmware
             // was committed to then (the last period's certificate).
             let truth_before = self.last.and_then(|(_, c)| c).map(|c| c.margin());
