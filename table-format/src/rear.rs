@@ -24,12 +24,34 @@
 //! form is the least gap over all of them. The property tests check it against brute-force
 //! integration, and that an ego whose braking builds up at a finite jerk keeps a larger gap.
 //!
-//! # What it does not claim
-//! It is the gap from one moment on, for one braking started at that moment: the follower's
-//! reaction clock starts when the ego's braking does. An ego that brakes, releases and brakes
-//! again restarts nothing in a real driver's head, and nothing here argues invariance across
-//! such a sequence; a certificate built on it must carry the braking's start in its state (as
-//! the firmware's braking ramp carries its own start).
+//! # The reaction clock, and why a certificate built on it is invariant
+//! The follower reacts to a braking that it has seen for `reaction_time`: [`rear_gap_after`]
+//! takes how long the ego has been braking (`braking_for`, from the moment its braking took
+//! effect: its brake lights, so a command's dead time is not part of it) and evaluates the
+//! model from the middle of the follower's reaction, or from inside its build-up. Write
+//! `G(t) = rear_gap_after(state(t), b, t - t_0)` for an ego that has braked at most at `b` since
+//! `t_0`, and `X` for the model's extremal pair from `state(t_0)` (the ego braking at `b` at
+//! once, the follower at its model's bound). Then, for every `t >= t_0`:
+//! - `X`'s continuation from `X(t)`, evaluated with the clock at `t - t_0`, is `X` itself (the
+//!   model is written in absolute time from `t_0`), so `G` evaluated at `X(t)` is the least gap
+//!   of `X` after `t`, which is at least its least gap after `t_0`: `G(t_0)`;
+//! - the true state at `t` has a gap at least `X(t)`'s, an ego at least as fast and a follower
+//!   no faster (each car covered, and kept, at least the extremal's margin at every instant),
+//!   and the closed form is non-decreasing in the gap and the ego's speed and non-increasing in
+//!   the follower's;
+//!
+//! so `G(t) >= G(t_0)` along every admissible episode while the braking lasts: a state
+//! certified by `G` stays certified, and its gap stays above `G(t_0)`. The property test
+//! `never_decreases_along_an_admissible_braking` checks it by integrating random admissible
+//! episodes.
+//!
+//! A **release** ends the braking, and the model then assumes nothing of the follower but its
+//! `reaction_acceleration`: the clock restarts at zero with the next braking (a fresh reaction,
+//! the least the follower can be credited with), and nothing makes `G` invariant across the
+//! release. A controller built on it may release only into a state that the fresh clock
+//! certifies at the braking it will need next: an authority is kept until a lower one
+//! certifies. The property test `a_release_restarts_the_clock` checks that the restarted
+//! clock still bounds the gap from below after a release in which the follower accelerated.
 
 use crate::front::{front_value, FrontModel};
 
@@ -88,12 +110,37 @@ pub fn rear_gap(
     ego_braking: f32,
     follower: &ReactingFollower,
 ) -> f32 {
-    front_value(
-        gap,
-        ego_speed,
-        follower_speed,
-        &follower.as_car_behind(ego_braking),
-    )
+    rear_gap_after(gap, ego_speed, follower_speed, ego_braking, 0.0, follower)
+}
+
+/// [`rear_gap`] for an ego that has been braking for `braking_for` seconds (module docs: the
+/// reaction clock): the follower's reaction already that far under way. `braking_for` at or
+/// below zero, or NaN, is a braking that starts now (the least credit); at or beyond the
+/// reaction and the follower's build-up, the follower is braking at its level. Non-decreasing
+/// in `braking_for`.
+pub fn rear_gap_after(
+    gap: f32,
+    ego_speed: f32,
+    follower_speed: f32,
+    ego_braking: f32,
+    braking_for: f32,
+    follower: &ReactingFollower,
+) -> f32 {
+    // (`>` is false for NaN: a NaN clock gets no credit.)
+    let elapsed = if braking_for > 0.0 { braking_for } else { 0.0 };
+    let mut car_behind = follower.as_car_behind(ego_braking);
+    let left = follower.reaction_time - elapsed;
+    if left > 0.0 {
+        car_behind.response_time = left;
+    } else {
+        car_behind.response_time = 0.0;
+        if follower.jerk.is_finite() {
+            // Into the build-up by `-left` seconds; past its end the ramp's start is below
+            // `-braking` and the closed form brakes at the level at once.
+            car_behind.ramp_from = follower.reaction_acceleration + follower.jerk * left;
+        }
+    }
+    front_value(gap, ego_speed, follower_speed, &car_behind)
 }
 
 /// The hardest braking in `[0, ceiling]` (m/s^2) the `follower` allows the ego: the largest
@@ -239,6 +286,243 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The extremal pair by brute force (f64, 0.1 ms steps), the ego braking at `b` at once,
+    /// from `(gap, ve, vf)`: the state at `split` seconds, and the least gap from `split` on.
+    fn extremal_after(
+        (gap, ve, vf): (f64, f64, f64),
+        b: f64,
+        f: &ReactingFollower,
+        split: f64,
+    ) -> ((f64, f64, f64), f64) {
+        let dt = 1e-4;
+        let (mut g, mut ve, mut vf, mut t) = (gap, ve.clamp(0.0, f64::from(f.max_speed)), vf, 0.0);
+        let (rho, ar) = (
+            f64::from(f.reaction_time),
+            f64::from(f.reaction_acceleration),
+        );
+        let (bf, jf) = (f64::from(f.braking), f64::from(f.jerk));
+        let mut at_split = None;
+        let mut least = f64::INFINITY;
+        loop {
+            if at_split.is_none() && t >= split - 0.5 * dt {
+                at_split = Some((g, ve, vf));
+            }
+            if at_split.is_some() {
+                least = least.min(g);
+                if (ve <= 0.0 && vf <= 0.0 && t > rho) || t > 200.0 {
+                    break;
+                }
+            }
+            let mid = t + 0.5 * dt;
+            let af = if mid < rho {
+                ar
+            } else {
+                (ar - jf * (mid - rho)).max(-bf)
+            };
+            let ne = (ve - b * dt).max(0.0);
+            let nf = (vf + af * dt).max(0.0);
+            g += 0.5 * (ve + ne) * dt - 0.5 * (vf + nf) * dt;
+            ve = ne;
+            vf = nf;
+            t += dt;
+        }
+        (at_split.unwrap_or((g, ve, vf)), least)
+    }
+
+    /// One admissible episode by integration (1 ms steps) for `seconds`: the ego's
+    /// acceleration drawn in `[-b, 1]` while it brakes (`[0, 1]` while released), the
+    /// follower's at most `reaction_acceleration` until `reaction_time` into each braking and
+    /// at most its build-up after, at least -9 m/s^2 (it may brake harder than its model),
+    /// each held for 50 ms. `released` says when the ego is not braking. Calls `visit` every
+    /// 10 ms with the state and the clock; returns the least gap.
+    #[allow(clippy::too_many_arguments)]
+    fn admissible_episode(
+        (gap, ve, vf): (f32, f32, f32),
+        b: f32,
+        f: &ReactingFollower,
+        draws: &[(f32, f32)],
+        released: impl Fn(f32) -> bool,
+        seconds: f32,
+        mut visit: impl FnMut(f32, (f32, f32, f32), f32),
+    ) -> f32 {
+        let dt = 1e-3f64;
+        let (mut g, mut e, mut fv) = (f64::from(gap), f64::from(ve), f64::from(vf));
+        let mut clock = 0.0f64;
+        let mut least = g;
+        let steps = (f64::from(seconds) / dt).round() as usize;
+        for k in 0..steps {
+            let t = k as f64 * dt;
+            if k % 10 == 0 {
+                visit(t as f32, (g as f32, e as f32, fv as f32), clock as f32);
+            }
+            let (ue, uf) = draws[(k / 50) % draws.len()];
+            let off = released(t as f32);
+            let ae = if off {
+                f64::from(ue.abs())
+            } else if ue < 0.0 {
+                f64::from(ue * b)
+            } else {
+                f64::from(ue)
+            };
+            let bound = if off || clock < f64::from(f.reaction_time) {
+                f64::from(f.reaction_acceleration)
+            } else if f.jerk.is_finite() {
+                (f64::from(f.reaction_acceleration)
+                    - f64::from(f.jerk) * (clock - f64::from(f.reaction_time)))
+                .max(-f64::from(f.braking))
+            } else {
+                -f64::from(f.braking)
+            };
+            // `uf` in [0, 1] picks between -9 and the bound.
+            let af = bound - f64::from(uf) * (bound + 9.0).max(0.0);
+            let ne = (e + ae * dt).clamp(0.0, f64::from(f.max_speed));
+            let nf = (fv + af * dt).max(0.0);
+            g += 0.5 * (e + ne) * dt - 0.5 * (fv + nf) * dt;
+            e = ne;
+            fv = nf;
+            clock = if off { 0.0 } else { clock + dt };
+            least = least.min(g);
+        }
+        least as f32
+    }
+
+    fn draws() -> impl Strategy<Value = Vec<(f32, f32)>> {
+        proptest::collection::vec((-1.0f32..1.0, 0.0f32..1.0), 40)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        /// The clock mid-reaction or mid-build-up against brute force: the extremal pair's state
+        /// `split` seconds into the braking, evaluated with the clock at `split`, gives the
+        /// extremal's least gap from then on.
+        #[test]
+        fn the_clock_matches_brute_force_from_inside_the_reaction(
+            gap in 0.0f32..120.0, ve in 0.0f32..35.0, vf in 0.0f32..35.0,
+            b in 0.5f32..10.0, rho in 0.0f32..2.0, ar in -1.0f32..2.0,
+            bf in 3.0f32..9.0, jf in 5.0f32..30.0, split in 0.0f64..3.0,
+        ) {
+            let f = follower(rho, ar, bf, jf);
+            let (state, least) = extremal_after(
+                (f64::from(gap), f64::from(ve), f64::from(vf)), f64::from(b), &f, split,
+            );
+            let exact = rear_gap_after(
+                state.0 as f32, state.1 as f32, state.2 as f32, b, split as f32, &f,
+            );
+            prop_assert!(
+                (f64::from(exact) - least).abs() < 0.01 * (1.0 + least.abs() * 1e-3),
+                "{} vs {} at {:?}", exact, least, state
+            );
+        }
+
+        /// More time braking never lowers the value.
+        #[test]
+        fn the_value_never_falls_as_the_clock_runs(
+            gap in 0.0f32..120.0, ve in 0.0f32..35.0, vf in 0.0f32..35.0,
+            b in 0.5f32..10.0, rho in 0.0f32..2.0, t in 0.0f32..3.0, dt in 0.0f32..1.0,
+        ) {
+            let f = follower(rho, 0.5, 7.59, 12.65);
+            let early = rear_gap_after(gap, ve, vf, b, t, &f);
+            let late = rear_gap_after(gap, ve, vf, b, t + dt, &f);
+            prop_assert!(late >= early - 1e-3 * (1.0 + early.abs()), "{} then {}", early, late);
+        }
+
+        /// The invariance (module docs): along every admissible episode of a braking that
+        /// lasts, the value with the clock never falls below its start by more than rounding,
+        /// and the gap never falls below it.
+        #[test]
+        fn never_decreases_along_an_admissible_braking(
+            gap in 0.0f32..80.0, ve in 0.0f32..35.0, vf in 0.0f32..35.0,
+            b in 0.5f32..10.0, rho in 0.0f32..2.0, ar in -1.0f32..2.0,
+            draws in draws(),
+        ) {
+            let f = follower(rho, ar, 7.59, 12.65);
+            let start = rear_gap_after(gap, ve, vf, b, 0.0, &f);
+            let tolerance = 2e-3 * (1.0 + start.abs());
+            let mut visited = Vec::new();
+            let least = admissible_episode((gap, ve, vf), b, &f, &draws, |_| false, 8.0,
+                |_, (g, e, v), clock| visited.push((g, rear_gap_after(g, e, v, b, clock, &f))));
+            let low = visited.iter().map(|p| p.1).fold(f32::INFINITY, f32::min);
+            prop_assert!(low >= start - tolerance, "{} after {}", low, start);
+            prop_assert!(least >= start - tolerance, "gap {} below {}", least, start);
+            // And each value bounds the gaps after it (the clock gives no more credit than the
+            // follower's reaction has earned).
+            let mut after = f32::INFINITY;
+            for &(g, value) in visited.iter().rev() {
+                after = after.min(g);
+                prop_assert!(after >= value - 2e-3 * (1.0 + value.abs()) - 0.02, "gap {} below {}", after, value);
+            }
+        }
+
+        /// A release restarts the clock: after a release in which the follower accelerated at
+        /// its bound, the fresh clock still bounds the rest of the episode's gap from below
+        /// (a clock carried across the release would not; see the next test).
+        #[test]
+        fn a_release_restarts_the_clock(
+            gap in 0.0f32..80.0, ve in 0.0f32..35.0, vf in 0.0f32..35.0,
+            b in 0.5f32..10.0, rho in 0.3f32..2.0,
+            release in 0.2f32..3.0, length in 0.1f32..2.0,
+            draws in draws(),
+        ) {
+            let f = follower(rho, 1.0, 7.59, 12.65);
+            let again = release + length;
+            let mut fresh = None;
+            let mut after = f32::INFINITY;
+            admissible_episode((gap, ve, vf), b, &f, &draws,
+                |t| t >= release && t < again, 10.0,
+                |t, (g, e, v), clock| {
+                    if t >= again {
+                        if fresh.is_none() {
+                            fresh = Some(rear_gap_after(g, e, v, b, clock, &f));
+                        }
+                        after = after.min(g);
+                    }
+                });
+            if let Some(fresh) = fresh {
+                prop_assert!(after >= fresh - 2e-3 * (1.0 + fresh.abs()), "gap {} below {}", after, fresh);
+            }
+        }
+    }
+
+    /// Why the clock must restart: carried across a release, it credits the follower with a
+    /// reaction to a braking it no longer sees. Both at 30 m/s, 20 m apart; the ego brakes at
+    /// 6 m/s^2 for 1.5 s, releases for 2 s, then brakes again. A follower that accelerates at
+    /// +1 m/s^2 while the ego does not brake, and reacts 1.15 s after the second braking,
+    /// comes closer than the value with the old clock (3.5 s) promises; the fresh clock's value
+    /// is below what it does.
+    #[test]
+    fn a_clock_carried_across_a_release_is_unsound() {
+        let f = follower(1.15, 1.0, 7.59, 12.65);
+        let b = 6.0;
+        let (release, again) = (1.5f32, 3.5f32);
+        let mut at_again = None;
+        let mut after = f32::INFINITY;
+        // The ego brakes at `b` while braking (draw -1) and holds its speed while released
+        // (draw 0 is no acceleration); the follower at its bound (draw 0).
+        let draws = [(-1.0f32, 0.0f32)];
+        admissible_episode(
+            (120.0, 30.0, 30.0),
+            b,
+            &f,
+            &draws,
+            |t| t >= release && t < again,
+            12.0,
+            |t, state, clock| {
+                if t >= again {
+                    at_again.get_or_insert((state, clock));
+                    after = after.min(state.0);
+                }
+            },
+        );
+        let ((g, e, v), clock) = at_again.unwrap();
+        assert!(clock < 0.011, "{clock}");
+        let carried = rear_gap_after(g, e, v, b, again, &f);
+        let fresh = rear_gap_after(g, e, v, b, clock, &f);
+        assert!(after > 0.0, "{after}");
+        assert!(carried > after + 1.0, "carried {carried}, gap {after}");
+        assert!(fresh <= after + 0.05, "fresh {fresh}, gap {after}");
     }
 
     /// A follower at the IDM's closest time gap (1 s: 30 m + 2 m at 30 m/s), both at 30 m/s.
