@@ -45,7 +45,7 @@ pub mod math;
 pub mod sensing;
 
 pub use controller::{
-    Certificate, CertificateConfig, Certifier, Command, Config, Controller, DriverError,
+    Braking, Certificate, CertificateConfig, Certifier, Command, Config, Controller, DriverError,
     DriverRequest, DriverState, Event, FallbackConfig, Fault, LawConfig, Mode, OverridePolicy,
     PlantConfig, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
 };

@@ -285,6 +285,39 @@ fn the_gap_policy_keeps_room_over_the_certificate() {
     assert!((15.0..30.0).contains(&cost), "{cost}");
 }
 
+/// The steady gap for another leader or braking, against figures worked out by hand: with the
+/// ego braking no harder than either leader, both cars stop before the closest point is passed,
+/// so the gap needed against a leader at 9.8 m/s^2 exceeds the one at 6 m/s^2 by what the
+/// leader no longer covers, `v_L^2 / 2 (1/6 - 1/9.8)` (for the worst corner's leader speed
+/// `v_L`), scaled by the range error's `1 + r`; the table's own model gives `steady_gap`; a
+/// harder braking needs less room.
+#[test]
+fn the_steady_gap_for_another_leader_or_braking_matches_the_figures_by_hand() {
+    let config = Config::default();
+    let c = Controller::new(DEFAULT_TABLE, config);
+    let comfort = firmware::Braking {
+        level: 3.5,
+        jerk: config.certificate.brake_jerk,
+    };
+    let sensors = config.sensors;
+    for v in [10.0f32, 20.0, 30.0] {
+        assert_eq!(c.steady_gap_with(v, 6.0, comfort), c.steady_gap(v));
+        let v_l = sensors.ego_speed(v).0 + sensors.range_rate(0.0).0;
+        let by_hand =
+            (1.0 + sensors.error.range_relative) * v_l * v_l / 2.0 * (1.0 / 6.0 - 1.0 / 9.8);
+        let more = c.steady_gap_with(v, 9.8, comfort) - c.steady_gap(v);
+        assert!(
+            (more - by_hand).abs() < 1e-3 * (1.0 + by_hand),
+            "{v}: {more} vs {by_hand}"
+        );
+        let emergency = firmware::Braking {
+            level: 8.0,
+            jerk: 12.0,
+        };
+        assert!(c.steady_gap_with(v, 9.8, emergency) < c.steady_gap_with(v, 9.8, comfort) - 10.0);
+    }
+}
+
 /// An engagement from standby into a state the certificate does not certify (here a stopped
 /// car 30 m ahead at 25 m/s) is refused with its reason, and the car stays in standby: engaged,
 /// the certificate would have nothing to keep and the first step would brake at beta. The

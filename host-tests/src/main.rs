@@ -795,10 +795,12 @@ fn gap_policy(out: &std::path::Path) -> Result<()> {
         );
     }
     let allowed = braking_the_follower_allows(bytes)?;
+    let authorities = gaps_with_two_authorities(bytes, out)?;
     let report = serde_json::json!({
         "by_speed": rows,
         "front_certified_share": shares,
         "braking_the_follower_allows": allowed,
+        "two_authorities": authorities,
     });
     std::fs::write(
         out.join("gap-policy.json"),
@@ -859,5 +861,246 @@ fn braking_the_follower_allows(bytes: &[u8]) -> Result<serde_json::Value> {
             }));
         }
     }
+    Ok(serde_json::Value::Array(rows))
+}
+
+/// The car's full braking as the vehicle's emergency authority, m/s^2, and its build-up,
+/// m/s^3: 8 m/s^2 on dry asphalt (friction about 0.8), reached at UN R157's careful driver's
+/// rate (0.774 g over 0.6 s, about 12.65 m/s^3; rounded down to 12).
+const EMERGENCY: firmware::Braking = firmware::Braking {
+    level: host_tests::campaign::EMERGENCY_BRAKING,
+    jerk: 12.0,
+};
+
+/// What the certified steady gap and the gap policy would be with two braking authorities:
+/// the comfort band as today and the emergency braking ([`EMERGENCY`]), as hard as a follower
+/// that reacts like a person allows (`table_format::rear`), against leaders braking at 6 and at
+/// 9.8 m/s^2. Everything else is the deployed firmware's argument: its delays, sensor errors
+/// and margins ([`firmware::Controller::steady_gap_with`]). The follower sits at the IDM's
+/// jam distance plus its time gap behind, at the ego's speed, and the braking it allows is
+/// taken where the firmware would see it: at the worst corner of the error box around the worst
+/// measurement of it, with the track as old as the radar delivers it and the period and the
+/// brake's dead time before the braking shows. Printed, drawn to `gap-policy-authorities.png`
+/// and returned for the report.
+fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serde_json::Value> {
+    use table_format::rear::{allowed_braking, ReactingFollower};
+    let table = table_format::Table::parse(bytes)?;
+    let model = host_tests::humans::HumanModel::of(&table)
+        .ok_or_else(|| anyhow::anyhow!("the default table is not a split table"))?;
+    let config = firmware::Config::default();
+    let table_format::FollowerModel::Idm { idm, .. } = model.follower;
+    let jam = idm.jam_distance;
+    let clip = -model.follower_clip().0;
+    let careful = ReactingFollower::careful_driver(model.max_speed);
+    let followers = [
+        (
+            "instant (the paper's IDM at its clip)",
+            ReactingFollower {
+                reaction_time: 0.0,
+                braking: clip,
+                jerk: f32::INFINITY,
+                ..careful
+            },
+        ),
+        (
+            "1.15 s, then the IDM's clip at once",
+            ReactingFollower {
+                braking: clip,
+                jerk: f32::INFINITY,
+                ..careful
+            },
+        ),
+        (
+            "R157's careful driver (1.15 s, 7.59 m/s^2 over 0.6 s)",
+            careful,
+        ),
+    ];
+    let comfort = firmware::Controller::new(bytes, config);
+    anyhow::ensure!(comfort.table().is_some(), "the default table is refused");
+    let comfort_braking = firmware::Braking {
+        level: -model.band_min,
+        jerk: config.certificate.brake_jerk,
+    };
+    let sensors = config.sensors;
+    let error = sensors.error;
+    // Before the ego's braking shows: the rear track's age, a period, the brake's dead time.
+    let delay = (sensors.latency_us
+        + sensors.cycle_us
+        + config.period_us
+        + config.plant.actuator_dead_time_us) as f32
+        * 1e-6;
+    // The braking a follower `time_gap` behind allows at `v`: the worst corner of the box
+    // around the worst measurement of the true state. The ego's braking shows at the latest
+    // `delay` after the measurement and the follower reacts `reaction_time` after that, so the
+    // follower's reaction is taken `delay` longer, with the ego braking up to the level from the
+    // measurement on (an ego that brakes later covers more).
+    let allows = |f: &ReactingFollower, time_gap: f32, v: f32| -> Option<f32> {
+        let gap = jam + time_gap * v;
+        let measured = gap - (error.range + error.range_relative * gap);
+        let gap_low = error.range(measured).0;
+        let ego_measured = v - (error.ego_speed + error.ego_speed_relative * v);
+        let ego_low = error.ego_speed(ego_measured).0;
+        let ego_high = error
+            .ego_speed(v + error.ego_speed + error.ego_speed_relative * v)
+            .1;
+        let follower_high = ego_high + 2.0 * error.range_rate;
+        let later = ReactingFollower {
+            reaction_time: f.reaction_time + delay,
+            ..*f
+        };
+        allowed_braking(
+            gap_low,
+            ego_low,
+            follower_high,
+            &later,
+            config.certificate.rear_margin,
+            EMERGENCY.level,
+        )
+    };
+    let speeds = [10.0f32, 20.0, 30.0];
+    let follower_gaps = [0.6f32, 1.0, 2.0];
+    let settings: Vec<f32> = (0..firmware::controller::TIME_GAP_SETTINGS)
+        .map(|k| config.time_gap(k as u8))
+        .collect();
+    let mut by_setting = Vec::new();
+    for setting in 0..settings.len() {
+        let mut law = config.law;
+        law.time_gap_setting = setting as u8;
+        by_setting.push(firmware::Controller::new(
+            bytes,
+            firmware::Config { law, ..config },
+        ));
+    }
+    let cell = |g: f32| {
+        if g.is_finite() {
+            format!("{g:.1}")
+        } else {
+            "-".to_string()
+        }
+    };
+    println!();
+    println!("Two braking authorities: comfort (the band, {:.1} m/s^2 at {:.1} m/s^3) and emergency ({:.1} m/s^2 at {:.1} m/s^3) as far as the follower allows; the certified steady gap and the gap policy at the settings {} s [m] (-: no braking certified):", comfort_braking.level, comfort_braking.jerk, EMERGENCY.level, EMERGENCY.jerk, settings.iter().map(|t| format!("{t}")).collect::<Vec<_>>().join(" / "));
+    println!("| leader [m/s^2] | speed [m/s] | follower | behind [s] | allowed braking [m/s^2] | certified steady gap [m] | gap policy [m] |");
+    println!("|---|---|---|---|---|---|---|");
+    let mut rows = Vec::new();
+    for leader in [6.0f32, 9.8] {
+        for &v in &speeds {
+            let mut report =
+                |follower: &str, behind: Option<f32>, braking: Option<firmware::Braking>| {
+                    let steady =
+                        braking.map_or(f32::INFINITY, |b| comfort.steady_gap_with(v, leader, b));
+                    let policy: Vec<f32> = by_setting
+                        .iter()
+                        .map(|c| {
+                            if steady.is_finite() {
+                                c.desired_gap_over(v, steady)
+                            } else {
+                                f32::INFINITY
+                            }
+                        })
+                        .collect();
+                    println!(
+                        "| {leader} | {v:.0} | {follower} | {} | {} | {} | {} |",
+                        behind.map_or("-".to_string(), |t| format!("{t}")),
+                        braking.map_or("-".to_string(), |b| format!("{:.2}", b.level)),
+                        cell(steady),
+                        policy
+                            .iter()
+                            .map(|&g| cell(g))
+                            .collect::<Vec<_>>()
+                            .join(" / ")
+                    );
+                    rows.push(serde_json::json!({
+                    "leader_braking_m_s2": leader,
+                    "speed_m_s": v,
+                    "follower": follower,
+                    "follower_time_gap_s": behind,
+                    "braking_m_s2": braking.map(|b| b.level),
+                    "braking_jerk_m_s3": braking.map(|b| b.jerk),
+                    "certified_steady_gap_m": steady.is_finite().then_some(steady),
+                    "gap_policy_m": settings.iter().zip(&policy).map(|(t, g)| {
+                        serde_json::json!({"time_gap_s": t, "gap_m": g.is_finite().then_some(*g)})
+                    }).collect::<Vec<_>>(),
+                }));
+                };
+            report(
+                "comfort band only (today's certificate)",
+                None,
+                Some(comfort_braking),
+            );
+            report("none", None, Some(EMERGENCY));
+            for (name, f) in &followers {
+                for &t in &follower_gaps {
+                    let braking =
+                        allows(f, t, v).map(|level| firmware::Braking { level, ..EMERGENCY });
+                    report(name, Some(t), braking);
+                }
+            }
+        }
+    }
+    // The plot: leaders at 6 and 9.8 m/s^2 in rows; no follower, then the IDM follower that
+    // reacts after 1.15 s at 0.6, 1 and 2 s behind, in columns.
+    let speeds: Vec<f32> = (0..=70).map(|k| k as f32 * 0.5).collect();
+    let mut panels = Vec::new();
+    let idm_reacting = followers[1].1;
+    for leader in [6.0f32, 9.8] {
+        let columns = [None, Some(0.6f32), Some(1.0), Some(2.0)];
+        for behind in columns {
+            let braking_at = |v: f32| match behind {
+                None => Some(EMERGENCY),
+                Some(t) => allows(&idm_reacting, t, v)
+                    .map(|level| firmware::Braking { level, ..EMERGENCY }),
+            };
+            let certified: Vec<(f32, f32)> = speeds
+                .iter()
+                .map(|&v| {
+                    let g = braking_at(v)
+                        .map_or(f32::INFINITY, |b| comfort.steady_gap_with(v, leader, b));
+                    (v, g)
+                })
+                .collect();
+            let comfort_only = speeds
+                .iter()
+                .map(|&v| (v, comfort.steady_gap_with(v, leader, comfort_braking)))
+                .collect();
+            let policies = settings
+                .iter()
+                .zip(&by_setting)
+                .map(|(&t, c)| {
+                    let gaps = certified
+                        .iter()
+                        .map(|&(v, g)| {
+                            (
+                                v,
+                                if g.is_finite() {
+                                    c.desired_gap_over(v, g)
+                                } else {
+                                    g
+                                },
+                            )
+                        })
+                        .collect();
+                    (t, gaps)
+                })
+                .collect();
+            panels.push(host_tests::plots::GapPanel {
+                title: match behind {
+                    None => format!("leader {leader} m/s^2, no follower"),
+                    Some(t) => format!("leader {leader} m/s^2, follower {t} s behind"),
+                },
+                certified,
+                comfort_only,
+                policies,
+            });
+        }
+    }
+    let file = out.join("gap-policy-authorities.png");
+    host_tests::plots::gap_policy_panels(
+        &file,
+        "Gap policy with the emergency authority the follower leaves (IDM follower reacting after 1.15 s)",
+        2,
+        &panels,
+    )?;
+    println!("{}", file.display());
     Ok(serde_json::Value::Array(rows))
 }

@@ -212,3 +212,85 @@ pub fn gap_policy(
     root.present()?;
     Ok(())
 }
+
+/// One panel of [`gap_policy_panels`]: its title, the certified steady gap (with the follower
+/// as it is), the comfort band's alone, and the gap policy at each time-gap setting (the time
+/// gap and its gaps), each by speed. A gap that is not finite (no braking certified) is left
+/// out.
+pub struct GapPanel {
+    /// The panel's title.
+    pub title: String,
+    /// The certified steady gap by speed, m.
+    pub certified: Vec<(f32, f32)>,
+    /// The comfort band's certified steady gap by speed, m.
+    pub comfort_only: Vec<(f32, f32)>,
+    /// The gap policy at each setting: its time gap, s, and its gaps by speed, m.
+    pub policies: Vec<(f32, Vec<(f32, f32)>)>,
+}
+
+/// Draws `panels` in a grid of `rows` rows to `file`, under `title`, on one gap scale.
+pub fn gap_policy_panels(file: &Path, title: &str, rows: usize, panels: &[GapPanel]) -> Result<()> {
+    solver::output::register_plot_font()?;
+    let columns = panels.len().div_ceil(rows.max(1)).max(1);
+    let root = BitMapBackend::new(file, (380 * columns as u32, 360 * rows as u32 + 40))
+        .into_drawing_area();
+    root.fill(&WHITE)?;
+    let root = root.titled(title, ("sans-serif", 22))?;
+    let finite = |points: &[(f32, f32)]| -> Vec<(f32, f32)> {
+        points.iter().copied().filter(|p| p.1.is_finite()).collect()
+    };
+    let g_max = panels
+        .iter()
+        .flat_map(|p| p.policies.iter().flat_map(|q| finite(&q.1)))
+        .chain(panels.iter().flat_map(|p| finite(&p.comfort_only)))
+        .map(|p| p.1)
+        .fold(1.0f32, f32::max)
+        * 1.05;
+    let policy_colours = [SKY_BLUE, GREEN, BLUE, PURPLE];
+    for (area, panel) in root.split_evenly((rows.max(1), columns)).iter().zip(panels) {
+        let mut chart = ChartBuilder::on(area)
+            .caption(&panel.title, ("sans-serif", 15))
+            .margin(8)
+            .x_label_area_size(30)
+            .y_label_area_size(40)
+            .build_cartesian_2d(0f32..35f32, 0f32..g_max)?;
+        chart
+            .configure_mesh()
+            .x_desc("speed [m/s]")
+            .y_desc("gap to the leader [m]")
+            .draw()?;
+        chart
+            .draw_series(LineSeries::new(
+                finite(&panel.comfort_only),
+                MID_GREY.stroke_width(2),
+            ))?
+            .label("certified, comfort band only")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], MID_GREY.stroke_width(2)));
+        chart
+            .draw_series(LineSeries::new(
+                finite(&panel.certified),
+                VERMILLION.stroke_width(3),
+            ))?
+            .label("certified, two authorities")
+            .legend(|(x, y)| {
+                PathElement::new(vec![(x, y), (x + 14, y)], VERMILLION.stroke_width(3))
+            });
+        for ((time_gap, points), colour) in panel.policies.iter().zip(policy_colours) {
+            chart
+                .draw_series(LineSeries::new(finite(points), colour.stroke_width(1)))?
+                .label(format!("policy at {time_gap} s"))
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 14, y)], colour.stroke_width(1))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE)
+            .label_font(("sans-serif", 11))
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()?;
+    }
+    root.present()?;
+    Ok(())
+}

@@ -480,8 +480,27 @@ impl<'t> Controller<'t> {
     /// at the ego's own speed `speed`, with a track as old as the radar delivers it
     /// (`latency + cycle`) and no command above zero pending: the certificate's steady
     /// following gap, m (the nominal law's gap policy keeps room over it). `+inf` without a
-    /// table.
+    /// table. [`Controller::steady_gap_with`] for the table's leader and band and the
+    /// configured ramp.
     pub fn steady_gap(&self, speed: f32) -> f32 {
+        let Ok(Certifier { model, .. }) = &self.certifier else {
+            return f32::INFINITY;
+        };
+        self.steady_gap_with(
+            speed,
+            model.leader_braking,
+            Braking {
+                level: -model.ego.min,
+                jerk: self.config.certificate.brake_jerk,
+            },
+        )
+    }
+
+    /// [`Controller::steady_gap`] against a leader braking at most at `leader_braking`, for an
+    /// ego that answers with `braking`, through the configured delays and sensors: what another
+    /// model or authority would cost in distance, with the rest of the argument unchanged. `+inf`
+    /// without a table.
+    pub fn steady_gap_with(&self, speed: f32, leader_braking: f32, braking: Braking) -> f32 {
         let Ok(Certifier { model, .. }) = &self.certifier else {
             return f32::INFINITY;
         };
@@ -494,8 +513,11 @@ impl<'t> Controller<'t> {
         let (ego_low, ego_high) = sensors.ego_speed(speed);
         let leader_low = math::max(ego_low + sensors.range_rate(0.0).0, 0.0);
         let tail = self.lag_tail(model);
-        let jerk = c.certificate.brake_jerk;
-        let front = model.front(age + h + dead + lag, tail, 0.0, jerk);
+        let front = FrontModel {
+            leader_braking,
+            ego_braking: braking.level,
+            ..model.front(age + h + dead + lag, tail, 0.0, braking.jerk)
+        };
         // The front value is the gap plus a function of the speeds; the measured gap `m` has
         // its least true gap at `(m - e) / (1 + r)` (sensing's module docs).
         let offset = front_value(0.0, leader_low, ego_high, &front);
@@ -725,6 +747,16 @@ impl<'t> Controller<'t> {
             passed,
         }
     }
+}
+
+/// A braking the certificate argues with: its level and how fast it builds up.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Braking {
+    /// The braking level, m/s^2 (positive).
+    pub level: f32,
+    /// Its build-up, m/s^3 (positive; `f32::INFINITY`: at once).
+    pub jerk: f32,
 }
 
 /// The front half at a measured state ([`Controller::measured_front`]).

@@ -268,7 +268,7 @@ pub use crate::config::{
 };
 pub use crate::driver::{DriverError, DriverRequest, DriverState};
 pub use certificate::{
-    Certificate, Certifier, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
+    Braking, Certificate, Certifier, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
 };
 pub use command::{Command, Event, Mode};
 pub use faults::Fault;
@@ -436,8 +436,15 @@ impl<'t> Controller<'t> {
     /// the gap policy (the driver's `standstill_gap + time_gap v`, at least the certificate's
     /// steady gap plus its room; [`Controller::steady_gap`]).
     pub fn desired_gap(&self, speed: f32) -> f32 {
+        self.desired_gap_over(speed, self.steady_gap(speed))
+    }
+
+    /// The gap policy at `speed` with the driver's time-gap setting over a certified steady
+    /// gap `steady_gap` (m): [`Controller::desired_gap`] for another model or authority
+    /// ([`Controller::steady_gap_with`]).
+    pub fn desired_gap_over(&self, speed: f32, steady_gap: f32) -> f32 {
         let time_gap = self.config.time_gap(self.driver.time_gap_setting);
-        Law::desired_gap(&self.config, time_gap, self.steady_gap(speed), speed)
+        Law::desired_gap(&self.config, time_gap, steady_gap, speed)
     }
 
     /// A request from the driver's controls (also taken from [`Inputs::driver`] in the step).
