@@ -46,6 +46,7 @@
     )
 )]
 
+pub mod authority;
 mod error;
 pub mod front;
 mod header;

@@ -2,6 +2,7 @@
 //! error box, the look-ahead that decides the command, the rear half from the table over the
 //! box, and the ego's speed headroom (the argument is in the controller's module docs).
 
+use table_format::authority::Braking;
 use table_format::front::{front_value, FrontModel};
 use table_format::{Bounds, Game, Table};
 
@@ -747,16 +748,6 @@ impl<'t> Controller<'t> {
             passed,
         }
     }
-}
-
-/// A braking the certificate argues with: its level and how fast it builds up.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Braking {
-    /// The braking level, m/s^2 (positive).
-    pub level: f32,
-    /// Its build-up, m/s^3 (positive; `f32::INFINITY`: at once).
-    pub jerk: f32,
 }
 
 /// The front half at a measured state ([`Controller::measured_front`]).

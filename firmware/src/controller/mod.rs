@@ -268,10 +268,11 @@ pub use crate::config::{
 };
 pub use crate::driver::{DriverError, DriverRequest, DriverState};
 pub use certificate::{
-    Braking, Certificate, Certifier, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
+    Certificate, Certifier, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
 };
 pub use command::{Command, Event, Mode};
 pub use faults::Fault;
+pub use table_format::authority::Braking;
 
 use heapless::Deque;
 use table_format::Table;
