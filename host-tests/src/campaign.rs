@@ -604,7 +604,7 @@ fn cut_in_summary(outcomes: &[(u64, Outcome)]) -> CutInSummary {
 }
 
 /// The groups a campaign runs: every leader against every follower.
-pub const GROUPS: [(Leader, Follower); 20] = {
+pub const GROUPS: [(Leader, Follower); 24] = {
     let leaders = [
         Leader::HardBrake,
         Leader::StopAndGo,
@@ -617,11 +617,12 @@ pub const GROUPS: [(Leader, Follower); 20] = {
         Follower::IdmSwitching,
         Follower::IdmWorstCase,
         Follower::Unbounded,
+        Follower::IdmReacting,
     ];
-    let mut out = [(Leader::HardBrake, Follower::IdmFixed); 20];
+    let mut out = [(Leader::HardBrake, Follower::IdmFixed); 24];
     let mut i = 0;
-    while i < 20 {
-        out[i] = (leaders[i / 5], followers[i % 5]);
+    while i < 24 {
+        out[i] = (leaders[i / 6], followers[i % 6]);
         i += 1;
     }
     out

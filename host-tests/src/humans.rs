@@ -46,12 +46,23 @@ pub enum Follower {
     /// Breaks the model: the largest acceleration the bounds allow, always (the paper's
     /// baseline follower's worst case).
     Unbounded,
+    /// Breaks today's model: the IDM at the range's closest time gap, seeing the ego's brake
+    /// lights only after [`REACTION_TIME`]. From the period the ego's acceleration falls below
+    /// zero (its lights come on) it keeps the acceleration it had for that long, then drives
+    /// by its IDM again, which by then sees the closing gap. The follower that reacts like a
+    /// person of `table_format::rear`, with the IDM for its braking.
+    IdmReacting,
 }
+
+/// How long a follower takes to react to the ego's brake lights, s: UN R157's careful driver,
+/// 0.4 s to perceive and 0.75 s to brake (Green 2000 measures about 1.25 s for a leader's brake
+/// lights).
+pub const REACTION_TIME: f32 = 1.15;
 
 impl Follower {
     /// Whether the follower keeps to the table's model.
     pub fn in_model(self) -> bool {
-        self != Follower::Unbounded
+        !matches!(self, Follower::Unbounded | Follower::IdmReacting)
     }
 }
 
@@ -138,6 +149,12 @@ pub struct Humans<'t> {
     /// Switching follower: the current time gap and when it next jumps.
     switching_time_gap: f32,
     next_switch: f32,
+    /// Reacting follower: the ego's speed a period ago, since when its lights are on, the
+    /// acceleration held until the follower reacts, and its last acceleration.
+    ego_speed_before: Option<f32>,
+    lights_since: Option<f32>,
+    held: f32,
+    last_follower: f32,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -205,6 +222,10 @@ impl<'t> Humans<'t> {
             pull_away: 0.0,
             switching_time_gap: if rng.random::<bool>() { tmin } else { tmax },
             next_switch: rng.random_range(0.2..4.0),
+            ego_speed_before: None,
+            lights_since: None,
+            held: 0.0,
+            last_follower: 0.0,
         })
     }
 
@@ -265,7 +286,27 @@ impl<'t> Humans<'t> {
                 }
             }
             Follower::Unbounded => m.follower_clip().1,
+            Follower::IdmReacting => {
+                // The ego's lights: its speed fell over the last period, or it stands after a
+                // braking.
+                let falling = self.ego_speed_before.is_some_and(|v| ego.v < v - 1e-6);
+                let standing = ego.v <= 0.0 && self.lights_since.is_some();
+                if falling || standing {
+                    if self.lights_since.is_none() {
+                        self.lights_since = Some(t);
+                        self.held = self.last_follower;
+                    }
+                } else {
+                    self.lights_since = None;
+                }
+                match self.lights_since {
+                    Some(on) if t - on < REACTION_TIME => self.held,
+                    _ => idm_with(tmin),
+                }
+            }
         };
+        self.ego_speed_before = Some(ego.v);
+        self.last_follower = a_follower;
         (
             within_speed_limit(a_leader, leader.v, m.max_speed, h),
             within_speed_limit(a_follower, follower.v, m.max_speed, h),
