@@ -213,13 +213,15 @@ impl TwoAuthorities {
         front > 0.0 && rear > 0.0
     }
 
-    /// Whether the command `u` held for `h` seconds passes the look-ahead (module docs), the
+    /// Whether the command `u` held for `h` seconds passes the look-ahead (module docs; never
+    /// for a command below the emergency level, or NaN), the
     /// lights on for `lights` seconds (zero: off): a braking command keeps them on (or turns
     /// them on), so the follower's reaction goes on; otherwise they come on at the latest
     /// where the ramp from `u` crosses zero after the hold.
     pub fn passes(&self, s: &State, u: f32, h: f32, lights: f32) -> bool {
         let e = self.emergency;
-        if self.front(s, e, h, u, u) <= self.front_margin {
+        // A command beyond the emergency level is outside the model, and NaN is no command.
+        if !(u >= -e.level) || self.front(s, e, h, u, u) <= self.front_margin {
             return false;
         }
         let rear = if u < 0.0 {
@@ -559,6 +561,28 @@ mod tests {
             "{front} {rear} {margin}"
         );
         assert!(periods[Authority::Emergency as usize] > 0, "{periods:?}");
+    }
+
+    /// A proposal that is NaN or beyond the emergency level never drives: the rule brakes.
+    #[test]
+    fn a_proposal_outside_the_model_is_not_driven() {
+        let m = with_follower(9.8, 1.15, 0.0, false);
+        let s = State {
+            gap_leader: 200.0,
+            leader_speed: 20.0,
+            gap_follower: 200.0,
+            follower_speed: 20.0,
+            ego_speed: 20.0,
+            ego_acceleration: 0.0,
+        };
+        assert_eq!(m.decide(&s, None, 0.0, 0.0, 0.02), Decision::Drive(0.0));
+        for u in [f32::NAN, -9.0, f32::NEG_INFINITY] {
+            assert!(!m.passes(&s, u, 0.02, 0.0), "{u}");
+            assert!(
+                matches!(m.decide(&s, None, 0.0, u, 0.02), Decision::Brake(_)),
+                "{u}"
+            );
+        }
     }
 
     /// The least rear gap by brute force (f64, 0.1 ms steps) for an ego ramping from its
