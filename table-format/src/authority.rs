@@ -19,7 +19,8 @@
 //!   braking; an ego that starts a braking ramp while still accelerating lights them only
 //!   where the ramp crosses zero.
 //! - The ego's acceleration is what it is commanded (an ideal actuator: the caller argues a
-//!   real one, as the firmware does for the front, through a hold).
+//!   real one, as the firmware does for the front, through a hold, and for the lights through
+//!   [`crate::rear::lights_on_within`]).
 //!
 //! # The certificate and the rule
 //! An authority `A` (a [`Braking`]: a level and a build-up) **certifies** a state for an ego
@@ -221,7 +222,8 @@ impl TwoAuthorities {
     pub fn passes(&self, s: &State, u: f32, h: f32, lights: f32) -> bool {
         let e = self.emergency;
         // A command beyond the emergency level is outside the model, and NaN is no command.
-        if !(u >= -e.level) || self.front(s, e, h, u, u) <= self.front_margin {
+        let in_model = u >= -e.level;
+        if !in_model || self.front(s, e, h, u, u) <= self.front_margin {
             return false;
         }
         let rear = if u < 0.0 {

@@ -50,7 +50,14 @@
 //! the least the follower can be credited with), and nothing makes `G` invariant across the
 //! release. A controller built on it may release only into a state that the fresh clock
 //! certifies at the braking it will need next: an authority is kept until a lower one
-//! certifies. The property test `a_release_restarts_the_clock` checks that the restarted
+//! certifies.
+//!
+//! **When the lights come on.** The follower reacts to the lights, which are on while the
+//! ego's actual acceleration is below zero; through a dead time and a lag that is later than
+//! the command. [`lights_on_within`] bounds it from what the controller knows (the actuator's
+//! acceleration, the commands in its dead time, the braking ramp from now), in closed form
+//! along the lag's response to a ramp, checked against a brute-force actuator; the follower's
+//! reaction is then taken that much longer. The property test `a_release_restarts_the_clock` checks that the restarted
 //! clock still bounds the gap from below after a release in which the follower accelerated.
 
 use crate::front::{front_value, FrontModel};
@@ -141,6 +148,99 @@ pub fn rear_gap_after(
         }
     }
     front_value(gap, ego_speed, follower_speed, &car_behind)
+}
+
+/// How long until an ego's brake lights are on for good, at most (s): they are on while its
+/// actual acceleration is below zero, and the follower's reaction starts there (module docs).
+///
+/// The actuator is a dead time `dead_time` (s) then a first-order lag `lag` (s, zero: none).
+/// Its acceleration now is at most `acceleration`, the commands already in its dead time are
+/// at most `pipeline`, and the commands from now on at most the braking ramp
+/// `max(ramp_from - jerk t, -level)` (`jerk` positive, `f32::INFINITY`: at once; `level`
+/// positive). Every profile below these bounds lights the brakes no later (the lag is monotone
+/// in its input and its start), so the bound is the last zero of the actual acceleration `A`
+/// with every bound taken with equality. Derivation, `s` seconds after the dead time, `tau` the
+/// lag, `r = ramp_from`, `j = jerk`:
+/// - in the dead time, `A` moves from `acceleration` towards `pipeline`:
+///   `A(t) = P + (A_0 - P) e^(-t/tau)`, monotone;
+/// - along the ramp (`s < s_b = (r + level) / j`), the lag of a linear input trails it by
+///   `j tau`: `A = r - j s + j tau + K e^(-s/tau)`, `K = A(D) - r - j tau`, which is concave
+///   when `K < 0` (it may rise, then fall) and decreasing otherwise;
+/// - at the level, `A = -level + (A(s_b) + level) e^(-(s - s_b)/tau)`, which crosses zero at
+///   `s_b + tau ln((A(s_b) + level) / level)` when `A(s_b) > 0`.
+///
+/// So the last zero is in the last phase where `A` reaches zero: in closed form at the level,
+/// by bisection (40 halvings) on the falling side of the ramp's phase, in closed form in the
+/// dead time. `A` is below zero from the returned time on; zero when it already is and stays so.
+/// NaN in any argument gives `+inf` (no credit).
+pub fn lights_on_within(
+    dead_time: f32,
+    lag: f32,
+    acceleration: f32,
+    pipeline: f32,
+    ramp_from: f32,
+    jerk: f32,
+    level: f32,
+) -> f32 {
+    let finite = [dead_time, lag, acceleration, pipeline, ramp_from, level]
+        .iter()
+        .all(|x| x.is_finite());
+    let positive = jerk > 0.0 && level > 0.0;
+    if !finite || !positive {
+        return f32::INFINITY;
+    }
+    let (d, tau, a0, p) = (dead_time.max(0.0), lag.max(0.0), acceleration, pipeline);
+    let r = ramp_from.max(-level);
+    let s_b = if jerk.is_finite() {
+        (r + level) / jerk
+    } else {
+        0.0
+    };
+    if tau <= 0.0 {
+        // No lag: `A` is `a0` now, `p` in the dead time, the command after it.
+        if s_b > 0.0 && r >= 0.0 {
+            return d + r / jerk;
+        }
+        if d > 0.0 && p >= 0.0 {
+            return d;
+        }
+        return if a0 >= 0.0 { d.min(f32::EPSILON) } else { 0.0 };
+    }
+    let decay = |t: f32| libm::expf(-t / tau);
+    let at_dead_end = p + (a0 - p) * decay(d);
+    let k = at_dead_end - r - if jerk.is_finite() { jerk * tau } else { 0.0 };
+    let on_ramp = |s: f32| r - jerk * s + jerk * tau + k * decay(s);
+    let at_level_start = if s_b > 0.0 { on_ramp(s_b) } else { at_dead_end };
+    // At the level: `-level + (A(s_b) + level) e^(-(s - s_b)/tau)`.
+    if at_level_start >= 0.0 {
+        return d + s_b + tau * libm::logf((at_level_start + level) / level);
+    }
+    // On the ramp: concave when `k < 0` (highest where `A' = 0`, `s = tau ln(-k / (j tau))`),
+    // decreasing otherwise; the last zero is on the falling side of the highest point.
+    if s_b > 0.0 {
+        let top = if k < 0.0 {
+            (tau * libm::logf(-k / (jerk * tau))).clamp(0.0, s_b)
+        } else {
+            0.0
+        };
+        if on_ramp(top) >= 0.0 {
+            let (mut lo, mut hi) = (top, s_b);
+            for _ in 0..40 {
+                let mid = 0.5 * (lo + hi);
+                if on_ramp(mid) >= 0.0 {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            return d + hi;
+        }
+    }
+    // In the dead time: monotone from `a0` to `A(D) < 0` (so `p < 0` when `a0 >= 0`).
+    if a0 >= 0.0 && p < 0.0 {
+        return (tau * libm::logf((a0 - p) / -p)).min(d);
+    }
+    0.0
 }
 
 /// The hardest braking in `[0, ceiling]` (m/s^2) the `follower` allows the ego: the largest
@@ -523,6 +623,91 @@ mod tests {
         assert!(after > 0.0, "{after}");
         assert!(carried > after + 1.0, "carried {carried}, gap {after}");
         assert!(fresh <= after + 0.05, "fresh {fresh}, gap {after}");
+    }
+
+    /// The actual acceleration by brute force (f64, 0.1 ms steps) of a dead time `d` and a
+    /// first-order lag `tau` from `a0`, with the commands in the dead time `pipeline(t)` and
+    /// after it `ramp(t)` (both at `t` seconds from now, before the dead time): the samples
+    /// `(t, A(t))` every step until `until`.
+    fn actuator(
+        d: f64,
+        tau: f64,
+        a0: f64,
+        pipeline: impl Fn(f64) -> f64,
+        ramp: impl Fn(f64) -> f64,
+        until: f64,
+    ) -> Vec<(f64, f64)> {
+        let dt = 1e-4;
+        let (mut a, mut t) = (a0, 0.0);
+        let mut out = vec![(0.0, a0)];
+        while t < until {
+            let mid = t + 0.5 * dt;
+            let c = if mid < d {
+                pipeline(mid)
+            } else {
+                ramp(mid - d)
+            };
+            a = if tau > 0.0 {
+                c + (a - c) * (-dt / tau).exp()
+            } else {
+                c
+            };
+            t += dt;
+            out.push((t, a));
+        }
+        out
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(400))]
+
+        /// The bound against the actuator by brute force: with every bound taken with
+        /// equality, the acceleration is below zero from the bound on and reaches zero within
+        /// 2 ms before it (tight); with commands drawn below the bounds, below zero from the
+        /// bound on.
+        #[test]
+        fn the_lights_come_on_within_the_bound(
+            d in 0.0f32..0.2, tau in prop_oneof![Just(0.0f32), 0.0f32..0.5], a0 in -6.0f32..3.0,
+            p in -6.0f32..3.0,
+            r in -8.0f32..3.0, j in 1.0f32..30.0, at_once in proptest::bool::ANY,
+            level in 2.0f32..9.0,
+            below in proptest::collection::vec(0.0f64..1.0, 100),
+        ) {
+            let a0 = a0.max(-level);
+            let p = p.max(-level);
+            let jerk = if at_once { f32::INFINITY } else { j };
+            let bound = lights_on_within(d, tau, a0, p, r, jerk, level);
+            prop_assert!(bound.is_finite() && bound >= 0.0, "{}", bound);
+            let ramp = |s: f64| {
+                let c = if at_once { -f64::from(level) } else { f64::from(r) - f64::from(j) * s };
+                c.max(-f64::from(level))
+            };
+            let until = f64::from(bound) + 3.0;
+            let exact = actuator(f64::from(d), f64::from(tau), f64::from(a0), |_| f64::from(p), ramp, until);
+            let t_bound = f64::from(bound);
+            for &(t, a) in &exact {
+                if t >= t_bound + 2e-4 {
+                    prop_assert!(a < 1e-5, "A({}) = {} after the bound {}", t, a, bound);
+                }
+            }
+            if t_bound > 3e-3 {
+                let before = exact.iter().rev().find(|x| x.0 <= t_bound - 2e-3).unwrap().1;
+                prop_assert!(before > -0.05, "A before the bound {} is {}", bound, before);
+            }
+            // Commands below the bounds, drawn per 10 ms.
+            let draw = |t: f64| below[((t / 0.01) as usize) % below.len()];
+            let lower = actuator(
+                f64::from(d), f64::from(tau), f64::from(a0) - 0.5 * draw(0.0),
+                |t| f64::from(p) - 2.0 * draw(t),
+                |s| (ramp(s) - 2.0 * draw(s + 0.5)).max(-f64::from(level)),
+                until,
+            );
+            for &(t, a) in &lower {
+                if t >= t_bound + 2e-4 {
+                    prop_assert!(a < 1e-5, "A({}) = {} after the bound {} (below)", t, a, bound);
+                }
+            }
+        }
     }
 
     /// A follower at the IDM's closest time gap (1 s: 30 m + 2 m at 30 m/s), both at 30 m/s.
