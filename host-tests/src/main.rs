@@ -923,12 +923,19 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     };
     let sensors = config.sensors;
     let error = sensors.error;
-    // Before the ego's braking shows: the rear track's age, a period, the brake's dead time.
-    let delay = (sensors.latency_us
-        + sensors.cycle_us
-        + config.period_us
-        + config.plant.actuator_dead_time_us) as f32
-        * 1e-6;
+    // Before the ego's braking shows: the rear track's age, a period, and until the actuator
+    // lights the brakes (`table_format::rear::lights_on_within`: from steady following, its
+    // acceleration and commands at zero, braking along the emergency ramp).
+    let lights = table_format::rear::lights_on_within(
+        config.plant.actuator_dead_time_us as f32 * 1e-6,
+        config.plant.actuator_lag_us as f32 * 1e-6,
+        0.0,
+        0.0,
+        0.0,
+        EMERGENCY.jerk,
+        EMERGENCY.level,
+    );
+    let delay = (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6 + lights;
     // The braking a follower `time_gap` behind allows at `v`: the worst corner of the box
     // around the worst measurement of the true state. The ego's braking shows at the latest
     // `delay` after the measurement and the follower reacts `reaction_time` after that, so the
