@@ -4,8 +4,8 @@ Reads QEMU's `-d exec,nochain` log in single-step mode (one instruction per tran
 so one log line per executed instruction) from a file or FIFO, and counts the lines between
 each entry into `hjacc_step_begin` and the next entry into `hjacc_step_end` (the markers the
 qemu-scenario binary calls around `Controller::step`). The scenario then calls one marker per
-mode (`hjacc_mode_nominal`, ...), which files the step's count under its path. Prints the
-worst, median and mean over every step and per path.
+mode or path (every `hjacc_mode_*` symbol: `hjacc_mode_nominal`, ...), which files the step's
+count under it. Prints the worst, median and mean over every step and per path.
 Usage: count_instructions.py ELF LOG"""
 import re
 import statistics
@@ -19,9 +19,8 @@ for line in subprocess.run(["nm", elf], capture_output=True, text=True, check=Tr
     if len(parts) == 3 and parts[2].startswith(("hjacc_step_", "hjacc_mode_")):
         symbols[parts[2]] = int(parts[0], 16) & ~1
 begin, end = symbols["hjacc_step_begin"], symbols["hjacc_step_end"]
-modes = {symbols[name]: name.removeprefix("hjacc_mode_").replace("_", "-")
-         for name in ("hjacc_mode_nominal", "hjacc_mode_override", "hjacc_mode_minimum_risk",
-                      "hjacc_mode_uncertified")}
+modes = {address: name.removeprefix("hjacc_mode_").replace("_", "-")
+         for name, address in sorted(symbols.items()) if name.startswith("hjacc_mode_")}
 per_mode = {name: [] for name in modes.values()}
 pending = None
 pc_re = re.compile(r"\[[0-9a-f]+/([0-9a-f]+)/")

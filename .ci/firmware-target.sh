@@ -2,8 +2,9 @@
 # Builds the firmware's bare-metal binaries for thumbv7em-none-eabihf with Debian's Rust
 # toolchain, proves no panic is reachable from the control step (the no-panic binary only links
 # if none is), runs the closed-loop scenario on QEMU's emulated Cortex-M4F (failing on a
-# non-zero exit), and prints sizes, stack and instructions per control step; then runs it once more
-# with the firmware's defmt log on (feature qemu-defmt) and decodes the log with defmt-print.
+# non-zero exit), and prints sizes, stack and instructions per control step; counts the
+# instructions of the two-authority rule's decision (qemu-authority); then runs the scenario once
+# more with the firmware's defmt log on (feature qemu-defmt) and decodes the log with defmt-print.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -40,6 +41,21 @@ fi
 timeout 600 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
   -semihosting-config enable=on,target=native "${step[@]}" -d exec,nochain -D "$fifo" \
   -kernel "$elf" > /dev/null
+wait "$counter"
+cat "$fifo.out"
+rm -f "$fifo" "$fifo.out"
+
+echo "--- the two-authority rule (table_format::authority) on mps2-an386: instructions per decision"
+authority=$dir/qemu-authority
+timeout 300 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
+  -semihosting-config enable=on,target=native -kernel "$authority"
+fifo=$(mktemp -u)
+mkfifo "$fifo"
+python3 .ci/count_instructions.py "$authority" "$fifo" > "$fifo.out" &
+counter=$!
+timeout 600 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
+  -semihosting-config enable=on,target=native "${step[@]}" -d exec,nochain -D "$fifo" \
+  -kernel "$authority" > /dev/null
 wait "$counter"
 cat "$fifo.out"
 rm -f "$fifo" "$fifo.out"

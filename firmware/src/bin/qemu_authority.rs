@@ -1,0 +1,151 @@
+//! What the two-authority rule costs on the emulated Cortex-M4F (`qemu-system-arm -machine
+//! mps2-an386`): `table_format::authority::TwoAuthorities::decide` and
+//! `table_format::rear::lights_on_within`, the work a control step would add to argue two braking
+//! authorities against a leader braking at up to 9.8 m/s^2 and a follower that reacts after
+//! 1.15 s, over 576 states (the ego at 5-33 m/s, the leader 8-120 m ahead and as fast or slower,
+//! the follower 3-40 m behind, the ego braking hard, holding or accelerating, its lights off or
+//! on for 1 s). Each call is bracketed by the instruction counter's markers and filed under its
+//! decision (drive, comfort, emergency). Prints how many of each over semihosting and exits with
+//! status 0 when every decision was reached at least once; 1 otherwise. The firmware's step does
+//! not run this rule yet: the figure says what it would cost.
+#![no_std]
+#![no_main]
+// The bare-metal entry point and the markers' unmangled names are the only unsafe code.
+#![allow(unsafe_code)]
+
+use core::hint::black_box;
+use core::panic::PanicInfo;
+
+// The critical section semihosting needs (cortex-m's single-core implementation).
+use cortex_m as _;
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use table_format::authority::{Authority, Braking, Decision, State, TwoAuthorities};
+use table_format::rear::{lights_on_within, ReactingFollower};
+
+/// Marks the start of a call for the instruction counter.
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn hjacc_step_begin() {
+    black_box(0x5eed_0001u32);
+}
+
+/// Marks the end of a call for the instruction counter.
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn hjacc_step_end() {
+    black_box(0x5eed_0002u32);
+}
+
+/// Files the call just counted under "drive": the command passed the look-ahead.
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn hjacc_mode_drive() {
+    black_box(0x5eed_0020u32);
+}
+
+/// Files the call just counted under "comfort": a braking under the comfort authority.
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn hjacc_mode_comfort() {
+    black_box(0x5eed_0021u32);
+}
+
+/// Files the call just counted under "emergency": a braking under the emergency authority.
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn hjacc_mode_emergency() {
+    black_box(0x5eed_0022u32);
+}
+
+#[panic_handler]
+fn panic(_: &PanicInfo) -> ! {
+    debug::exit(debug::EXIT_FAILURE);
+    loop {}
+}
+
+#[entry]
+fn main() -> ! {
+    let model = TwoAuthorities {
+        leader_braking: 9.8,
+        max_speed: 35.0,
+        comfort: Braking {
+            level: 3.5,
+            jerk: 2.5,
+        },
+        emergency: Braking {
+            level: 8.0,
+            jerk: 12.0,
+        },
+        follower: ReactingFollower {
+            braking: 6.0,
+            jerk: f32::INFINITY,
+            ..ReactingFollower::careful_driver(35.0)
+        },
+        front_margin: 0.5,
+        rear_margin: 0.5,
+    };
+    let (mut drive, mut comfort, mut emergency) = (0u32, 0u32, 0u32);
+    for v in [5.0f32, 15.0, 25.0, 33.0] {
+        for gap_leader in [8.0f32, 25.0, 60.0, 120.0] {
+            for leader_speed in [v - 3.0, v] {
+                for gap_follower in [3.0f32, 15.0, 40.0] {
+                    for a in [-6.0f32, 0.0, 1.5] {
+                        for lights in [0.0f32, 1.0] {
+                            let s = State {
+                                gap_leader,
+                                leader_speed,
+                                gap_follower,
+                                follower_speed: v,
+                                ego_speed: v,
+                                ego_acceleration: a,
+                            };
+                            let in_force = (a < 0.0).then_some(Authority::Emergency);
+                            let lights = if a < 0.0 { lights } else { 0.0 };
+                            hjacc_step_begin();
+                            let on = lights_on_within(0.1, 0.3, a, a, a, 12.0, 8.0);
+                            let d = model.decide(
+                                black_box(&s),
+                                in_force,
+                                black_box(lights),
+                                black_box(0.5),
+                                0.02,
+                            );
+                            black_box((on, d));
+                            hjacc_step_end();
+                            match d {
+                                Decision::Drive(_) => {
+                                    drive += 1;
+                                    hjacc_mode_drive();
+                                }
+                                Decision::Brake(Authority::Comfort) => {
+                                    comfort += 1;
+                                    hjacc_mode_comfort();
+                                }
+                                Decision::Brake(Authority::Emergency) => {
+                                    emergency += 1;
+                                    hjacc_mode_emergency();
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let ok = drive > 0 && comfort > 0 && emergency > 0;
+    hprintln!(
+        "authority: {} decisions: drive {}, comfort {}, emergency {}",
+        drive + comfort + emergency,
+        drive,
+        comfort,
+        emergency
+    );
+    hprintln!("result: {}", if ok { "PASS" } else { "FAIL" });
+    debug::exit(if ok {
+        debug::EXIT_SUCCESS
+    } else {
+        debug::EXIT_FAILURE
+    });
+    loop {}
+}
