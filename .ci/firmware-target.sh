@@ -28,37 +28,34 @@ echo "--- sections of the scenario binary (bytes; the table is in .rodata)"
 size -A "$elf" | awk '$1 ~ /^\.(vector_table|text|rodata|data|bss|uninit)$/ {printf "%-14s %8d\n", $1, $2}'
 echo "default table: $(stat -c %s firmware/tables/default.bin) bytes"
 
-echo "--- instructions per control step (QEMU single-step trace)"
-fifo=$(mktemp -u)
-mkfifo "$fifo"
-python3 .ci/count_instructions.py "$elf" "$fifo" > "$fifo.out" &
-counter=$!
 if [ "$(qemu-system-arm --version | grep -oE 'version [0-9]+' | grep -oE '[0-9]+')" -ge 8 ]; then
   step=(-accel tcg,one-insn-per-tb=on)
 else
   step=(-singlestep)
 fi
-timeout 600 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
-  -semihosting-config enable=on,target=native "${step[@]}" -d exec,nochain -D "$fifo" \
-  -kernel "$elf" > /dev/null
-wait "$counter"
-cat "$fifo.out"
-rm -f "$fifo" "$fifo.out"
+# Counts the instructions between the markers of the binary $1 on a single-step trace.
+count_instructions() {
+  local fifo counter
+  fifo=$(mktemp -u)
+  mkfifo "$fifo"
+  python3 .ci/count_instructions.py "$1" "$fifo" > "$fifo.out" &
+  counter=$!
+  timeout 600 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
+    -semihosting-config enable=on,target=native "${step[@]}" -d exec,nochain -D "$fifo" \
+    -kernel "$1" > /dev/null
+  wait "$counter"
+  cat "$fifo.out"
+  rm -f "$fifo" "$fifo.out"
+}
+
+echo "--- instructions per control step (QEMU single-step trace)"
+count_instructions "$elf"
 
 echo "--- the two-authority rule (table_format::authority) on mps2-an386: instructions per decision"
 authority=$dir/qemu-authority
 timeout 300 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
   -semihosting-config enable=on,target=native -kernel "$authority"
-fifo=$(mktemp -u)
-mkfifo "$fifo"
-python3 .ci/count_instructions.py "$authority" "$fifo" > "$fifo.out" &
-counter=$!
-timeout 600 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
-  -semihosting-config enable=on,target=native "${step[@]}" -d exec,nochain -D "$fifo" \
-  -kernel "$authority" > /dev/null
-wait "$counter"
-cat "$fifo.out"
-rm -f "$fifo" "$fifo.out"
+count_instructions "$authority"
 
 echo "--- the same scenario with the firmware's defmt log (feature qemu-defmt), decoded by defmt-print"
 DEFMT_LOG=info build -p firmware --features qemu-defmt --bin qemu-scenario

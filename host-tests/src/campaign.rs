@@ -121,9 +121,8 @@ pub struct Outcome {
 }
 
 /// A car's full braking, m/s^2: the emergency authority the cut-in counterfactual is judged at
-/// (dry asphalt, tyre-road friction about 0.8; ad-rss-lib's parameter notes take 8 m/s^2 as the
-/// braking driving schools teach).
-pub const EMERGENCY_BRAKING: f32 = 8.0;
+/// ([`table_format::authority::DRY_ROAD_EMERGENCY`]).
+pub const EMERGENCY_BRAKING: f32 = table_format::authority::DRY_ROAD_EMERGENCY.level;
 
 impl Outcome {
     /// The outcome of an episode from its score.

@@ -864,13 +864,8 @@ fn braking_the_follower_allows(bytes: &[u8]) -> Result<serde_json::Value> {
     Ok(serde_json::Value::Array(rows))
 }
 
-/// The car's full braking as the vehicle's emergency authority, m/s^2, and its build-up,
-/// m/s^3: 8 m/s^2 on dry asphalt (friction about 0.8), reached at UN R157's careful driver's
-/// rate (0.774 g over 0.6 s, about 12.65 m/s^3; rounded down to 12).
-const EMERGENCY: firmware::Braking = firmware::Braking {
-    level: host_tests::campaign::EMERGENCY_BRAKING,
-    jerk: 12.0,
-};
+/// The emergency authority: a car's full braking on a dry road.
+const EMERGENCY: firmware::Braking = table_format::authority::DRY_ROAD_EMERGENCY;
 
 /// What the certified steady gap and the gap policy would be with two braking authorities:
 /// the comfort band as today and the emergency braking ([`EMERGENCY`]), as hard as a follower

@@ -20,7 +20,9 @@ use core::panic::PanicInfo;
 use cortex_m as _;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
-use table_format::authority::{Authority, Braking, Decision, State, TwoAuthorities};
+use table_format::authority::{
+    Authority, Braking, Decision, State, TwoAuthorities, DRY_ROAD_EMERGENCY,
+};
 use table_format::rear::{lights_on_within, ReactingFollower};
 
 /// Marks the start of a call for the instruction counter.
@@ -73,10 +75,7 @@ fn main() -> ! {
             level: 3.5,
             jerk: 2.5,
         },
-        emergency: Braking {
-            level: 8.0,
-            jerk: 12.0,
-        },
+        emergency: DRY_ROAD_EMERGENCY,
         follower: ReactingFollower {
             braking: 6.0,
             jerk: f32::INFINITY,
@@ -103,7 +102,8 @@ fn main() -> ! {
                             let in_force = (a < 0.0).then_some(Authority::Emergency);
                             let lights = if a < 0.0 { lights } else { 0.0 };
                             hjacc_step_begin();
-                            let on = lights_on_within(0.1, 0.3, a, a, a, 12.0, 8.0);
+                            let e = DRY_ROAD_EMERGENCY;
+                            let on = lights_on_within(0.1, 0.3, a, a, a, e.jerk, e.level);
                             let d = model.decide(
                                 black_box(&s),
                                 in_force,
