@@ -196,7 +196,7 @@ class Doors(unittest.TestCase):
             loop = os.path.join(out, "campaign")
             result = hjacc.campaign(episodes=2, seconds=5.0, out=loop)
             self.assertIsNone(result["failure"])
-            self.assertEqual(len(result["groups"]), 20)
+            self.assertEqual(len(result["groups"]), 24)
             self.assertTrue(os.path.exists(os.path.join(loop, "campaign.json")))
             for bad, name in [({"seconds": -5.0}, "seconds"), ({"episodes": 0}, "episodes"),
                               ({"sensors": "perfect"}, "sensors"), ({"cut_in": "sideways"}, "cut_in"),
