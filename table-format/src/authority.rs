@@ -37,8 +37,8 @@
 //! come on only where the ramp from `u` crosses zero). [`TwoAuthorities::decide`] takes, in
 //! this order:
 //! - the law's proposal, if it passes the look-ahead;
-//! - the gentlest braking between the comfort level and the proposal that passes it (a
-//!   comfort response where comfort suffices);
+//! - a braking between the comfort level and the proposal that passes it, close to the
+//!   gentlest (a comfort response where comfort suffices);
 //! - a braking under the comfort authority, if it certifies the state with the clock under
 //!   way;
 //! - a braking under the authority in force (the emergency one when none is).
@@ -151,8 +151,8 @@ pub struct TwoAuthorities {
 /// What the rule decided for one period.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Decision {
-    /// Drive by this command (the law's proposal, or the gentlest braking down to the comfort
-    /// level that passes the look-ahead), m/s^2: the command passed the look-ahead.
+    /// Drive by this command (the law's proposal, or a braking down to the comfort level that
+    /// passes the look-ahead), m/s^2: the command passed the look-ahead.
     Drive(f32),
     /// Brake under this authority along its ramp from the ego's acceleration.
     Brake(Authority),
@@ -223,31 +223,48 @@ impl TwoAuthorities {
         front > 0.0 && rear > 0.0
     }
 
-    /// Whether the command `u` held for `h` seconds passes the look-ahead (module docs; never
-    /// for a command below the emergency level, or NaN), the
-    /// lights on for `lights` seconds (zero: off): a braking command keeps them on (or turns
-    /// them on), so the follower's reaction goes on; otherwise they come on at the latest
-    /// where the ramp from `u` crosses zero after the hold.
-    pub fn passes(&self, s: &State, u: f32, h: f32, lights: f32) -> bool {
+    /// The look-ahead's margin for the command `u` held for `h` seconds (module docs), m: the
+    /// smaller of its front and rear values less their margins, the lights on for `lights`
+    /// seconds (zero: off). A braking command keeps them on (or turns them on), so the
+    /// follower's reaction goes on; otherwise they come on at the latest where the ramp from
+    /// `u` crosses zero after the hold. `-inf` for a command below the emergency level, or NaN
+    /// (outside the model). Non-increasing in `u`: ahead, a harder braking is never behind a
+    /// gentler one; behind, every command below zero is one braking at most at the emergency
+    /// level with the lights on, and a command at or above zero is worse (the lights go off,
+    /// for longer the larger it is).
+    pub fn look_ahead(&self, s: &State, u: f32, h: f32, lights: f32) -> f32 {
         let e = self.emergency;
-        // A command beyond the emergency level is outside the model, and NaN is no command.
         let in_model = u >= -e.level;
-        if !in_model || self.front(s, e, h, u, u) <= self.front_margin {
-            return false;
+        if !in_model {
+            return f32::NEG_INFINITY;
         }
+        let front = self.front(s, e, h, u, u) - self.front_margin;
         let rear = if u < 0.0 {
             self.rear(s, e.level, lights, 0.0)
         } else {
             self.rear(s, e.level, 0.0, h + u / e.jerk)
-        };
-        rear > self.rear_margin
+        } - self.rear_margin;
+        // (Not `f32::min`: it would drop a NaN.)
+        if front < rear {
+            front
+        } else {
+            rear
+        }
+    }
+
+    /// Whether the command `u` held for `h` seconds passes the look-ahead: its margin
+    /// ([`TwoAuthorities::look_ahead`]) is above zero.
+    pub fn passes(&self, s: &State, u: f32, h: f32, lights: f32) -> bool {
+        self.look_ahead(s, u, h, lights) > 0.0
     }
 
     /// The rule (module docs): the law's `proposal` for a period `h` if it passes the
-    /// look-ahead, else the gentlest braking in `[-comfort level, proposal]` that passes it,
-    /// else a braking, under the comfort authority if it certifies, else under the authority
-    /// `in_force` (the emergency one when none is). `lights`: how long the ego's brake lights
-    /// have been on, s (zero: off).
+    /// look-ahead, else a braking between the comfort level and the proposal that passes it
+    /// (the secant's root between the two, pulled a tenth towards the comfort level, else the
+    /// midpoint between that and the comfort level, else the comfort level: at most four
+    /// look-aheads in all), else a braking, under the comfort authority if it certifies, else
+    /// under the authority `in_force` (the emergency one when none is). `lights`: how long the
+    /// ego's brake lights have been on, s (zero: off).
     pub fn decide(
         &self,
         s: &State,
@@ -256,26 +273,29 @@ impl TwoAuthorities {
         proposal: f32,
         h: f32,
     ) -> Decision {
-        if self.passes(s, proposal, h, lights) {
+        let at_proposal = self.look_ahead(s, proposal, h, lights);
+        if at_proposal > 0.0 {
             return Decision::Drive(proposal);
         }
         let floor = -self.comfort.level;
-        if proposal > floor && self.passes(s, floor, h, lights) {
-            // The look-ahead is monotone in the command: ahead, a harder braking is never
-            // behind a gentler one; behind, every command below zero is one braking at most at
-            // the emergency level with the lights on, and a command at or above zero is worse
-            // (the lights go off, for longer the larger it is). Bisection, keeping the end that
-            // passes.
-            let (mut lo, mut hi) = (floor, proposal);
-            for _ in 0..12 {
-                let mid = 0.5 * (lo + hi);
-                if self.passes(s, mid, h, lights) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
+        let at_floor = self.look_ahead(s, floor, h, lights);
+        if proposal > floor && at_floor > 0.0 {
+            // The margin is non-increasing in the command and nearly affine over the band.
+            let drop = at_floor - at_proposal;
+            let share = if drop.is_finite() && drop > 0.0 {
+                (0.9 * at_floor / drop).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let candidate = floor + share * (proposal - floor);
+            if self.passes(s, candidate, h, lights) {
+                return Decision::Drive(candidate);
             }
-            return Decision::Drive(lo);
+            let halfway = 0.5 * (floor + candidate);
+            if self.passes(s, halfway, h, lights) {
+                return Decision::Drive(halfway);
+            }
+            return Decision::Drive(floor);
         }
         if self.certifies(s, Authority::Comfort, lights) {
             Decision::Brake(Authority::Comfort)
@@ -527,7 +547,7 @@ mod tests {
     /// emergency authority certifies against a 9.8 m/s^2 leader, a follower 2 s behind that
     /// reacts after 1.15 s. A leader that brakes at 3.5 m/s^2 to standstill, with a law that
     /// brakes with it, passes the look-ahead throughout: no period under either authority. A
-    /// law that holds its speed a second longer gets the gentlest braking that passes: no
+    /// law that holds its speed a second longer gets a braking that passes: no
     /// period under the emergency authority either. A leader that brakes at 9.8 m/s^2 gets the
     /// emergency authority. None collides.
     #[test]
