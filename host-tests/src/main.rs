@@ -1040,6 +1040,77 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
             }
         }
     }
+    // What would reach the targets at 30 m/s against a 9.8 m/s^2 leader: the rear known
+    // exactly and at once, a faster brake (lag 0.1 s), and a smaller room in the gap policy.
+    let v = 30.0f32;
+    let idm_follower = followers[1].1;
+    let exact_rear = allowed_braking(
+        jam + v,
+        v,
+        v,
+        &idm_follower,
+        config.certificate.rear_margin,
+        EMERGENCY.level,
+    );
+    let declared_rear = allows(&idm_follower, 1.0, v);
+    let mut faster = config;
+    faster.plant.actuator_lag_us = 100_000;
+    let faster = firmware::Controller::new(bytes, faster);
+    let mut small_room = config;
+    small_room.law.time_gap_setting = 0;
+    small_room.law.gap_room_time = 0.1;
+    let small_room = firmware::Controller::new(bytes, small_room);
+    let at = |c: &firmware::Controller<'_>, b: Option<f32>| {
+        b.map_or(f32::INFINITY, |level| {
+            c.steady_gap_with(v, 9.8, firmware::Braking { level, ..EMERGENCY })
+        })
+    };
+    let levers = [
+        (
+            "declared errors and delays",
+            declared_rear,
+            at(&comfort, declared_rear),
+        ),
+        (
+            "the follower known exactly and at once",
+            exact_rear,
+            at(&comfort, exact_rear),
+        ),
+        (
+            "a brake lag of 0.1 s (declared 0.3 s)",
+            declared_rear,
+            at(&faster, declared_rear),
+        ),
+        ("both", exact_rear, at(&faster, exact_rear)),
+    ];
+    println!();
+    println!(
+        "At 30 m/s against a 9.8 m/s^2 leader, the IDM follower 1 s behind reacting after 1.15 s:"
+    );
+    println!("| what changes | braking it allows [m/s^2] | certified steady gap [m] |");
+    println!("|---|---|---|");
+    for (name, b, g) in levers {
+        println!(
+            "| {name} | {} | {} |",
+            b.map_or("-".to_string(), |b| format!("{b:.2}")),
+            cell(g)
+        );
+    }
+    let alone = at(&comfort, Some(EMERGENCY.level));
+    println!(
+        "With no follower: certified {}; the gap policy at 1.0 s {} with the room 0.3 s v + 1 m, {} with 0.1 s v + 1 m.",
+        cell(alone),
+        cell(by_setting[0].desired_gap_over(v, alone)),
+        cell(small_room.desired_gap_over(v, alone))
+    );
+    let levers_json: Vec<serde_json::Value> = levers
+        .iter()
+        .map(|(name, b, g)| {
+            serde_json::json!({"what": name, "allowed_braking_m_s2": b, "certified_steady_gap_m": g.is_finite().then_some(*g)})
+        })
+        .collect();
+    rows.push(serde_json::json!({"levers_at_30_m_s_leader_9_8_idm_follower_1_s": levers_json}));
+
     // The plot: leaders at 6 and 9.8 m/s^2 in rows; no follower, then the IDM follower that
     // reacts after 1.15 s at 0.6, 1 and 2 s behind, in columns.
     let speeds: Vec<f32> = (0..=70).map(|k| k as f32 * 0.5).collect();
