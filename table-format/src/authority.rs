@@ -362,6 +362,7 @@ mod tests {
         follower: &[f32],
         law: &[f32],
         brake_on_switch: bool,
+        flicker: bool,
     ) -> (f32, f32, f32, [usize; 2]) {
         let (dt, h) = (1e-3f32, 0.02f32);
         let per_period = 20usize;
@@ -381,6 +382,18 @@ mod tests {
                 proposal = 3.5 * law[second % law.len()] - 1.5;
                 proposal = proposal.clamp(-3.5, 2.0);
             }
+            // A flickering law brakes and releases in turn, every period, so that the lights
+            // go on and off and the follower's reaction restarts again and again.
+            let proposal = if flicker {
+                let p = proposal.abs().max(0.2);
+                if k % 2 == 0 {
+                    p.min(2.0)
+                } else {
+                    -p.min(3.5)
+                }
+            } else {
+                proposal
+            };
             let u = if s.ego_speed > 34.0 {
                 proposal.min(0.0)
             } else {
@@ -576,14 +589,14 @@ mod tests {
         let gentle = vec![-3.5 / 9.8; 60];
         let hard = vec![-1.0; 60];
         for (leader, law, braking) in [(&gentle, &with_it, [0, 0]), (&gentle, &late, [0, 0])] {
-            let (front, rear, margin, periods) = episode(&m, s, leader, &still, law, false);
+            let (front, rear, margin, periods) = episode(&m, s, leader, &still, law, false, false);
             assert!(
                 front > 0.0 && rear > 0.0 && margin > -0.02,
                 "{front} {rear} {margin}"
             );
             assert_eq!(periods, braking);
         }
-        let (front, rear, margin, periods) = episode(&m, s, &hard, &still, &with_it, false);
+        let (front, rear, margin, periods) = episode(&m, s, &hard, &still, &with_it, false, false);
         assert!(
             front > 0.0 && rear > 0.0 && margin > -0.02,
             "{front} {rear} {margin}"
@@ -656,9 +669,10 @@ mod tests {
         m: &TwoAuthorities,
         s: State,
         [leader, follower, law]: [&[f32]; 3],
-        brake_on_switch: bool,
+        (brake_on_switch, flicker): (bool, bool),
     ) -> Result<(), TestCaseError> {
-        let (front, rear, margin, _) = episode(m, s, leader, follower, law, brake_on_switch);
+        let (front, rear, margin, _) =
+            episode(m, s, leader, follower, law, brake_on_switch, flicker);
         prop_assert!(front > 0.0 && rear > 0.0, "gaps {} and {}", front, rear);
         prop_assert!(margin > -0.02, "margin {}", margin);
         Ok(())
@@ -673,9 +687,9 @@ mod tests {
 
         /// The module's claim, in closed loop: from a certified start, with leaders at 6 and
         /// 9.8 m/s^2 and followers reacting after 0 and 1.15 s (holding or gaining 1 m/s^2
-        /// until then; braking at the IDM's clip at once, or as R157's careful driver), no
-        /// collision, and the induction's margin above zero (less the 1 ms integration's error)
-        /// at every period.
+        /// until then; braking at the IDM's clip at once, or as R157's careful driver), a law
+        /// that flickers the lights or does not, no collision, and the induction's margin above
+        /// zero (less the 1 ms integration's error) at every period.
         #[test]
         fn a_certified_start_stays_certified_and_collision_free(
             s in start(),
@@ -684,6 +698,7 @@ mod tests {
             gaining in proptest::bool::ANY,
             careful in proptest::bool::ANY,
             brake_on_switch in proptest::bool::ANY,
+            flicker in proptest::bool::ANY,
             leader in draws(60), follower in draws(60), law in draws(60),
         ) {
             let m = with_follower(
@@ -693,7 +708,7 @@ mod tests {
                 careful,
             );
             prop_assume!(m.certifies(&s, Authority::Emergency, 0.0));
-            holds(&m, s, [&leader, &follower, &law], brake_on_switch)?;
+            holds(&m, s, [&leader, &follower, &law], (brake_on_switch, flicker))?;
         }
 
         /// The same from the certified set's boundary: both gaps within 0.5 m of the least
@@ -706,6 +721,7 @@ mod tests {
             late in proptest::bool::ANY,
             careful in proptest::bool::ANY,
             brake_on_switch in proptest::bool::ANY,
+            flicker in proptest::bool::ANY,
             leader in draws(60), follower in draws(60), law in draws(60),
         ) {
             let m = with_follower(
@@ -716,7 +732,7 @@ mod tests {
             );
             let Some(s) = on_the_boundary(&m, s, slack) else { return Ok(()) };
             prop_assume!(m.certifies(&s, Authority::Emergency, 0.0));
-            holds(&m, s, [&leader, &follower, &law], brake_on_switch)?;
+            holds(&m, s, [&leader, &follower, &law], (brake_on_switch, flicker))?;
         }
 
         /// An ego still accelerating lights its brakes only where its ramp crosses zero: the
