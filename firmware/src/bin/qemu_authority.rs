@@ -13,8 +13,13 @@
 // The bare-metal entry point and the markers' unmangled names are the only unsafe code.
 #![allow(unsafe_code)]
 
+#[path = "qemu/markers.rs"]
+mod markers;
+
 use core::hint::black_box;
 use core::panic::PanicInfo;
+
+use markers::{hjacc_step_begin, hjacc_step_end};
 
 // The critical section semihosting needs (cortex-m's single-core implementation).
 use cortex_m as _;
@@ -24,20 +29,9 @@ use table_format::authority::{
     Authority, Braking, Decision, State, TwoAuthorities, DRY_ROAD_EMERGENCY,
 };
 use table_format::rear::{lights_on_within, ReactingFollower};
+use table_format::{Game, Table};
 
-/// Marks the start of a call for the instruction counter.
-#[no_mangle]
-#[inline(never)]
-pub extern "C" fn hjacc_step_begin() {
-    black_box(0x5eed_0001u32);
-}
-
-/// Marks the end of a call for the instruction counter.
-#[no_mangle]
-#[inline(never)]
-pub extern "C" fn hjacc_step_end() {
-    black_box(0x5eed_0002u32);
-}
+use firmware::{Config, DEFAULT_TABLE};
 
 /// Files the call just counted under "drive": the command passed the look-ahead.
 #[no_mangle]
@@ -62,27 +56,40 @@ pub extern "C" fn hjacc_mode_emergency() {
 
 #[panic_handler]
 fn panic(_: &PanicInfo) -> ! {
+    fail()
+}
+
+fn fail() -> ! {
     debug::exit(debug::EXIT_FAILURE);
     loop {}
 }
 
 #[entry]
 fn main() -> ! {
+    // The deployed comfort authority (the table's band, the configured ramp) and the table's
+    // follower braking at its clip once it reacts.
+    let config = Config::default();
+    let Ok(table) = Table::parse(DEFAULT_TABLE) else {
+        fail()
+    };
+    let Game::ThreeCarSplit { ego, follower, .. } = table.header().game else {
+        fail()
+    };
     let model = TwoAuthorities {
         leader_braking: 9.8,
         max_speed: 35.0,
         comfort: Braking {
-            level: 3.5,
-            jerk: 2.5,
+            level: -ego.min,
+            jerk: config.certificate.brake_jerk,
         },
         emergency: DRY_ROAD_EMERGENCY,
         follower: ReactingFollower {
-            braking: 6.0,
+            braking: -follower.clip().min,
             jerk: f32::INFINITY,
             ..ReactingFollower::careful_driver(35.0)
         },
-        front_margin: 0.5,
-        rear_margin: 0.5,
+        front_margin: config.certificate.front_margin,
+        rear_margin: config.certificate.rear_margin,
     };
     let (mut drive, mut comfort, mut emergency) = (0u32, 0u32, 0u32);
     for v in [5.0f32, 15.0, 25.0, 33.0] {

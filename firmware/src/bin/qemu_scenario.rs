@@ -22,8 +22,13 @@
 // unsafe code in the project; the controller itself has none.
 #![allow(unsafe_code)]
 
+#[path = "qemu/markers.rs"]
+mod markers;
+
 use core::hint::black_box;
 use core::panic::PanicInfo;
+
+use markers::{hjacc_step_begin, hjacc_step_end};
 
 use cortex_m_rt::entry;
 use cortex_m_semihosting::debug;
@@ -50,20 +55,6 @@ macro_rules! report {
 use firmware::{
     Config, Controller, Inputs, Measurement, Mode, Track, CERTIFICATE_TOLERANCE, DEFAULT_TABLE,
 };
-
-/// Marks the start of a control step for the instruction counter.
-#[no_mangle]
-#[inline(never)]
-pub extern "C" fn hjacc_step_begin() {
-    black_box(0x5eed_0001u32);
-}
-
-/// Marks the end of a control step for the instruction counter.
-#[no_mangle]
-#[inline(never)]
-pub extern "C" fn hjacc_step_end() {
-    black_box(0x5eed_0002u32);
-}
 
 /// Tells the instruction counter that the step just counted ran the nominal law.
 #[no_mangle]
