@@ -116,8 +116,16 @@ pub struct Outcome {
     /// that the humans alone had made it unavoidable.
     pub cut_in_unavoidable: Option<bool>,
     /// The same at [`EMERGENCY_BRAKING`]: whether a car braking as hard as it can from the first
-    /// track (through the same actuator) collides too.
+    /// track (through the same actuator) hits the car ahead too.
     pub cut_in_unavoidable_at_emergency: Option<bool>,
+    /// Whether that braking, clear of the car ahead, was hit from behind: the follower driving
+    /// as it did in the episode (its recorded accelerations), which did not answer the harder
+    /// braking. What the emergency authority must buy from the follower.
+    pub cut_in_hit_from_behind_at_emergency: Option<bool>,
+    /// The same with a follower that answers the harder braking: the IDM at its closest time
+    /// gap, at once, and after [`crate::humans::REACTION_TIME`]
+    /// ([`Follower::IdmReacting`]).
+    pub cut_in_hit_from_behind_at_emergency_answered: Option<[bool; 2]>,
 }
 
 /// A car's full braking, m/s^2: the emergency authority the cut-in counterfactual is judged at
@@ -157,6 +165,8 @@ impl Outcome {
             cut_in: s.cut_in,
             cut_in_unavoidable: None,
             cut_in_unavoidable_at_emergency: None,
+            cut_in_hit_from_behind_at_emergency: None,
+            cut_in_hit_from_behind_at_emergency_answered: None,
         }
     }
 }
@@ -302,19 +312,51 @@ pub fn run_episode(
             .and_then(|c| c.delivered_after)
             .map_or(0, |s| (s / h).round() as usize);
         // The same world from the cut-in, the same commands until the first track, then
-        // `braking`: whether it collides too.
-        let collides_braking_at = |braking: f32| {
+        // `braking`: whether it collides too, and with the car ahead or behind. The follower
+        // replays its accelerations, or answers the new braking: the IDM at its closest time
+        // gap, at once or after a person's reaction time.
+        let tmin = model.parameter_range().0;
+        let collides_braking_at = |braking: f32, answer: Option<Follower>| {
             let mut world = counterfactual.clone();
-            record
-                .iter()
-                .enumerate()
-                .any(|(k, &(a_leader, a_follower, command))| {
-                    let command = if k < delivered { command } else { braking };
-                    !world.step_with(a_leader, a_follower, Some(command), None)
-                })
+            let mut rng = StdRng::seed_from_u64(0);
+            let mut follower =
+                answer.and_then(|f| Humans::new(table, Leader::Comfortable, f, &mut rng));
+            let collided =
+                record
+                    .iter()
+                    .enumerate()
+                    .any(|(k, &(a_leader, a_follower, command))| {
+                        let command = if k < delivered { command } else { braking };
+                        let a_follower = match (&mut follower, answer) {
+                            (Some(humans), Some(Follower::IdmReacting)) => {
+                                humans
+                                    .accelerations(world.time(), h, world.cars(), &mut rng)
+                                    .1
+                            }
+                            (_, Some(_)) => {
+                                let [_, e, f] = world.cars();
+                                let a = model.follower_acceleration(f.v, e.v, e.x - f.x, tmin);
+                                if a > 0.0 {
+                                    a.min(((model.max_speed - f.v) / h).max(0.0))
+                                } else {
+                                    a
+                                }
+                            }
+                            _ => a_follower,
+                        };
+                        !world.step_with(a_leader, a_follower, Some(command), None)
+                    });
+            let behind = collided && world.score().min_gap_follower <= 0.0;
+            (collided, collided && !behind, behind)
         };
-        outcome.cut_in_unavoidable = Some(collides_braking_at(model.band_min));
-        outcome.cut_in_unavoidable_at_emergency = Some(collides_braking_at(-EMERGENCY_BRAKING));
+        outcome.cut_in_unavoidable = Some(collides_braking_at(model.band_min, None).0);
+        let (_, ahead, behind) = collides_braking_at(-EMERGENCY_BRAKING, None);
+        outcome.cut_in_unavoidable_at_emergency = Some(ahead);
+        outcome.cut_in_hit_from_behind_at_emergency = Some(behind);
+        outcome.cut_in_hit_from_behind_at_emergency_answered = Some([
+            collides_braking_at(-EMERGENCY_BRAKING, Some(Follower::IdmFixed)).2,
+            collides_braking_at(-EMERGENCY_BRAKING, Some(Follower::IdmReacting)).2,
+        ]);
     }
     Some(outcome)
 }
@@ -436,8 +478,14 @@ pub struct CutInSummary {
     /// Leader cut-ins UN R157 requires avoiding ([`crate::world::r157_requires_avoiding`]).
     pub r157_preventable: usize,
     /// Collisions that braking at [`EMERGENCY_BRAKING`] from the first track would not have
-    /// avoided either.
+    /// avoided either: the car ahead hit all the same.
     pub unavoidable_at_emergency: usize,
+    /// Collisions that braking at [`EMERGENCY_BRAKING`] would have avoided ahead, but would
+    /// have been hit from behind by the follower driving as it did.
+    pub hit_from_behind_at_emergency: usize,
+    /// The same with a follower that answers the braking: the IDM at its closest time gap at
+    /// once, and after a person's reaction time.
+    pub hit_from_behind_at_emergency_answered: [usize; 2],
     /// Collisions that were preventable, by R157's rule or at the emergency authority, and
     /// were not prevented. The aim is none.
     pub preventable_not_prevented: usize,
@@ -591,6 +639,19 @@ fn cut_in_summary(outcomes: &[(u64, Outcome)]) -> CutInSummary {
             .iter()
             .filter(|(o, _)| o.cut_in_unavoidable_at_emergency == Some(true))
             .count(),
+        hit_from_behind_at_emergency: cuts
+            .iter()
+            .filter(|(o, _)| o.collided && o.cut_in_hit_from_behind_at_emergency == Some(true))
+            .count(),
+        hit_from_behind_at_emergency_answered: [0, 1].map(|i| {
+            cuts.iter()
+                .filter(|(o, _)| {
+                    o.collided
+                        && o.cut_in_hit_from_behind_at_emergency_answered
+                            .is_some_and(|a| a[i])
+                })
+                .count()
+        }),
         preventable_not_prevented: cuts
             .iter()
             .filter(|(o, c)| {
@@ -743,6 +804,12 @@ pub struct CampaignTotals {
     pub cut_in_collisions_avoidable: usize,
     /// Collisions after a cut-in that braking at [`EMERGENCY_BRAKING`] would not have avoided.
     pub cut_in_collisions_unavoidable_at_emergency: usize,
+    /// Collisions after a cut-in that braking at [`EMERGENCY_BRAKING`] would have turned into
+    /// a collision from behind (the follower driving as it did).
+    pub cut_in_collisions_hit_from_behind_at_emergency: usize,
+    /// The same with a follower that answers the braking at once, and after a person's
+    /// reaction time.
+    pub cut_in_collisions_hit_from_behind_at_emergency_answered: [usize; 2],
     /// Collisions after a cut-in that were preventable (R157's rule, or at the emergency
     /// authority) and were not prevented.
     pub cut_in_collisions_preventable: usize,
@@ -856,6 +923,11 @@ pub fn run_campaign(
         totals.cut_ins_braked_late += c.front_uncertified - c.beta_within_one_period;
         totals.cut_in_collisions_avoidable += c.collisions - c.unavoidable;
         totals.cut_in_collisions_unavoidable_at_emergency += c.unavoidable_at_emergency;
+        totals.cut_in_collisions_hit_from_behind_at_emergency += c.hit_from_behind_at_emergency;
+        for i in 0..2 {
+            totals.cut_in_collisions_hit_from_behind_at_emergency_answered[i] +=
+                c.hit_from_behind_at_emergency_answered[i];
+        }
         totals.cut_in_collisions_preventable += c.preventable_not_prevented;
     }
     CampaignReport {

@@ -485,12 +485,12 @@ fn campaign(args: CampaignArgs) -> Result<()> {
     plotted?;
     if settings.cut_in.is_some() {
         println!();
-        println!("| leader | follower | cut-ins | first track after [s] (mean, max) | recognised at once | front uncertified | of those at beta within one period | mean hardest command [m/s^2] | collisions | of them unavoidable (at beta) | R157 requires avoiding | collisions unavoidable at the emergency authority | preventable, not prevented |");
-        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+        println!("| leader | follower | cut-ins | first track after [s] (mean, max) | recognised at once | front uncertified | of those at beta within one period | mean hardest command [m/s^2] | collisions | of them unavoidable (at beta) | R157 requires avoiding | collisions unavoidable at the emergency authority | of the others, hit from behind there | preventable, not prevented |");
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         for summary in &report.groups {
             if let Some(c) = summary.cut_ins {
                 println!(
-                    "| {:?} | {:?} | {} | {:.3}, {:.3} | {} | {} | {} | {:.2} | {} | {} | {} | {} | {} |",
+                    "| {:?} | {:?} | {} | {:.3}, {:.3} | {} | {} | {} | {:.2} | {} | {} | {} | {} | {} | {} |",
                     summary.leader,
                     summary.follower,
                     c.episodes,
@@ -504,6 +504,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
                     c.unavoidable,
                     c.r157_preventable,
                     c.unavoidable_at_emergency,
+                    c.hit_from_behind_at_emergency,
                     c.preventable_not_prevented
                 );
             }
@@ -536,13 +537,19 @@ fn campaign(args: CampaignArgs) -> Result<()> {
         println!(
             "cut-ins: {}; {} not braked at beta within one period of the new track \
              while the front was uncertified; {} collisions the humans had not made \
-             unavoidable; at the emergency authority ({} m/s^2) {} unavoidable and {} \
-             preventable (by it or R157's rule) but not prevented",
+             unavoidable; at the emergency authority ({} m/s^2) {} unavoidable ahead, {} hit from \
+             behind instead by the follower as it drove ({} by the IDM at its closest time gap \
+             answering at once, {} answering after {} s), and {} preventable (by it or R157's \
+             rule) but not prevented",
             t.cut_ins,
             t.cut_ins_braked_late,
             t.cut_in_collisions_avoidable,
             host_tests::campaign::EMERGENCY_BRAKING,
             t.cut_in_collisions_unavoidable_at_emergency,
+            t.cut_in_collisions_hit_from_behind_at_emergency,
+            t.cut_in_collisions_hit_from_behind_at_emergency_answered[0],
+            t.cut_in_collisions_hit_from_behind_at_emergency_answered[1],
+            host_tests::humans::REACTION_TIME,
             t.cut_in_collisions_preventable
         );
     }

@@ -207,9 +207,9 @@ fn r157s_cut_in_rule() {
 }
 
 /// Leader cut-ins are scored three ways: against braking at beta from the first track (the
-/// humans alone made the collision unavoidable), at the emergency authority, and by R157's rule;
-/// a collision is preventable and not prevented where either of the last two says it could have
-/// been avoided.
+/// humans alone made the collision unavoidable), at the emergency authority (the car ahead hit
+/// all the same, or the ego hit from behind instead), and by R157's rule; a collision is
+/// preventable and not prevented where either of the last two says it could have been avoided.
 #[test]
 fn cut_in_collisions_are_scored_at_the_emergency_authority_and_by_r157() {
     let t = table();
@@ -231,7 +231,32 @@ fn cut_in_collisions_are_scored_at_the_emergency_authority_and_by_r157() {
         let Some(cut) = o.cut_in else { continue };
         assert_eq!(o.cut_in_unavoidable.is_some(), o.collided);
         assert_eq!(o.cut_in_unavoidable_at_emergency.is_some(), o.collided);
+        assert_eq!(o.cut_in_hit_from_behind_at_emergency.is_some(), o.collided);
+        // Ahead or behind, never both: the counterfactual stops at its first collision.
+        assert!(
+            !(o.cut_in_unavoidable_at_emergency == Some(true)
+                && o.cut_in_hit_from_behind_at_emergency == Some(true))
+        );
         assert!(cut.r157_preventable.is_some());
+    }
+    // Behind a follower that ignores the model (full acceleration), braking at 8 m/s^2 is hit
+    // from behind when the follower replays what it did; the IDM in its place, answering the
+    // braking at once or after a person's reaction, far less often.
+    let (s, _) = run_group(
+        &t,
+        firmware::DEFAULT_TABLE,
+        Episode {
+            follower: Follower::Unbounded,
+            ..template
+        },
+        120,
+        &|| {},
+    );
+    let c = s.cut_ins.expect("cut-ins were scored");
+    println!("{c:?}");
+    assert!(c.hit_from_behind_at_emergency > 10, "{c:?}");
+    for answered in c.hit_from_behind_at_emergency_answered {
+        assert!(2 * answered < c.hit_from_behind_at_emergency, "{c:?}");
     }
     // Braking at 8 m/s^2 avoids some of what 3.5 could not.
     assert!(c.unavoidable_at_emergency < c.collisions, "{c:?}");
