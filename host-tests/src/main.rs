@@ -953,8 +953,17 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
             .ego_speed(v + error.ego_speed + error.ego_speed_relative * v)
             .1;
         let follower_high = ego_high + 2.0 * error.range_rate;
+        // Until it reacts it keeps what its IDM does now: at most the IDM's acceleration at the
+        // box's most inviting corner (the longest gap, the slowest follower, the fastest ego) and
+        // the range's closest time gap, and at least zero (an IDM at or inside its time gap
+        // brakes by itself; the model takes it as holding its speed).
+        let gap_high = error.range(measured).1;
+        let follower_low = (ego_low - 2.0 * error.range_rate).max(0.0);
+        let tmin = model.parameter_range().0;
+        let idm = model.follower_acceleration(follower_low, ego_high, gap_high, tmin);
         let later = ReactingFollower {
             reaction_time: f.reaction_time + delay,
+            reaction_acceleration: idm.max(0.0),
             ..*f
         };
         allowed_braking(
