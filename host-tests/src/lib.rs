@@ -10,12 +10,14 @@
 //! collisions, certificate losses (the true state leaving the certified set), minimum gaps,
 //! time under override and jerk; [`falsify`] *searches* for what sampling misses: starts on the
 //! certified boundary and at the domain's edges, humans chosen by cross-entropy, hill climbing
-//! and greedy rollouts within the model; [`plots`] draws a trace and the gap policy. The ego is `firmware::Controller` itself, on the same
+//! and greedy rollouts within the model; [`gap_policy`] tells what the gap policy and two braking
+//! authorities cost in distance; [`plots`] draws a trace and the gap policy. The ego is `firmware::Controller` itself, on the same
 //! table bytes the target runs.
 #![warn(missing_docs)]
 
 pub mod campaign;
 pub mod falsify;
+pub mod gap_policy;
 pub mod humans;
 pub mod iso;
 pub mod plots;

@@ -1,0 +1,524 @@
+//! `host-tests gap-policy`: the certificate's steady-following gap and the gap policy at each
+//! setting, the braking a follower that reacts like a person allows, and what two braking
+//! authorities would cost in distance, printed, drawn and written to `gap-policy.json`.
+
+use anyhow::{Context, Result};
+use table_format::rear::{allowed_braking, ReactingFollower};
+
+use crate::humans::HumanModel;
+
+/// The emergency authority: a car's full braking on a dry road.
+pub const EMERGENCY: firmware::Braking = table_format::authority::DRY_ROAD_EMERGENCY;
+
+/// The hardest braking, up to [`EMERGENCY`], that a `follower` `time_gap` seconds behind
+/// (plus the IDM's jam distance, at the ego's speed `v`) allows an ego whose firmware argues
+/// with `config`: judged at the worst corner of the error box around the worst measurement of
+/// the true state (the gap read short and then taken shorter, the follower fastest, the ego
+/// slowest). The ego's braking shows at the latest `delay` seconds after the measurement, and
+/// the follower reacts `reaction_time` after that, so its reaction is taken `delay` longer,
+/// with the ego braking up to the level from the measurement on (an ego that brakes later
+/// covers more). Until it reacts the follower keeps what its IDM does at the box's most
+/// inviting corner (the longest gap, the slowest follower, the fastest ego, the range's closest
+/// time gap), and at least holds its speed. `None` where not even holding the ego's speed keeps
+/// the rear margin.
+pub fn braking_a_follower_allows(
+    config: &firmware::Config,
+    model: &HumanModel,
+    follower: &ReactingFollower,
+    delay: f32,
+    time_gap: f32,
+    v: f32,
+) -> Option<f32> {
+    let error = config.sensors.error;
+    let table_format::FollowerModel::Idm { idm, .. } = model.follower;
+    let gap = idm.jam_distance + time_gap * v;
+    let measured = gap - (error.range + error.range_relative * gap);
+    let (gap_low, gap_high) = error.range(measured);
+    let ego_measured = v - (error.ego_speed + error.ego_speed_relative * v);
+    let ego_low = error.ego_speed(ego_measured).0;
+    let ego_high = error
+        .ego_speed(v + error.ego_speed + error.ego_speed_relative * v)
+        .1;
+    let follower_high = ego_high + 2.0 * error.range_rate;
+    let follower_low = (ego_low - 2.0 * error.range_rate).max(0.0);
+    let tmin = model.parameter_range().0;
+    let idm_now = model.follower_acceleration(follower_low, ego_high, gap_high, tmin);
+    let later = ReactingFollower {
+        reaction_time: follower.reaction_time + delay,
+        reaction_acceleration: idm_now.max(0.0),
+        ..*follower
+    };
+    allowed_braking(
+        gap_low,
+        ego_low,
+        follower_high,
+        &later,
+        config.certificate.rear_margin,
+        EMERGENCY.level,
+    )
+}
+
+/// Runs the command: prints its tables, writes `gap-policy.json` and the plots to `out`.
+pub fn run(out: &std::path::Path) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let bytes = firmware::DEFAULT_TABLE;
+    let configs = [
+        (
+            "no ramp",
+            firmware::Config {
+                certificate: firmware::CertificateConfig {
+                    brake_jerk: f32::INFINITY,
+                    ..firmware::Config::default().certificate
+                },
+                ..firmware::Config::default()
+            },
+        ),
+        (
+            "ramp at 5 m/s^3",
+            firmware::Config {
+                certificate: firmware::CertificateConfig {
+                    brake_jerk: 5.0,
+                    ..firmware::Config::default().certificate
+                },
+                ..firmware::Config::default()
+            },
+        ),
+        ("ramp at 2.5 m/s^3 (default)", firmware::Config::default()),
+    ];
+    let speeds: Vec<f32> = (0..=70).map(|k| k as f32 * 0.5).collect();
+    let mut rows = Vec::new();
+    println!("| speed [m/s] | certified steady gap, no ramp [m] | with a ramp at 5 m/s^3 [m] | at 2.5 m/s^3 (default) [m] | gap policy at 1.0 / 1.4 / 1.8 / 2.2 s [m] |");
+    println!("|---|---|---|---|---|");
+    let mut series: Vec<(String, Vec<(f32, f32)>)> = Vec::new();
+    for (name, config) in configs {
+        let c = firmware::Controller::new(bytes, config);
+        anyhow::ensure!(c.table().is_some(), "the default table is refused");
+        series.push((
+            format!("certified, {name}"),
+            speeds.iter().map(|&v| (v, c.steady_gap(v))).collect(),
+        ));
+    }
+    let mut policies = Vec::new();
+    for setting in 0..firmware::controller::TIME_GAP_SETTINGS as u8 {
+        let config = firmware::Config {
+            law: firmware::LawConfig {
+                time_gap_setting: setting,
+                ..firmware::Config::default().law
+            },
+            ..firmware::Config::default()
+        };
+        let c = firmware::Controller::new(bytes, config);
+        policies.push((
+            config.time_gap(setting),
+            speeds
+                .iter()
+                .map(|&v| (v, c.desired_gap(v)))
+                .collect::<Vec<_>>(),
+        ));
+    }
+    for (k, &v) in speeds.iter().enumerate() {
+        if k % 10 == 0 {
+            println!(
+                "| {v:.0} | {:.1} | {:.1} | {:.1} | {} |",
+                series[0].1[k].1,
+                series[1].1[k].1,
+                series[2].1[k].1,
+                policies
+                    .iter()
+                    .map(|p| format!("{:.1}", p.1[k].1))
+                    .collect::<Vec<_>>()
+                    .join(" / ")
+            );
+        }
+        rows.push(serde_json::json!({
+            "speed_m_s": v,
+            "certified_gap_no_ramp_m": series[0].1[k].1,
+            "certified_gap_ramp_5_m": series[1].1[k].1,
+            "certified_gap_ramp_2_5_m": series[2].1[k].1,
+            "gap_policy_m": policies.iter().map(|p| serde_json::json!({"time_gap_s": p.0, "gap_m": p.1[k].1})).collect::<Vec<_>>(),
+        }));
+    }
+    // The cost in certified volume: the share of front states (gap 0-150 m by 1 m, leader and
+    // ego 0-35 m/s by 0.5 m/s) certified for an ego at rest in its actuator with the declared
+    // delays, braking along each configuration's ramp.
+    let declared = firmware::Config::default();
+    let response =
+        (declared.plant.actuator_dead_time_us + declared.plant.actuator_lag_us) as f32 * 1e-6;
+    let mut shares = Vec::new();
+    for (name, config) in configs {
+        let c = firmware::Certifier::new(table_format::Table::parse(bytes)?, &config)
+            .map_err(|f| anyhow::anyhow!("the default table is refused: {f:?}"))?;
+        let (mut certified, mut all) = (0u64, 0u64);
+        for g in 0..=150 {
+            for l in 0..=70 {
+                for e in 0..=70 {
+                    let state = [g as f32, l as f32 * 0.5, 1e4, 0.0, e as f32 * 0.5];
+                    all += 1;
+                    if c.certificate_with_response(state, response, 0.0)
+                        .is_some_and(|x| x.front > 0.0)
+                    {
+                        certified += 1;
+                    }
+                }
+            }
+        }
+        let share = 100.0 * certified as f64 / all as f64;
+        println!(
+            "front-certified share of (gap 0-150 m, leader and ego 0-35 m/s), {name}: {share:.2}%"
+        );
+        shares.push(
+            serde_json::json!({"configuration": name, "front_certified_share_percent": share}),
+        );
+    }
+    let allowed = braking_the_follower_allows(bytes)?;
+    let authorities = gaps_with_two_authorities(bytes, out)?;
+    let report = serde_json::json!({
+        "by_speed": rows,
+        "front_certified_share": shares,
+        "braking_the_follower_allows": allowed,
+        "two_authorities": authorities,
+    });
+    std::fs::write(
+        out.join("gap-policy.json"),
+        serde_json::to_string_pretty(&report)?,
+    )?;
+    let file = out.join("gap-policy.png");
+    crate::plots::gap_policy(&file, &series, &policies)?;
+    println!("{}", file.display());
+    Ok(())
+}
+
+/// The hardest braking a follower that reacts like a person allows the ego, at equal speeds
+/// with the follower 0.6, 1 and 2 s behind (`table_format::rear`): R157's careful driver, and a
+/// follower that brakes at the table's follower clip at once after the same 1.15 s. Printed as
+/// a table; returned for the report.
+fn braking_the_follower_allows(bytes: &[u8]) -> Result<serde_json::Value> {
+    let table = table_format::Table::parse(bytes)?;
+    let model = crate::humans::HumanModel::of(&table)
+        .ok_or_else(|| anyhow::anyhow!("the default table is not a split table"))?;
+    let careful = ReactingFollower::careful_driver(model.max_speed);
+    let at_clip = ReactingFollower {
+        braking: -model.follower_clip().0,
+        jerk: f32::INFINITY,
+        ..careful
+    };
+    let followers = [
+        (
+            "careful driver (1.15 s, then 7.59 m/s^2 over 0.6 s)",
+            careful,
+        ),
+        ("1.15 s, then the model's clip at once", at_clip),
+    ];
+    let time_gaps = [0.6f32, 1.0, 2.0];
+    let ceiling = 12.0;
+    println!();
+    println!("The hardest ego braking [m/s^2] a follower reacting after 1.15 s allows, at equal speeds (12: any a car can do; -: none):");
+    println!("| speed [m/s] | follower | 0.6 s behind | 1 s behind | 2 s behind |");
+    println!("|---|---|---|---|---|");
+    let mut rows = Vec::new();
+    for v in [10.0f32, 20.0, 30.0] {
+        for (name, f) in followers {
+            let allowed: Vec<Option<f32>> = time_gaps
+                .iter()
+                .map(|&t| allowed_braking(t * v, v, v, &f, 0.0, ceiling))
+                .collect();
+            let cell = |b: &Option<f32>| b.map_or("-".to_string(), |b| format!("{b:.2}"));
+            println!(
+                "| {v:.0} | {name} | {} |",
+                allowed.iter().map(cell).collect::<Vec<_>>().join(" | ")
+            );
+            rows.push(serde_json::json!({
+                "speed_m_s": v,
+                "follower": name,
+                "by_time_gap": time_gaps.iter().zip(&allowed).map(|(t, b)| {
+                    serde_json::json!({"time_gap_s": t, "allowed_braking_m_s2": b})
+                }).collect::<Vec<_>>(),
+            }));
+        }
+    }
+    Ok(serde_json::Value::Array(rows))
+}
+
+/// What the certified steady gap and the gap policy would be with two braking authorities:
+/// the comfort band as today and the emergency braking ([`EMERGENCY`]), as hard as a follower
+/// that reacts like a person allows (`table_format::rear`), against leaders braking at 6 and at
+/// 9.8 m/s^2. Everything else is the deployed firmware's argument: its delays, sensor errors
+/// and margins ([`firmware::Controller::steady_gap_with`]). The follower sits at the IDM's
+/// jam distance plus its time gap behind, at the ego's speed, and the braking it allows is
+/// taken where the firmware would see it: at the worst corner of the error box around the worst
+/// measurement of it, with the track as old as the radar delivers it and the period and the
+/// brake's dead time before the braking shows. Printed, drawn to `gap-policy-authorities.png`
+/// and returned for the report.
+fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serde_json::Value> {
+    let table = table_format::Table::parse(bytes)?;
+    let model = crate::humans::HumanModel::of(&table)
+        .ok_or_else(|| anyhow::anyhow!("the default table is not a split table"))?;
+    let config = firmware::Config::default();
+    let table_format::FollowerModel::Idm { idm, .. } = model.follower;
+    let jam = idm.jam_distance;
+    let clip = -model.follower_clip().0;
+    let careful = ReactingFollower::careful_driver(model.max_speed);
+    let followers = [
+        (
+            "instant (the paper's IDM at its clip)",
+            ReactingFollower {
+                reaction_time: 0.0,
+                braking: clip,
+                jerk: f32::INFINITY,
+                ..careful
+            },
+        ),
+        (
+            "1.15 s, then the IDM's clip at once",
+            ReactingFollower {
+                braking: clip,
+                jerk: f32::INFINITY,
+                ..careful
+            },
+        ),
+        (
+            "R157's careful driver (1.15 s, 7.59 m/s^2 over 0.6 s)",
+            careful,
+        ),
+    ];
+    let comfort = firmware::Controller::new(bytes, config);
+    anyhow::ensure!(comfort.table().is_some(), "the default table is refused");
+    let comfort_braking = firmware::Braking {
+        level: -model.band_min,
+        jerk: config.certificate.brake_jerk,
+    };
+    let sensors = config.sensors;
+    // Before the ego's braking shows: the rear track's age, a period, and until the actuator
+    // lights the brakes (`table_format::rear::lights_on_within`: from steady following, its
+    // acceleration and commands at zero, braking along the emergency ramp).
+    let lights = table_format::rear::lights_on_within(
+        config.plant.actuator_dead_time_us as f32 * 1e-6,
+        config.plant.actuator_lag_us as f32 * 1e-6,
+        0.0,
+        0.0,
+        0.0,
+        EMERGENCY.jerk,
+        EMERGENCY.level,
+    );
+    let delay = (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6 + lights;
+    let allows = |f: &ReactingFollower, time_gap: f32, v: f32| {
+        braking_a_follower_allows(&config, &model, f, delay, time_gap, v)
+    };
+    let speeds = [10.0f32, 20.0, 30.0];
+    let follower_gaps = [0.6f32, 1.0, 2.0];
+    let settings: Vec<f32> = (0..firmware::controller::TIME_GAP_SETTINGS)
+        .map(|k| config.time_gap(k as u8))
+        .collect();
+    let mut by_setting = Vec::new();
+    for setting in 0..settings.len() {
+        let mut law = config.law;
+        law.time_gap_setting = setting as u8;
+        by_setting.push(firmware::Controller::new(
+            bytes,
+            firmware::Config { law, ..config },
+        ));
+    }
+    let cell = |g: f32| {
+        if g.is_finite() {
+            format!("{g:.1}")
+        } else {
+            "-".to_string()
+        }
+    };
+    println!();
+    println!("Two braking authorities: comfort (the band, {:.1} m/s^2 at {:.1} m/s^3) and emergency ({:.1} m/s^2 at {:.1} m/s^3) as far as the follower allows; the certified steady gap and the gap policy at the settings {} s [m] (-: no braking certified):", comfort_braking.level, comfort_braking.jerk, EMERGENCY.level, EMERGENCY.jerk, settings.iter().map(|t| format!("{t}")).collect::<Vec<_>>().join(" / "));
+    println!("| leader [m/s^2] | speed [m/s] | follower | behind [s] | allowed braking [m/s^2] | certified steady gap [m] | gap policy [m] |");
+    println!("|---|---|---|---|---|---|---|");
+    let mut rows = Vec::new();
+    for leader in [6.0f32, 9.8] {
+        for &v in &speeds {
+            let mut report =
+                |follower: &str, behind: Option<f32>, braking: Option<firmware::Braking>| {
+                    let steady =
+                        braking.map_or(f32::INFINITY, |b| comfort.steady_gap_with(v, leader, b));
+                    let policy: Vec<f32> = by_setting
+                        .iter()
+                        .map(|c| {
+                            if steady.is_finite() {
+                                c.desired_gap_over(v, steady)
+                            } else {
+                                f32::INFINITY
+                            }
+                        })
+                        .collect();
+                    println!(
+                        "| {leader} | {v:.0} | {follower} | {} | {} | {} | {} |",
+                        behind.map_or("-".to_string(), |t| format!("{t}")),
+                        braking.map_or("-".to_string(), |b| format!("{:.2}", b.level)),
+                        cell(steady),
+                        policy
+                            .iter()
+                            .map(|&g| cell(g))
+                            .collect::<Vec<_>>()
+                            .join(" / ")
+                    );
+                    rows.push(serde_json::json!({
+                    "leader_braking_m_s2": leader,
+                    "speed_m_s": v,
+                    "follower": follower,
+                    "follower_time_gap_s": behind,
+                    "braking_m_s2": braking.map(|b| b.level),
+                    "braking_jerk_m_s3": braking.map(|b| b.jerk),
+                    "certified_steady_gap_m": steady.is_finite().then_some(steady),
+                    "gap_policy_m": settings.iter().zip(&policy).map(|(t, g)| {
+                        serde_json::json!({"time_gap_s": t, "gap_m": g.is_finite().then_some(*g)})
+                    }).collect::<Vec<_>>(),
+                }));
+                };
+            report(
+                "comfort band only (today's certificate)",
+                None,
+                Some(comfort_braking),
+            );
+            report("none", None, Some(EMERGENCY));
+            for (name, f) in &followers {
+                for &t in &follower_gaps {
+                    let braking =
+                        allows(f, t, v).map(|level| firmware::Braking { level, ..EMERGENCY });
+                    report(name, Some(t), braking);
+                }
+            }
+        }
+    }
+    // What would reach the targets at 30 m/s against a 9.8 m/s^2 leader: the rear known
+    // exactly and at once, a faster brake (lag 0.1 s), and a smaller room in the gap policy.
+    let v = 30.0f32;
+    let idm_follower = followers[1].1;
+    let exact_rear = allowed_braking(
+        jam + v,
+        v,
+        v,
+        &idm_follower,
+        config.certificate.rear_margin,
+        EMERGENCY.level,
+    );
+    let declared_rear = allows(&idm_follower, 1.0, v);
+    let mut faster = config;
+    faster.plant.actuator_lag_us = 100_000;
+    let faster = firmware::Controller::new(bytes, faster);
+    let mut small_room = config;
+    small_room.law.time_gap_setting = 0;
+    small_room.law.gap_room_time = 0.1;
+    let small_room = firmware::Controller::new(bytes, small_room);
+    let at = |c: &firmware::Controller<'_>, b: Option<f32>| {
+        b.map_or(f32::INFINITY, |level| {
+            c.steady_gap_with(v, 9.8, firmware::Braking { level, ..EMERGENCY })
+        })
+    };
+    let levers = [
+        (
+            "declared errors and delays",
+            declared_rear,
+            at(&comfort, declared_rear),
+        ),
+        (
+            "the follower known exactly and at once",
+            exact_rear,
+            at(&comfort, exact_rear),
+        ),
+        (
+            "a brake lag of 0.1 s (declared 0.3 s)",
+            declared_rear,
+            at(&faster, declared_rear),
+        ),
+        ("both", exact_rear, at(&faster, exact_rear)),
+    ];
+    println!();
+    println!(
+        "At 30 m/s against a 9.8 m/s^2 leader, the IDM follower 1 s behind reacting after 1.15 s:"
+    );
+    println!("| what changes | braking it allows [m/s^2] | certified steady gap [m] |");
+    println!("|---|---|---|");
+    for (name, b, g) in levers {
+        println!(
+            "| {name} | {} | {} |",
+            b.map_or("-".to_string(), |b| format!("{b:.2}")),
+            cell(g)
+        );
+    }
+    let alone = at(&comfort, Some(EMERGENCY.level));
+    println!(
+        "With no follower: certified {}; the gap policy at 1.0 s {} with the room 0.3 s v + 1 m, {} with 0.1 s v + 1 m.",
+        cell(alone),
+        cell(by_setting[0].desired_gap_over(v, alone)),
+        cell(small_room.desired_gap_over(v, alone))
+    );
+    let levers_json: Vec<serde_json::Value> = levers
+        .iter()
+        .map(|(name, b, g)| {
+            serde_json::json!({"what": name, "allowed_braking_m_s2": b, "certified_steady_gap_m": g.is_finite().then_some(*g)})
+        })
+        .collect();
+    rows.push(serde_json::json!({"levers_at_30_m_s_leader_9_8_idm_follower_1_s": levers_json}));
+
+    // The plot: leaders at 6 and 9.8 m/s^2 in rows; no follower, then the IDM follower that
+    // reacts after 1.15 s at 0.6, 1 and 2 s behind, in columns.
+    let speeds: Vec<f32> = (0..=70).map(|k| k as f32 * 0.5).collect();
+    let mut panels = Vec::new();
+    let idm_reacting = followers[1].1;
+    for leader in [6.0f32, 9.8] {
+        let columns = [None, Some(0.6f32), Some(1.0), Some(2.0)];
+        for behind in columns {
+            let braking_at = |v: f32| match behind {
+                None => Some(EMERGENCY),
+                Some(t) => allows(&idm_reacting, t, v)
+                    .map(|level| firmware::Braking { level, ..EMERGENCY }),
+            };
+            let certified: Vec<(f32, f32)> = speeds
+                .iter()
+                .map(|&v| {
+                    let g = braking_at(v)
+                        .map_or(f32::INFINITY, |b| comfort.steady_gap_with(v, leader, b));
+                    (v, g)
+                })
+                .collect();
+            let comfort_only = speeds
+                .iter()
+                .map(|&v| (v, comfort.steady_gap_with(v, leader, comfort_braking)))
+                .collect();
+            let policies = settings
+                .iter()
+                .zip(&by_setting)
+                .map(|(&t, c)| {
+                    let gaps = certified
+                        .iter()
+                        .map(|&(v, g)| {
+                            (
+                                v,
+                                if g.is_finite() {
+                                    c.desired_gap_over(v, g)
+                                } else {
+                                    g
+                                },
+                            )
+                        })
+                        .collect();
+                    (t, gaps)
+                })
+                .collect();
+            panels.push(crate::plots::GapPanel {
+                title: match behind {
+                    None => format!("leader {leader} m/s^2, no follower"),
+                    Some(t) => format!("leader {leader} m/s^2, follower {t} s behind"),
+                },
+                certified,
+                comfort_only,
+                policies,
+            });
+        }
+    }
+    let file = out.join("gap-policy-authorities.png");
+    crate::plots::gap_policy_panels(
+        &file,
+        "Gap policy with the emergency authority the follower leaves (IDM follower reacting after 1.15 s)",
+        2,
+        &panels,
+    )?;
+    println!("{}", file.display());
+    Ok(serde_json::Value::Array(rows))
+}
