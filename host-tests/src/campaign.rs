@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use table_format::Table;
 
-use crate::humans::{Follower, HumanModel, Humans, Leader};
+use crate::humans::{within_speed_limit, Follower, HumanModel, Humans, Leader};
 use crate::sim::{ActuatorModel, Car, SensorModel};
 pub use crate::world::{state_of, CutInKind, CutInScore, Half, ModeName, Trace, TracePoint};
 use crate::world::{EmergencyCauses, Start, Tolerances, World};
@@ -312,53 +312,62 @@ pub fn run_episode(
             .and_then(|c| c.delivered_after)
             .map_or(0, |s| (s / h).round() as usize);
         // The same world from the cut-in, the same commands until the first track, then
-        // `braking`: whether it collides too, and with the car ahead or behind. The follower
-        // replays its accelerations, or answers the new braking: the IDM at its closest time
-        // gap, at once or after a person's reaction time.
+        // `braking`: whether it collides too, and with the car ahead or behind.
         let tmin = model.parameter_range().0;
-        let collides_braking_at = |braking: f32, answer: Option<Follower>| {
+        let collides_braking_at = |braking: f32, behind: Behind| {
             let mut world = counterfactual.clone();
             let mut rng = StdRng::seed_from_u64(0);
-            let mut follower =
-                answer.and_then(|f| Humans::new(table, Leader::Comfortable, f, &mut rng));
-            let collided =
-                record
-                    .iter()
-                    .enumerate()
-                    .any(|(k, &(a_leader, a_follower, command))| {
-                        let command = if k < delivered { command } else { braking };
-                        let a_follower = match (&mut follower, answer) {
-                            (Some(humans), Some(Follower::IdmReacting)) => {
-                                humans
-                                    .accelerations(world.time(), h, world.cars(), &mut rng)
-                                    .1
-                            }
-                            (_, Some(_)) => {
-                                let [_, e, f] = world.cars();
-                                let a = model.follower_acceleration(f.v, e.v, e.x - f.x, tmin);
-                                if a > 0.0 {
-                                    a.min(((model.max_speed - f.v) / h).max(0.0))
-                                } else {
-                                    a
-                                }
-                            }
-                            _ => a_follower,
-                        };
-                        !world.step_with(a_leader, a_follower, Some(command), None)
-                    });
-            let behind = collided && world.score().min_gap_follower <= 0.0;
-            (collided, collided && !behind, behind)
+            let mut reacting = match behind {
+                Behind::Reacting => {
+                    Humans::new(table, Leader::Comfortable, Follower::IdmReacting, &mut rng)
+                }
+                Behind::Replayed | Behind::AtOnce => None,
+            };
+            let collided = record
+                .iter()
+                .enumerate()
+                .any(|(k, &(a_leader, recorded, command))| {
+                    let command = if k < delivered { command } else { braking };
+                    let a_follower = match (behind, reacting.as_mut()) {
+                        (Behind::Reacting, Some(humans)) => {
+                            humans
+                                .accelerations(world.time(), h, world.cars(), &mut rng)
+                                .1
+                        }
+                        (Behind::AtOnce, _) => {
+                            let [_, e, f] = world.cars();
+                            let a = model.follower_acceleration(f.v, e.v, e.x - f.x, tmin);
+                            within_speed_limit(a, f.v, model.max_speed, h)
+                        }
+                        _ => recorded,
+                    };
+                    !world.step_with(a_leader, a_follower, Some(command), None)
+                });
+            let hit_behind = collided && world.score().min_gap_follower <= 0.0;
+            (collided, collided && !hit_behind, hit_behind)
         };
-        outcome.cut_in_unavoidable = Some(collides_braking_at(model.band_min, None).0);
-        let (_, ahead, behind) = collides_braking_at(-EMERGENCY_BRAKING, None);
+        outcome.cut_in_unavoidable = Some(collides_braking_at(model.band_min, Behind::Replayed).0);
+        let (_, ahead, behind) = collides_braking_at(-EMERGENCY_BRAKING, Behind::Replayed);
         outcome.cut_in_unavoidable_at_emergency = Some(ahead);
         outcome.cut_in_hit_from_behind_at_emergency = Some(behind);
         outcome.cut_in_hit_from_behind_at_emergency_answered = Some([
-            collides_braking_at(-EMERGENCY_BRAKING, Some(Follower::IdmFixed)).2,
-            collides_braking_at(-EMERGENCY_BRAKING, Some(Follower::IdmReacting)).2,
+            collides_braking_at(-EMERGENCY_BRAKING, Behind::AtOnce).2,
+            collides_braking_at(-EMERGENCY_BRAKING, Behind::Reacting).2,
         ]);
     }
     Some(outcome)
+}
+
+/// The follower of a cut-in counterfactual.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Behind {
+    /// It replays its accelerations of the episode (it does not answer another braking).
+    Replayed,
+    /// The IDM at the range's closest time gap, answering the ego at once.
+    AtOnce,
+    /// [`Follower::IdmReacting`]: the same IDM, answering the ego's lights after a person's
+    /// reaction time.
+    Reacting,
 }
 
 /// Certificate losses by the firmware's mode at the moment of loss.

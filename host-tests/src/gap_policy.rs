@@ -170,7 +170,7 @@ pub fn run(out: &std::path::Path) -> Result<()> {
             serde_json::json!({"configuration": name, "front_certified_share_percent": share}),
         );
     }
-    let allowed = braking_the_follower_allows(bytes)?;
+    let allowed = braking_at_exact_states(bytes)?;
     let authorities = gaps_with_two_authorities(bytes, out)?;
     let report = serde_json::json!({
         "by_speed": rows,
@@ -188,11 +188,11 @@ pub fn run(out: &std::path::Path) -> Result<()> {
     Ok(())
 }
 
-/// The hardest braking a follower that reacts like a person allows the ego, at equal speeds
-/// with the follower 0.6, 1 and 2 s behind (`table_format::rear`): R157's careful driver, and a
-/// follower that brakes at the table's follower clip at once after the same 1.15 s. Printed as
-/// a table; returned for the report.
-fn braking_the_follower_allows(bytes: &[u8]) -> Result<serde_json::Value> {
+/// The hardest braking a follower that reacts like a person allows the ego at exact states (no
+/// measurement error, no delay), at equal speeds with the follower 0.6, 1 and 2 s behind
+/// (`table_format::rear`): R157's careful driver, and a follower that brakes at the table's
+/// follower clip at once after the same 1.15 s. Printed as a table; returned for the report.
+fn braking_at_exact_states(bytes: &[u8]) -> Result<serde_json::Value> {
     let table = table_format::Table::parse(bytes)?;
     let model = crate::humans::HumanModel::of(&table)
         .ok_or_else(|| anyhow::anyhow!("the default table is not a split table"))?;

@@ -180,7 +180,7 @@ pub fn follower_speed_gradient(table: &Table<'_>, z: [f32; 3]) -> Option<f32> {
 
 /// `a` limited so that a car at `v` stays in `[0, v_max]` over a period `h` (the plant stops
 /// cars at zero by itself).
-fn within_speed_limit(a: f32, v: f32, v_max: f32, h: f32) -> f32 {
+pub(crate) fn within_speed_limit(a: f32, v: f32, v_max: f32, h: f32) -> f32 {
     if a > 0.0 {
         a.min(((v_max - v) / h).max(0.0))
     } else {

@@ -80,7 +80,7 @@
 //! grows under one set of lights, so such a follower would need its reaction restarted at
 //! every rise of the ego's braking level.
 
-use crate::front::{front_value, FrontModel};
+use crate::front::{front_value, least_braking, FrontModel};
 use crate::rear::{rear_gap_after, ReactingFollower};
 
 /// A braking the certificate argues with: its level and how fast it builds up.
@@ -260,8 +260,7 @@ impl TwoAuthorities {
 
     /// The rule (module docs): the law's `proposal` for a period `h` if it passes the
     /// look-ahead, else a braking between the comfort level and the proposal that passes it
-    /// (the secant's root between the two, pulled a tenth towards the comfort level, else the
-    /// midpoint between that and the comfort level, else the comfort level: at most four
+    /// ([`least_braking`], the firmware override's secant, else the comfort level: at most four
     /// look-aheads in all), else a braking, under the comfort authority if it certifies, else
     /// under the authority `in_force` (the emergency one when none is). `lights`: how long the
     /// ego's brake lights have been on, s (zero: off).
@@ -280,22 +279,11 @@ impl TwoAuthorities {
         let floor = -self.comfort.level;
         let at_floor = self.look_ahead(s, floor, h, lights);
         if proposal > floor && at_floor > 0.0 {
-            // The margin is non-increasing in the command and nearly affine over the band.
-            let drop = at_floor - at_proposal;
-            let share = if drop.is_finite() && drop > 0.0 {
-                (0.9 * at_floor / drop).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let candidate = floor + share * (proposal - floor);
-            if self.passes(s, candidate, h, lights) {
-                return Decision::Drive(candidate);
-            }
-            let halfway = 0.5 * (floor + candidate);
-            if self.passes(s, halfway, h, lights) {
-                return Decision::Drive(halfway);
-            }
-            return Decision::Drive(floor);
+            // The margin is non-increasing in the command (`look_ahead`) and nearly affine over
+            // the band: the override's secant, else the comfort level, which passed.
+            let passes = |u: f32| self.passes(s, u, h, lights);
+            let graded = least_braking(proposal, at_proposal, floor, at_floor, 0.0, passes);
+            return Decision::Drive(graded.unwrap_or(floor));
         }
         if self.certifies(s, Authority::Comfort, lights) {
             Decision::Brake(Authority::Comfort)

@@ -243,6 +243,42 @@ pub fn front_value(gap: f32, leader_speed: f32, ego_speed: f32, model: &FrontMod
     least
 }
 
+/// The override's graded command: a braking between the ramp's `floor` and the `refused`
+/// command that passes the look-ahead, if one is found (the firmware's override, and
+/// `crate::authority`'s rule with the comfort level as the floor).
+///
+/// The look-ahead's front value `F(u)` (the command `u` held for a period, then the ramp from
+/// `u`) is non-increasing in `u`: a harder-accelerating ego is ahead of a gentler one at every
+/// instant. It is known at the refused command (`F(refused) <= margin`), and the certified
+/// value `front` (the ramp from now) stands in for `F(floor)`. Over one period `F` is nearly
+/// affine in `u`, so the secant's root, pulled 10% towards the floor, is a candidate; it is
+/// used only if the look-ahead passes it, else the midpoint between it and the floor, else
+/// nothing (the caller follows the ramp). Two evaluations at most (the control step's budget).
+/// Whatever is returned passed the look-ahead. Braking no harder than needed spares the
+/// follower and the jerk.
+pub fn least_braking(
+    refused: f32,
+    at_refused: f32,
+    floor: f32,
+    front: f32,
+    margin: f32,
+    passes: impl Fn(f32) -> bool,
+) -> Option<f32> {
+    let drop = front - at_refused;
+    if !(front > margin && drop > 0.0) {
+        return None;
+    }
+    // In `[0, 1]`, a NaN share at 0 (not `f32::clamp`: it passes NaN on).
+    let share = 0.9 * (front - margin) / drop;
+    let share = if share >= 0.0 { share.min(1.0) } else { 0.0 };
+    let candidate = floor + share * (refused - floor);
+    if passes(candidate) {
+        return Some(candidate);
+    }
+    let halfway = 0.5 * (floor + candidate);
+    passes(halfway).then_some(halfway)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -3,7 +3,7 @@
 //! box, and the ego's speed headroom (the argument is in the controller's module docs).
 
 use table_format::authority::Braking;
-use table_format::front::{front_value, FrontModel};
+use table_format::front::{front_value, least_braking, FrontModel};
 use table_format::{Bounds, Game, Table};
 
 use super::history::seconds;
@@ -837,37 +837,4 @@ pub(super) fn rear_value(
         },
         _ => Fault::OutsideDomain { axis: 0 },
     })
-}
-
-/// The override's graded command: a braking between the ramp's `floor` and the `refused`
-/// command that passes the look-ahead, if one is found.
-///
-/// The look-ahead's front value `F(u)` (the command `u` held for a period, then the ramp from
-/// `u`) is non-increasing in `u`: a harder-accelerating ego is ahead of a gentler one at every
-/// instant. It is known at the refused command (`F(refused) <= margin`), and the certified
-/// value `front` (the ramp from now) stands in for `F(floor)`. Over one period `F` is nearly
-/// affine in `u`, so the secant's root, pulled 10% towards the floor, is a candidate; it is
-/// used only if the look-ahead passes it, else the midpoint between it and the floor, else
-/// nothing (the caller follows the ramp). Two evaluations at most (the control step's budget).
-/// Whatever is returned passed the look-ahead. Braking no harder than needed spares the
-/// follower and the jerk.
-pub(super) fn least_braking(
-    refused: f32,
-    at_refused: f32,
-    floor: f32,
-    front: f32,
-    margin: f32,
-    passes: impl Fn(f32) -> bool,
-) -> Option<f32> {
-    let drop = front - at_refused;
-    if !(front > margin && drop > 0.0) {
-        return None;
-    }
-    let share = 0.9 * (front - margin) / drop;
-    let candidate = floor + math::clamp(share, 0.0, 1.0) * (refused - floor);
-    if passes(candidate) {
-        return Some(candidate);
-    }
-    let halfway = 0.5 * (floor + candidate);
-    passes(halfway).then_some(halfway)
 }

@@ -25,7 +25,7 @@
 //! look-ahead took the minimum over). So if the look-ahead exceeds `front_margin` the law's
 //! command is applied ([`Mode::Nominal`]); otherwise ([`Mode::Override`]) the gentlest braking
 //! between the ramp's floor and the refused command that the look-ahead passes (a secant step,
-//! `least_braking` in the `certificate` module), or, when none does, the ramp itself. Either way a
+//! `table_format::front::least_braking`), or, when none does, the ramp itself. Either way a
 //! certified state's front value stays above `front_margin`. No monotonicity of the table is
 //! used: the rear value is a property of the band, and the front value is exact.
 //!
