@@ -3,6 +3,8 @@
 
 use crate::math;
 use crate::sensing::SensorBounds;
+use table_format::authority::{Braking, DRY_ROAD_EMERGENCY};
+use table_format::rear::CAREFUL_DRIVER_REACTION;
 
 /// Tuning of the controller, grouped by what each part is for: the nominal law, the
 /// certificate, the plant it covers, the fallback. Units: SI.
@@ -84,6 +86,17 @@ pub struct CertificateConfig {
     pub front_margin: f32,
     /// The rear value (m, after the table's error bound) a certified state has.
     pub rear_margin: f32,
+    /// The emergency authority: the vehicle's full braking and its build-up (default
+    /// [`DRY_ROAD_EMERGENCY`], 8 m/s^2 at 12 m/s^3: a dry road). Used only where braking at
+    /// the band's floor at once cannot keep the leader's worst case off the car, and only as
+    /// far as the follower allows (the controller's module docs: emergencies). Its level is
+    /// at most the envelope's hardest braking; a level no harder than the table's band leaves
+    /// the band's floor as the hardest command.
+    pub emergency: Braking,
+    /// How long the follower behind keeps its acceleration after the ego's brake lights come
+    /// on, s (default [`CAREFUL_DRIVER_REACTION`], 1.15 s: UN R157's careful driver), at most
+    /// 5 s: what the emergency authority's rear check waits for.
+    pub follower_reaction_time: f32,
 }
 
 /// The vehicle the certificate covers: the actuator's dead time and lag, and the envelope.
@@ -143,10 +156,11 @@ pub struct Envelope {
 }
 
 impl Default for Envelope {
-    /// ISO 15622's limits for an ACC at speed (-3.5 and 2 m/s^2), up to 35 m/s.
+    /// The car's full braking on a dry road (-8 m/s^2, the emergency authority's default
+    /// level), ISO 15622's largest acceleration at speed (2 m/s^2), up to 35 m/s.
     fn default() -> Self {
         Envelope {
-            min_acceleration: ISO_15622_LIMITS.0,
+            min_acceleration: -DRY_ROAD_EMERGENCY.level,
             max_acceleration: ISO_15622_LIMITS.1,
             max_speed: 35.0,
         }
@@ -175,7 +189,8 @@ impl Envelope {
 impl Config {
     /// Whether the configuration lies within the limits the certificate is argued for: a period
     /// of 10 to 100 ms, a stale limit of 1 to [`MAX_STALE_PERIODS`] periods, a dead time and a
-    /// lag within their limits, finite non-negative margins and gains.
+    /// lag within their limits, finite non-negative margins and gains, an emergency level
+    /// within the envelope built up at 0.5 m/s^3 or faster, a follower reaction of 0 to 5 s.
     pub fn is_valid(&self) -> bool {
         let finite_non_negative = [
             self.law.set_speed,
@@ -211,9 +226,18 @@ impl Config {
             && usize::from(self.law.time_gap_setting) < TIME_GAP_SETTINGS;
         // A jerk of at least 0.5 m/s^3 (a ramp of 11 s to 3.5 m/s^2 at most), or no ramp.
         let jerk = self.certificate.brake_jerk >= 0.5;
+        let e = self.certificate.emergency;
+        let emergency = math::is_finite(e.level)
+            && e.level > 0.0
+            && e.level <= -self.plant.envelope.min_acceleration
+            && e.jerk >= 0.5;
+        let reaction = self.certificate.follower_reaction_time;
+        let reaction = math::is_finite(reaction) && (0.0..=5.0).contains(&reaction);
         finite_non_negative
             && time_gaps
             && jerk
+            && emergency
+            && reaction
             && self.law.stop_deceleration >= 0.3
             && (MIN_PERIOD_US..=MAX_PERIOD_US).contains(&self.period_us)
             && (1..=MAX_STALE_PERIODS).contains(&self.stale_periods)
@@ -306,6 +330,8 @@ impl Default for CertificateConfig {
             override_policy: OverridePolicy::Graded,
             front_margin: table_format::front::DEFAULT_FRONT_MARGIN,
             rear_margin: 0.0,
+            emergency: DRY_ROAD_EMERGENCY,
+            follower_reaction_time: CAREFUL_DRIVER_REACTION,
         }
     }
 }

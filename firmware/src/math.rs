@@ -61,6 +61,20 @@ pub fn is_finite(x: f32) -> bool {
     x.is_finite()
 }
 
+/// `seconds` as whole microseconds, rounded up (a bound on a time stays a bound); `None`
+/// unless it is finite and within `0..=4,000` s (the float-to-integer cast is range-checked).
+#[inline]
+pub fn micros(seconds: f32) -> Option<u64> {
+    if !(is_finite(seconds) && (0.0..=4_000.0).contains(&seconds)) {
+        return None;
+    }
+    let us = libm::ceilf(seconds * 1e6);
+    // In range (checked above: finite, at most 4e9): the cast truncates nothing.
+    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+    let us = us as u64;
+    Some(us)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -73,5 +87,11 @@ mod tests {
         assert!(!is_finite(f32::NAN) && !is_finite(f32::INFINITY) && is_finite(-3.0));
         assert_eq!(abs(-0.5), 0.5);
         assert_eq!(min(1.0, 2.0), 1.0);
+        assert_eq!(micros(0.1), Some(100_000));
+        assert_eq!(micros(1.5e-6), Some(2));
+        assert_eq!(micros(0.0), Some(0));
+        assert_eq!(micros(f32::INFINITY), None);
+        assert_eq!(micros(f32::NAN), None);
+        assert_eq!(micros(-1e-3), None);
     }
 }

@@ -2,10 +2,13 @@
 
 use firmware::table_format::{self, Game, MeasurementError, Table};
 use firmware::{
-    CertificateConfig, Command, Config, Controller, FallbackConfig, Fault, Inputs, LawConfig,
-    Measurement, Mode, PlantConfig, SensorBounds, Track, DEFAULT_TABLE,
+    Braking, CertificateConfig, Command, Config, Controller, FallbackConfig, Fault, Inputs,
+    LawConfig, Measurement, Mode, PlantConfig, SensorBounds, Track, DEFAULT_TABLE,
 };
 use proptest::prelude::*;
+
+mod common;
+use common::ideal;
 
 const NOW: u64 = 10_000_000;
 
@@ -32,22 +35,25 @@ fn inputs(leader: (f32, f32), follower: (f32, f32), ego_speed: f32) -> Inputs {
     }
 }
 
-/// The ideal plant: no actuator dead time or lag (the certificate's own tests; the delays have
-/// theirs below).
-fn ideal() -> Config {
-    Config {
-        sensors: SensorBounds::EXACT,
-        plant: PlantConfig {
-            actuator_dead_time_us: 0,
-            actuator_lag_us: 0,
-            ..Config::default().plant
-        },
-        ..Config::default()
-    }
-}
-
 fn controller() -> Controller<'static> {
     Controller::new(DEFAULT_TABLE, ideal())
+}
+
+/// `config` without an emergency authority (its level at the band's): for the tests of the
+/// band's own certificate, whose first steps (an engagement, with nothing issued yet) would
+/// otherwise be answered below the band (tests/emergency.rs).
+fn band_only(config: Config) -> Config {
+    let (beta, _, _) = band_and_leader();
+    Config {
+        certificate: CertificateConfig {
+            emergency: Braking {
+                level: -beta,
+                ..config.certificate.emergency
+            },
+            ..config.certificate
+        },
+        ..config
+    }
 }
 
 fn fault_of(c: Command) -> Fault {
@@ -102,12 +108,21 @@ fn at_standstill_behind_a_stopped_leader_the_certificate_holds() {
 #[test]
 fn closing_fast_on_the_leader_brakes_at_the_certificates_level() {
     let (beta, _, _) = band_and_leader();
-    let mut c = controller();
     // 25 m/s, the leader 30 m ahead at 15 m/s: the nominal law's -3.5 m/s^2 at most would not
-    // keep the front value above the margin for another period, so the override brakes at beta.
+    // keep the front value above the margin for another period, so the override brakes at beta
+    // without an emergency authority,
+    let mut c = Controller::new(DEFAULT_TABLE, band_only(ideal()));
     let cmd = c.step(&inputs((30.0, -10.0), (40.0, 0.0), 25.0));
     assert_eq!(cmd.mode, Mode::Override, "{cmd:?}");
     assert_eq!(cmd.acceleration, beta);
+    // and harder with one (the follower 40 m back at the same speed allows it), flagged an
+    // emergency with the rear half unknown after it.
+    let cmd = controller().step(&inputs((30.0, -10.0), (40.0, 0.0), 25.0));
+    assert!(
+        cmd.acceleration < beta && cmd.emergency && cmd.takeover,
+        "{cmd:?}"
+    );
+    assert_eq!(cmd.fault, Some(Fault::AfterEmergencyBraking), "{cmd:?}");
 }
 
 /// The jerk limit is inside the certificate, so near the margin the car starts
@@ -447,8 +462,11 @@ proptest! {
         i.leader.timestamp_us = NOW - age;
         let cmd = controller().step(&i);
         prop_assert!(cmd.acceleration.is_finite());
+        // Within the band, or below it down to the emergency authority's level, flagged.
         let (lo, hi, _) = band_and_leader();
-        prop_assert!((lo..=hi).contains(&cmd.acceleration));
+        let emergency = -ideal().certificate.emergency.level;
+        prop_assert!((emergency..=hi).contains(&cmd.acceleration));
+        prop_assert!(cmd.acceleration >= lo || (cmd.emergency && cmd.takeover), "{:?}", cmd);
         prop_assert_eq!(
             cmd.fault.is_some(),
             matches!(cmd.mode, Mode::MinimumRisk | Mode::Uncertified)
@@ -551,8 +569,9 @@ fn the_measurements_age_is_inside_the_look_ahead() {
     old.leader.timestamp_us = NOW - 100_000;
     old.ego_speed.timestamp_us = NOW - 100_000;
     old.ego_acceleration.timestamp_us = NOW - 100_000;
-    let m_fresh = controller().step(&fresh).margin.unwrap();
-    let m_old = controller().step(&old).margin.unwrap();
+    let band = || Controller::new(DEFAULT_TABLE, band_only(ideal()));
+    let m_fresh = band().step(&fresh).margin.unwrap();
+    let m_old = band().step(&old).margin.unwrap();
     assert!(m_old < m_fresh - 0.5, "{m_old} vs {m_fresh}");
 }
 
@@ -651,9 +670,18 @@ fn a_clock_jump_is_a_fault_that_recovers_never_latches() {
 #[test]
 fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
     use firmware::controller::Envelope;
-    // A vehicle that may brake at only 3 m/s^2: the table's 3.5 does not fit, and clamping it
-    // would void the certificate, so the table is refused.
+    // A vehicle that may brake at only 3 m/s^2 (and so declares no emergency authority beyond
+    // it): the table's 3.5 does not fit, and clamping it would void the certificate, so the
+    // table is refused.
+    let no_emergency = CertificateConfig {
+        emergency: Braking {
+            level: 3.0,
+            ..ideal().certificate.emergency
+        },
+        ..ideal().certificate
+    };
     let soft = Config {
+        certificate: no_emergency,
         plant: PlantConfig {
             envelope: Envelope {
                 min_acceleration: -3.0,
@@ -673,6 +701,7 @@ fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
             mrm_deceleration: 4.0,
             ..ideal().fallback
         },
+        certificate: no_emergency,
         plant: PlantConfig {
             envelope: Envelope {
                 min_acceleration: -3.0,
@@ -712,6 +741,19 @@ fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
         ..ideal()
     };
     assert!(!bad.is_valid());
+    // An emergency authority beyond the envelope's braking is not a configuration either.
+    let beyond = Config {
+        certificate: CertificateConfig {
+            emergency: Braking {
+                level: 8.5,
+                ..ideal().certificate.emergency
+            },
+            ..ideal().certificate
+        },
+        ..ideal()
+    };
+    assert!(!beyond.is_valid());
+    assert!(ideal().is_valid());
 }
 
 /// A valid, correctly checksummed split table with the given band (all values 1 m), with a
@@ -881,7 +923,7 @@ fn a_table_checked_for_less_error_than_declared_is_refused() {
 fn a_checksummed_table_with_wild_ego_bounds_is_refused() {
     // The audit's table: a valid CRC, the ego's bounds [-512, 131072] m/s^2. Before the
     // envelope, the override commanded -512 and the nominal law +2; now it never loads.
-    for band in [(-512.0, 131_072.0), (-50.0, 50.0), (-3.5, 2.5), (-4.0, 2.0)] {
+    for band in [(-512.0, 131_072.0), (-50.0, 50.0), (-3.5, 2.5), (-9.0, 2.0)] {
         let bytes = split_table(band);
         let mut c = Controller::new(&bytes, ideal());
         assert!(c.table().is_none(), "{band:?}");
@@ -1136,7 +1178,7 @@ fn an_aging_track_slows_the_car_smoothly_within_the_covered_age() {
         i.leader.timestamp_us = NOW - age_ms * 1_000;
         i.ego_speed.timestamp_us = NOW;
         i.ego_acceleration.timestamp_us = NOW;
-        let cmd = Controller::new(DEFAULT_TABLE, datasheet()).step(&i);
+        let cmd = Controller::new(DEFAULT_TABLE, band_only(datasheet())).step(&i);
         assert_ne!(cmd.mode, Mode::MinimumRisk, "{age_ms} ms: {cmd:?}");
         assert!(
             cmd.acceleration <= previous + 1e-6,
@@ -1213,8 +1255,9 @@ fn a_lost_track_runs_a_certified_fallback_and_a_track_that_returns_is_checked() 
 }
 
 /// A cut-in. A new vehicle 12 m ahead where the last track was 70 m: the
-/// firmware takes it as a new vehicle at once, brakes at beta in the same period (nothing
-/// gentler restores the front), and raises the takeover request.
+/// firmware takes it as a new vehicle at once, brakes harder than beta in the same period
+/// (nothing gentler restores the front, and the follower 40 m back allows it), and raises the
+/// takeover request.
 #[test]
 fn a_cut_in_is_answered_in_the_period_it_is_seen() {
     let (beta, _, _) = band_and_leader();
@@ -1231,8 +1274,8 @@ fn a_cut_in_is_answered_in_the_period_it_is_seen() {
     };
     let cmd = c.step(&cut_in);
     assert_eq!(cmd.leader, firmware::TrackState::New, "{cmd:?}");
-    assert_eq!(cmd.acceleration, beta, "{cmd:?}");
-    assert!(cmd.takeover && cmd.margin.unwrap() < 0.0, "{cmd:?}");
+    assert!(cmd.acceleration < beta, "{cmd:?}");
+    assert!(cmd.takeover && cmd.emergency, "{cmd:?}");
     assert!(
         c.events()
             .any(|e| matches!(e, firmware::Event::NewLeader { gap, .. } if *gap == 12.0)),

@@ -106,6 +106,8 @@ pub struct Outcome {
     pub uncertified_minimum_risk: u64,
     /// Periods of the certified fallback (a track beyond its covered age).
     pub fallback_periods: u64,
+    /// Periods braked harder than the band (the emergency authority).
+    pub below_band_periods: u64,
     /// The largest track ages the firmware read, s (leader, follower).
     pub max_track_age: [f32; 2],
     /// The cut-in, if any, and how it was answered.
@@ -161,6 +163,7 @@ impl Outcome {
             initial_margin,
             uncertified_minimum_risk: s.uncertified_minimum_risk,
             fallback_periods: s.fallback_periods,
+            below_band_periods: s.below_band_periods,
             max_track_age: s.max_track_age,
             cut_in: s.cut_in,
             cut_in_unavoidable: None,
@@ -323,10 +326,19 @@ pub fn run_episode(
                 }
                 Behind::Replayed | Behind::AtOnce => None,
             };
+            // The record ends where the episode did (at its collision): past it, the humans
+            // keep their last accelerations (a braking leader brakes on to a stop) for
+            // `AFTER_RECORD` more, so that a braking that only delays the collision past the
+            // record's end is not scored as avoiding it.
+            let extra = record
+                .last()
+                .map(|last| std::iter::repeat_n(*last, (AFTER_RECORD / h).round() as usize));
             let collided = record
                 .iter()
+                .copied()
+                .chain(extra.into_iter().flatten())
                 .enumerate()
-                .any(|(k, &(a_leader, recorded, command))| {
+                .any(|(k, (a_leader, recorded, command))| {
                     let command = if k < delivered { command } else { braking };
                     let a_follower = match (behind, reacting.as_mut()) {
                         (Behind::Reacting, Some(humans)) => {
@@ -357,6 +369,9 @@ pub fn run_episode(
     }
     Some(outcome)
 }
+
+/// How long a cut-in counterfactual runs past the end of the episode's record, s.
+const AFTER_RECORD: f32 = 10.0;
 
 /// The follower of a cut-in counterfactual.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -455,6 +470,11 @@ pub struct GroupSummary {
     pub fallback_periods: u64,
     /// See `fallback_periods`.
     pub fallback_episodes: usize,
+    /// Periods braked harder than the band (the emergency authority) over the group, and the
+    /// episodes that did.
+    pub below_band_periods: u64,
+    /// See `below_band_periods`.
+    pub below_band_episodes: usize,
     /// The largest track age the firmware read, s (leader, follower).
     pub max_track_age: [f32; 2],
     /// Cut-ins, if the group has them.
@@ -481,6 +501,8 @@ pub struct CutInSummary {
     pub mean_hardest_command: f32,
     /// Collisions after a cut-in.
     pub collisions: usize,
+    /// Of those, the ones with the follower (the ego hit from behind).
+    pub collisions_behind: usize,
     /// Of those, the ones that braking at beta from the cut-in on would not have avoided
     /// either: the humans alone had made them unavoidable.
     pub unavoidable: usize,
@@ -594,6 +616,8 @@ pub fn run_group(
             .map(|(_, o)| o.uncertified_minimum_risk)
             .sum(),
         fallback_periods: outcomes.iter().map(|(_, o)| o.fallback_periods).sum(),
+        below_band_periods: outcomes.iter().map(|(_, o)| o.below_band_periods).sum(),
+        below_band_episodes: count(&|o| o.below_band_periods > 0),
         fallback_episodes: count(&|o| o.fallback_periods > 0),
         max_track_age: [0, 1].map(|i| {
             outcomes
@@ -636,6 +660,10 @@ fn cut_in_summary(outcomes: &[(u64, Outcome)]) -> CutInSummary {
             .sum::<f32>()
             / n,
         collisions: cuts.iter().filter(|(o, _)| o.collided).count(),
+        collisions_behind: cuts
+            .iter()
+            .filter(|(o, _)| o.collided && o.min_gap_follower <= 0.0)
+            .count(),
         unavoidable: cuts
             .iter()
             .filter(|(o, _)| o.cut_in_unavoidable == Some(true))
@@ -803,6 +831,10 @@ pub struct CampaignTotals {
     pub uncertified_minimum_risk_periods: u64,
     /// Their periods of the certified fallback.
     pub fallback_periods: u64,
+    /// Their periods braked harder than the band, and the episodes that did.
+    pub below_band_periods: u64,
+    /// See `below_band_periods`.
+    pub below_band_episodes: usize,
     /// Their emergency periods by cause.
     pub emergencies: EmergencyCauses,
     /// Cut-ins over every group.
@@ -811,6 +843,8 @@ pub struct CampaignTotals {
     pub cut_ins_braked_late: usize,
     /// Collisions after a cut-in that braking at beta from the first track would have avoided.
     pub cut_in_collisions_avoidable: usize,
+    /// Collisions after a cut-in with the follower (the ego hit from behind).
+    pub cut_in_collisions_behind: usize,
     /// Collisions after a cut-in that braking at [`EMERGENCY_BRAKING`] would not have avoided.
     pub cut_in_collisions_unavoidable_at_emergency: usize,
     /// Collisions after a cut-in that braking at [`EMERGENCY_BRAKING`] would have turned into
@@ -925,12 +959,15 @@ pub fn run_campaign(
         totals.certificate_losses += s.certificate_losses;
         totals.uncertified_minimum_risk_periods += s.uncertified_minimum_risk_periods;
         totals.fallback_periods += s.fallback_periods;
+        totals.below_band_periods += s.below_band_periods;
+        totals.below_band_episodes += s.below_band_episodes;
         totals.emergencies = totals.emergencies.add(&s.emergencies);
     }
     for c in groups.iter().filter_map(|s| s.cut_ins) {
         totals.cut_ins += c.episodes;
         totals.cut_ins_braked_late += c.front_uncertified - c.beta_within_one_period;
         totals.cut_in_collisions_avoidable += c.collisions - c.unavoidable;
+        totals.cut_in_collisions_behind += c.collisions_behind;
         totals.cut_in_collisions_unavoidable_at_emergency += c.unavoidable_at_emergency;
         totals.cut_in_collisions_hit_from_behind_at_emergency += c.hit_from_behind_at_emergency;
         for i in 0..2 {

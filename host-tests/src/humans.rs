@@ -57,7 +57,7 @@ pub enum Follower {
 /// How long a follower takes to react to the ego's brake lights, s: UN R157's careful driver,
 /// 0.4 s to perceive and 0.75 s to brake (Green 2000 measures about 1.25 s for a leader's brake
 /// lights).
-pub const REACTION_TIME: f32 = 1.15;
+pub const REACTION_TIME: f32 = table_format::rear::CAREFUL_DRIVER_REACTION;
 
 impl Follower {
     /// Whether the follower keeps to the table's model.

@@ -173,6 +173,8 @@ pub struct Score {
     /// Periods of the certified fallback: a track beyond its covered age, the minimum-risk
     /// deceleration under the front half of its last measurement.
     pub fallback_periods: u64,
+    /// Periods whose command braked harder than the table's band: the emergency authority.
+    pub below_band_periods: u64,
     /// The largest age of a track the firmware read, s (leader, follower).
     pub max_track_age: [f32; 2],
     /// What became of a cut-in, if the episode had one.
@@ -184,7 +186,9 @@ pub struct Score {
 /// cause that holds, in this order.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct EmergencyCauses {
-    /// At engagement: the first period, and the unbroken run of emergencies from it (a start
+    /// Periods of emergency runs by the cause found at each run's first period (a run: an
+    /// unbroken sequence of emergency periods, one emergency with one cause however long the
+    /// braking that answers it lasts). At engagement: a run from the first period (a start
     /// whose measured state the firmware cannot certify).
     pub engagement: u64,
     /// Within 5 s of a cut-in (outside the model).
@@ -292,6 +296,7 @@ impl Score {
             max_ego_speed: 0.0,
             uncertified_minimum_risk: 0,
             fallback_periods: 0,
+            below_band_periods: 0,
             max_track_age: [0.0; 2],
             cut_in: None,
         }
@@ -378,8 +383,17 @@ pub struct World<'t> {
     /// The road's grade under the ego (rise over run; positive uphill). Outside the model:
     /// the certificate assumes an actuator that tracks the acceleration over ground.
     grade: f32,
-    /// Every period so far was an emergency (an engagement into an uncertified measurement).
-    engagement_run: bool,
+    /// The emergency run under way and its cause (`None`: the last period was not one).
+    emergency_run: Option<EmergencyCause>,
+}
+
+/// What started an emergency run ([`EmergencyCauses`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum EmergencyCause {
+    Engagement,
+    CutIn,
+    UncertifiedTruth,
+    CertifiedTruth,
 }
 
 impl<'t> World<'t> {
@@ -412,7 +426,7 @@ impl<'t> World<'t> {
             cut_in: None,
             iso: crate::iso::IsoCheck::new(1.0),
             grade: 0.0,
-            engagement_run: false,
+            emergency_run: None,
         }
     }
 
@@ -629,19 +643,30 @@ impl<'t> World<'t> {
                 .cut_in
                 .map(|(at, _)| self.period.saturating_sub(at) as f32 * h);
             let e = &mut s.emergencies;
-            if self.period == 0 || self.engagement_run {
-                s.engaged_in_emergency |= self.period == 0;
-                e.engagement += 1;
+            let cause = self.emergency_run.unwrap_or(if self.period == 0 {
+                EmergencyCause::Engagement
             } else if since_cut_in.is_some_and(|t| t <= 5.0) {
-                e.cut_in += 1;
+                EmergencyCause::CutIn
             } else if truth_before.is_some_and(|m| m > 0.0) {
-                e.certified_truth += 1;
+                EmergencyCause::CertifiedTruth
             } else {
-                e.uncertified_truth += 1;
-            }
+                EmergencyCause::UncertifiedTruth
+            });
+            s.engaged_in_emergency |= self.period == 0;
+            *match cause {
+                EmergencyCause::Engagement => &mut e.engagement,
+                EmergencyCause::CutIn => &mut e.cut_in,
+                EmergencyCause::CertifiedTruth => &mut e.certified_truth,
+                EmergencyCause::UncertifiedTruth => &mut e.uncertified_truth,
+            } += 1;
+            self.emergency_run = Some(cause);
+        } else {
+            self.emergency_run = None;
         }
-        self.engagement_run = command.emergency && (self.period == 0 || self.engagement_run);
         s.periods += 1;
+        if command.acceleration < self.model.band_min {
+            s.below_band_periods += 1;
+        }
         if command.mode == Mode::MinimumRisk {
             if command.margin.is_some() {
                 s.fallback_periods += 1;

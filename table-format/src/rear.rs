@@ -78,13 +78,18 @@ pub struct ReactingFollower {
     pub max_speed: f32,
 }
 
+/// UN R157's careful driver's reaction, s: 0.4 s to perceive and 0.75 s to move the foot and
+/// brake (UN Regulation No. 157, Annex 3, the careful and competent human driver). The
+/// firmware's default follower reaction and the campaigns' reacting follower.
+pub const CAREFUL_DRIVER_REACTION: f32 = 1.15;
+
 impl ReactingFollower {
     /// UN R157's careful driver: 0.4 s to perceive and 0.75 s to brake (1.15 s in which its
     /// speed is held), then 0.774 g (7.59 m/s^2) reached over 0.6 s (12.65 m/s^3), speeds up
     /// to `max_speed`.
     pub const fn careful_driver(max_speed: f32) -> Self {
         ReactingFollower {
-            reaction_time: 1.15,
+            reaction_time: CAREFUL_DRIVER_REACTION,
             reaction_acceleration: 0.0,
             braking: 0.774 * 9.81,
             jerk: 0.774 * 9.81 / 0.6,

@@ -8,10 +8,13 @@
 //! value over it on every new follower track); for 1.3 s the leader track is flagged invalid,
 //! longer than the covered age (1 s), so the track ages and is then lost. So every path of the
 //! control step runs: nominal, override (braking at the certificate's level), the aging track
-//! and the certified fallback, and the instruction counter's worst case covers them all. Prints
-//! a summary over semihosting and exits with status 0 when no gap closed, each of the three
-//! modes ran, the minimum-risk manoeuvre ran exactly when the track was past its covered age,
-//! and the certificate's margin never fell below `-CERTIFICATE_TOLERANCE`; 1 otherwise.
+//! and the certified fallback; then a car cuts in 12 m ahead, 5 m/s slower, and brakes at
+//! 6 m/s^2, so that the emergency answer runs too (below the band, the follower's check
+//! included). The instruction counter's worst case covers them all. Prints a summary over
+//! semihosting and exits with status 0 when no gap closed, each of the three modes ran, the
+//! minimum-risk manoeuvre ran exactly when the track was past its covered age, the
+//! certificate's margin never fell below `-CERTIFICATE_TOLERANCE` before the cut-in, and the
+//! cut-in was braked below the band; 1 otherwise.
 //!
 //! It also measures the stack one control step uses (the stack below the caller is painted
 //! before the first step and scanned after the last), and brackets every step with two marker
@@ -52,9 +55,18 @@ macro_rules! report {
         hprintln!($($arg)*);
     }};
 }
+use firmware::controller::ISO_15622_LIMITS;
 use firmware::{
     Config, Controller, Inputs, Measurement, Mode, Track, CERTIFICATE_TOLERANCE, DEFAULT_TABLE,
 };
+
+/// Tells the instruction counter that the step just counted was an emergency (the cut-in
+/// phase: the band's floor at once, or the emergency authority below it).
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn hjacc_mode_emergency() {
+    black_box(0x5eed_0050u32);
+}
 
 /// Tells the instruction counter that the step just counted ran the nominal law.
 #[no_mangle]
@@ -184,6 +196,11 @@ fn follower_acceleration(follower: Car, ego: Car) -> f32 {
 /// The fault window: the leader track is flagged invalid, s.
 const FAULT: (u32, u32) = (2_500, 2_565);
 
+/// From this period on, a car cuts in 12 m ahead, 5 m/s slower than the ego, and brakes at
+/// the leader model's 6 m/s^2 to a stop: the emergency answer runs (outside the model: the
+/// margin and gap checks end here).
+const CUT_IN: u32 = 3_000;
+
 #[entry]
 fn main() -> ! {
     let config = Config::default();
@@ -192,8 +209,8 @@ fn main() -> ! {
     let s = config.sensors;
     // A range read long by the declared error.
     let long = |g: f32| g + s.error.range + s.error.range_relative * g;
-    let steps = 3000u32; // 60 s
-                         // At the gap policy's distance (the certificate's steady gap with the law's room).
+    let steps = CUT_IN + 150; // 60 s, then 3 s after the cut-in
+                              // At the gap policy's distance (the certificate's steady gap with the law's room).
     let mut leader = Car { x: 140.0, v: 25.0 };
     let mut last_command = 0.0f32;
     let mut ego = Car { x: 50.0, v: 25.0 };
@@ -202,6 +219,7 @@ fn main() -> ! {
     let (mut nominal, mut overridden, mut minimum_risk) = (0u32, 0u32, 0u32);
     let (mut min_front, mut min_rear) = (f32::INFINITY, f32::INFINITY);
     let mut max_brake = 0.0f32;
+    let (mut emergency, mut below_band, mut cut_in_front) = (0u32, 0u32, f32::INFINITY);
 
     // Paint the stack below us.
     let sp = cortex_m::register::msp::read() as usize;
@@ -215,6 +233,12 @@ fn main() -> ! {
     for k in 0..steps {
         let now_us = u64::from(k) * u64::from(config.period_us);
         let t = k as f32 * h;
+        if k == CUT_IN {
+            leader = Car {
+                x: ego.x + 12.0,
+                v: (ego.v - 5.0).max(0.0),
+            };
+        }
         let inputs = Inputs {
             leader: Measurement::new(
                 Track {
@@ -252,6 +276,7 @@ fn main() -> ! {
         let command = controller.step(black_box(&inputs));
         hjacc_step_end();
         match command.mode {
+            _ if command.emergency => hjacc_mode_emergency(),
             Mode::Nominal => hjacc_mode_nominal(),
             Mode::Override => hjacc_mode_override(),
             Mode::MinimumRisk => hjacc_mode_minimum_risk(),
@@ -260,7 +285,11 @@ fn main() -> ! {
         if (command.mode == Mode::MinimumRisk) != lost || (lost && command.margin.is_none()) {
             misplaced_minimum_risk += 1;
         }
-        {
+        if k >= CUT_IN {
+            emergency += u32::from(command.emergency);
+            below_band += u32::from(command.acceleration < ISO_15622_LIMITS.0);
+        }
+        if k < CUT_IN {
             let state = [
                 leader.x - ego.x,
                 leader.v,
@@ -286,15 +315,19 @@ fn main() -> ! {
         if -command.acceleration > max_brake {
             max_brake = -command.acceleration;
         }
-        let a_leader = leader_acceleration(t, leader.v);
+        let a_leader = if k >= CUT_IN {
+            -6.0
+        } else {
+            leader_acceleration(t, leader.v)
+        };
         let a_follower = follower_acceleration(follower, ego);
         let a_ego = command.acceleration;
-        min_front = min_front.min(lowest_gap(
-            leader.x - ego.x,
-            leader.v - ego.v,
-            a_leader - a_ego,
-            h,
-        ));
+        let front_gap = lowest_gap(leader.x - ego.x, leader.v - ego.v, a_leader - a_ego, h);
+        if k < CUT_IN {
+            min_front = min_front.min(front_gap);
+        } else {
+            cut_in_front = cut_in_front.min(front_gap);
+        }
         min_rear = min_rear.min(lowest_gap(
             ego.x - follower.x,
             ego.v - follower.v,
@@ -338,6 +371,12 @@ fn main() -> ! {
         follower.v
     );
     report!(
+        "cut-in 12 m ahead, 5 m/s slower, braking at 6 m/s^2: {} emergency steps, {} below the band, min gap front {} m",
+        emergency,
+        below_band,
+        cut_in_front
+    );
+    report!(
         "stack used by the control loop (painted, 8 KiB window): {} bytes",
         stack_bytes
     );
@@ -351,7 +390,9 @@ fn main() -> ! {
         && overridden > 0
         && minimum_risk > 0
         && misplaced_minimum_risk == 0
-        && min_margin > -CERTIFICATE_TOLERANCE;
+        && min_margin > -CERTIFICATE_TOLERANCE
+        && below_band > 0
+        && cut_in_front > 0.0;
     report!("result: {}", if ok { "PASS" } else { "FAIL" });
     debug::exit(if ok {
         debug::EXIT_SUCCESS

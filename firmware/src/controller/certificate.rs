@@ -4,7 +4,8 @@
 
 use table_format::authority::Braking;
 use table_format::front::{front_value, least_braking, FrontModel};
-use table_format::{Bounds, Game, Table};
+use table_format::rear::ReactingFollower;
+use table_format::{Bounds, FollowerModel, Game, Table};
 
 use super::history::seconds;
 use super::{Config, Controller, Fault, OverridePolicy};
@@ -94,6 +95,13 @@ pub(super) struct Model {
     /// The smallest value on the rear grid's last gap face: the rear value beyond the grid.
     pub(super) beyond_grid: f32,
     pub(super) error_bound: f32,
+    /// The emergency authority, where it brakes harder than the band (module docs:
+    /// emergencies).
+    pub(super) emergency: Option<Braking>,
+    /// The follower the emergency authority is bought from: the table's follower, reacting
+    /// after the configured time, accelerating at most at its IDM's largest acceleration until
+    /// then and braking at its clip's bottom after.
+    pub(super) follower: ReactingFollower,
 }
 
 impl Model {
@@ -257,7 +265,7 @@ fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
         ego,
         leader,
         max_speed,
-        ..
+        follower: FollowerModel::Idm { clip, idm, .. },
     } = header.game
     else {
         return Err(Fault::WrongGame);
@@ -310,6 +318,16 @@ fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
         gap_max: gaps.max,
         beyond_grid,
         error_bound: header.error_bound.total(),
+        emergency: (config.certificate.emergency.level > -ego.min)
+            .then_some(config.certificate.emergency),
+        follower: ReactingFollower {
+            reaction_time: config.certificate.follower_reaction_time,
+            // The IDM's output never exceeds its largest acceleration.
+            reaction_acceleration: math::min(clip.max, idm.max_acceleration),
+            braking: -clip.min,
+            jerk: f32::INFINITY,
+            max_speed,
+        },
     })
 }
 
@@ -343,7 +361,7 @@ pub(super) struct Ramp {
 /// and lag: `(response_time, ramp_from)`, the hold lasting until the ramp's start takes force
 /// plus the lag, and the ramp's value at the hold's end (`table_format::front`'s module docs:
 /// a hold of `D + tau` bounds the delays before a ramp).
-fn profile(t_0: u64, ramp: Ramp, dead_us: u64, lag: f32, jerk: f32) -> (f32, f32) {
+pub(super) fn profile(t_0: u64, ramp: Ramp, dead_us: u64, lag: f32, jerk: f32) -> (f32, f32) {
     let in_force = ramp.start_us.saturating_add(dead_us);
     let response = seconds(in_force.saturating_sub(t_0)) + lag;
     let ramp_from = if math::is_finite(jerk) {

@@ -16,8 +16,10 @@ pub enum Mode {
     Override,
     /// The minimum-risk manoeuvre after a fault.
     MinimumRisk,
-    /// The nominal law (in the band) without a certificate: the state is outside the table's
-    /// domain ([`Fault::OutsideDomain`]).
+    /// The command without a certificate of the rear half, the front still enforced: the
+    /// state is outside the table's domain ([`Fault::OutsideDomain`]), or a braking below the
+    /// band may still act on the follower's last measurement
+    /// ([`Fault::AfterEmergencyBraking`]).
     Uncertified,
     /// Disengaged by the driver: the command is not for the actuator (acceleration 0).
     Standby,
@@ -28,7 +30,8 @@ pub enum Mode {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Command {
     /// Requested acceleration, m/s^2 (negative: braking). Always finite, always in the
-    /// vehicle's envelope, and in the table's band when a table was accepted.
+    /// vehicle's envelope, and in the table's band when a table was accepted, but for the
+    /// emergency authority's braking below it (flagged [`Command::emergency`]).
     pub acceleration: f32,
     /// Which law produced it.
     pub mode: Mode,
@@ -42,10 +45,12 @@ pub struct Command {
     /// closer than the certificate allows), the rear half is unknown ([`Mode::Uncertified`]),
     /// or the command is a minimum-risk manoeuvre.
     pub takeover: bool,
-    /// The command brakes faster than ISO 15622's jerk limit at the ego's speed allows
-    /// ([`crate::iso15622`]): the certificate needed it (an uncertified front: a cut-in, a
-    /// leader outside its model), or a brake ramp configured above the limit. The takeover
-    /// request is raised with it.
+    /// The command is the emergency answer to a front the certificate no longer covers (a
+    /// cut-in, an engagement into an uncertified state, a leader outside its model): the
+    /// band's floor at once, or a braking below the band under the emergency authority; or it
+    /// brakes faster than ISO 15622's jerk limit at the ego's speed allows
+    /// ([`crate::iso15622`]; a brake ramp configured above the limit). The takeover request is
+    /// raised with it.
     pub emergency: bool,
     /// What the controller made of the leader track ([`TrackState`]).
     pub leader: TrackState,

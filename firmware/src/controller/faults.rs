@@ -60,6 +60,13 @@ pub enum Fault {
     /// (`sensors.error`): some bound of its record
     /// ([`table_format::Verification::measurement_error`]) is below the declared one.
     TableCheckedForLessError,
+    /// The ego braked below the band (the emergency authority) after the follower's kept
+    /// measurement was taken, or too recently for the actuator to be back in the band: the
+    /// rear table's value holds only while the ego's acceleration stays in the band, so the
+    /// rear half is unknown until a follower measurement taken after the braking's effect (a
+    /// period, the dead time and ten lag time constants after the last such command). The
+    /// front is still enforced ([`Mode::Uncertified`](super::Mode::Uncertified)).
+    AfterEmergencyBraking,
     /// The board restarted after a fault of its own: the watchdog expired, or a HardFault
     /// (a stack overflow among them) or a panic ended the last run. The minimum-risk manoeuvre
     /// until the next power-on reset (see [`Controller::latch_minimum_risk`](super::Controller::latch_minimum_risk)).

@@ -14,8 +14,8 @@
 //!   ego keeps its command in the band, whatever the command is.
 //!
 //! # The law, and why it keeps a certified state certified
-//! Every command is in the band `[-beta, a_max]`, in every mode, so the rear half needs no
-//! decision: it is a property of the band, proven for the table itself, cell by cell, by
+//! Every command is in the band `[-beta, a_max]`, in every mode (the emergency authority's
+//! answers to an uncertified front aside, below), so the rear half needs no decision: it is a property of the band, proven for the table itself, cell by cell, by
 //! `solver verify` (below). The front half decides the command. The nominal ACC law
 //! (the `law` module, which knows nothing of the certificate but its steady-following gap) proposes `u`;
 //! the look-ahead computes `front_value` for `u` held one period `h`, then the **braking
@@ -53,9 +53,42 @@
 //! look-ahead certifies the true state, and the ramp keeps it certified: measurement noise
 //! moves the corner, not the truth; the best corner bounds the true value from above, so where
 //! it fails the truth is not certified); otherwise (an engagement into an uncertified state, a cut-in, a leader
-//! beyond its model) the command is `beta` at once: an emergency, flagged in
-//! [`Command::emergency`] with the takeover request whenever a command drops faster than
-//! ISO 15622's jerk limit.
+//! beyond its model) the command is the emergency answer: `beta` at once, or harder under the
+//! emergency authority (below). Every period of it is flagged in [`Command::emergency`] with
+//! the takeover request, as is any command that drops faster than ISO 15622's jerk limit.
+//!
+//! # Emergencies: the emergency authority, bought from the follower
+//! The vehicle declares a second braking, its full one ([`CertificateConfig::emergency`]:
+//! 8 m/s^2 built up at 12 m/s^3 by default, a dry road), within its envelope. It is used only
+//! in the emergency answer, and only where braking at `beta` at once cannot keep the leader's
+//! worst case (at the error box's worst corner, through the delays) above the front margin:
+//! then the command is the gentlest level between `beta` and the full one whose braking does
+//! (the ego's acceleration held at what is pending through the dead time and the lag, then
+//! building up at the declared jerk: the slower of the two), or the full level where none
+//! does, found by a secant in `1 / level` and checked; commanded at once, flagged an
+//! emergency. The follower behind sells that braking: the level is lowered to the hardest that
+//! keeps [`table_format::rear::rear_gap_after`] above `rear_margin` at the worst corner of the
+//! follower's measurement box at its time `t_f`, for a follower that keeps accelerating (at
+//! most at its IDM's largest acceleration) until its reaction time
+//! ([`CertificateConfig::follower_reaction_time`], 1.15 s: UN R157's careful driver) after the
+//! ego's brake lights are on for sure, then brakes at its clip's hardest (6 m/s^2 on the
+//! deployed table), the ego braking at most at that level (or the hardest since `t_f`). The
+//! lights are on from [`table_format::rear::lights_on_within`] after a run of commands at or
+//! below -0.5 m/s^2 began, while it lasts (the dead time and lag from what is pending); the
+//! reaction counts from there, so a follower close behind allows more as the braking goes on.
+//! Where it allows nothing beyond `beta` the answer is `beta`: the car ahead is not bought with
+//! the car behind.
+//!
+//! This is an answer, not a certificate: the front is outside the model already. What follows
+//! it is stated, not assumed away: the rear table's value holds only while the ego brakes
+//! within the band, so a follower measurement that the braking's effect may reach (taken up to
+//! a period, the dead time and ten lag time constants after the last command below the band:
+//! the lag then passes on `e^-10` of the excess, 2e-4 m/s^2) is not used for the rear half
+//! ([`Fault::AfterEmergencyBraking`], [`Mode::Uncertified`], the front still enforced); the
+//! ego's speed interval at a track's time takes the emergency level as its lowest acceleration
+//! for as long. The follower model credits its whole braking once it has reacted to any
+//! braking; a driver who answers a gentle braking gently and is then surprised by a harder one
+//! is outside it.
 //!
 //! # Delays: the measurements' age, the actuator's dead time and lag
 //! The configuration declares the actuator's dead time `D` (a command acts `D` after it is
@@ -209,7 +242,8 @@
 //! manoeuvre ends after [`CLOCK_RECOVERY_PERIODS`] good periods. A board that restarted after
 //! a fault of its own (watchdog, HardFault, panic) latches the manoeuvre until power-on
 //! ([`Controller::latch_minimum_risk`], [`Fault::RestartedAfterFault`]). Every command, in
-//! every mode, is clamped into the envelope, and (with a table) into the band.
+//! every mode, is clamped into the envelope, and (with a table) into the band, but for the
+//! emergency authority's (above).
 //!
 //! # What `solver verify` proves of the rear table
 //! `cargo run -p solver --release -- verify firmware/tables/default.bin` proves, by interval
@@ -247,7 +281,8 @@
 //! channel may have its own age); the actuator is a
 //! dead time and a first-order lag no slower than the configuration declares, tracks the
 //! acceleration over ground (a grade is its business, not the certificate's), and brakes at
-//! beta when told to; its reported state ([`Inputs::ego_acceleration`]) bounds what it
+//! beta when told to (and, for the emergency answer, at the emergency level, built up no slower
+//! than declared); its reported state ([`Inputs::ego_acceleration`]) bounds what it
 //! delivers before the controller's commands are known, within `sensors.acceleration_error`;
 //! the control step comes every period. Nothing is assumed of the ego's speed: the firmware keeps it in the
 //! domain (above). The front value is exact, and its look-ahead over the
@@ -256,6 +291,7 @@
 
 mod certificate;
 mod command;
+mod emergency;
 mod faults;
 mod history;
 mod law;
@@ -284,6 +320,7 @@ use crate::math;
 use crate::sensing::TrackState;
 
 use certificate::{LeaderMemo, Ramp, RearMemo};
+use emergency::EmergencyMemo;
 
 /// How long [`Mode::Override`] is still reported after the look-ahead's last trim of the law's
 /// command, microseconds: the label does not chatter while the law rides the look-ahead's edge.
@@ -341,6 +378,12 @@ pub struct Controller<'t> {
     speed_kept_from_us: Option<u64>,
     /// The last plausible follower measurement, with its rear value at its time.
     rear: Option<RearMemo>,
+    /// The last braking below the band, while its effect may last (module docs:
+    /// emergencies).
+    emergency: Option<EmergencyMemo>,
+    /// From when the brake lights are on for sure, while every command since a run of braking
+    /// commands began has been at or below [`emergency::LIGHTS_COMMAND`] (`None`: no run).
+    lights_on_us: Option<u64>,
     /// The certificate of the state measured in the last standby period (reset whenever a
     /// step is engaged): what an engagement is judged by.
     standby_certificate: Result<Certificate, DriverError>,
@@ -391,6 +434,8 @@ impl<'t> Controller<'t> {
             leader: None,
             speed_kept_from_us: None,
             rear: None,
+            emergency: None,
+            lights_on_us: None,
             standby_certificate: Err(DriverError::CertificateUnknown),
             ego_history: Deque::new(),
         }
@@ -478,6 +523,8 @@ impl<'t> Controller<'t> {
     /// Forgets what the actuator was told: from here on it is what its reported state says.
     fn forget_commands(&mut self) {
         self.front_chain = false;
+        // The lights' run ends with the commands it was argued from.
+        self.lights_on_us = None;
         self.issued.forget();
         self.ramp = None;
         self.last_command = None;
@@ -491,6 +538,17 @@ impl<'t> Controller<'t> {
         let fresh = m.timestamp_us <= now && now - m.timestamp_us <= limit;
         (m.valid && fresh && math::is_finite(m.value) && math::abs(m.value) <= 20.0)
             .then_some(m.value + self.config.sensors.acceleration_error)
+    }
+
+    /// The rear value of the kept follower measurement as the certificate may use it now: the
+    /// table's value holds while the ego brakes within the band, so not for a measurement the
+    /// effect of a braking below it reaches ([`Fault::AfterEmergencyBraking`]).
+    fn rear_value_now(&self, rear: &RearMemo) -> Result<f32, Fault> {
+        let value = rear.value?;
+        if self.emergency_reaches(rear.at_us) {
+            return Err(Fault::AfterEmergencyBraking);
+        }
+        Ok(value)
     }
 
     /// Recent events (the last 32), oldest first.
@@ -589,6 +647,11 @@ impl<'t> Controller<'t> {
         // from the last command, since `c` is below its floor), or at beta for a command at
         // beta. A command above the floor passed the look-ahead (or is not certified at all).
         let c = command.acceleration;
+        // The brake lights' run (module docs: emergencies).
+        self.lights_on_us = match model {
+            Some(m) if c <= emergency::LIGHTS_COMMAND => self.lights_on_from(now, &m),
+            _ => None,
+        };
         let jerk = self.config.certificate.brake_jerk;
         let h = seconds(u64::from(self.config.period_us));
         self.ramp = match (model, floor) {
@@ -640,7 +703,7 @@ impl<'t> Controller<'t> {
         };
         let pending = self.pending(leader.at_us.min(t_e), &model);
         let front = self.measured_front(&model, &leader, v, t_e, now, pending);
-        let certificate = match (&self.certifier, rear.value) {
+        let certificate = match (&self.certifier, self.rear_value_now(&rear)) {
             (Ok(c), Ok(w)) => Ok(c.certificate_of(front.value, w, front.headroom)),
             _ => Err(DriverError::NotCertified),
         };
@@ -787,7 +850,25 @@ impl<'t> Controller<'t> {
             }
         };
         let pending = self.pending(leader.at_us.min(t_e), &model);
-        let front = self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, proposal);
+        let mut front = self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, proposal);
+        // Where the band's floor at once was the answer, the emergency authority may brake
+        // harder (module docs: emergencies).
+        let below_band = match front.jumped {
+            true => self.emergency_braking(&model, &leader, now, pending),
+            false => None,
+        }
+        .filter(|e| e.command < model.ego.min);
+        if let Some(e) = below_band {
+            front.command = e.command;
+            let effect_lasts = self.emergency_reaches(now);
+            self.emergency = Some(EmergencyMemo {
+                level: match self.emergency {
+                    Some(m) if effect_lasts => math::max(m.level, e.level),
+                    _ => e.level,
+                },
+                last_below_band_us: now,
+            });
+        }
         self.front_chain = (front.value > self.config.certificate.front_margin
             && front.headroom >= 0.0)
             || front.passed
@@ -814,9 +895,15 @@ impl<'t> Controller<'t> {
         let front_certified = front.value > self.config.certificate.front_margin;
         let mut command = with_tracks(Command::bare(front.command, mode, lost));
         command.takeover = lost.is_some() || !front_certified;
+        // The emergency answer (the band's floor at once, or the emergency authority), every
+        // period it is given.
+        if front.jumped {
+            command.emergency = true;
+            command.takeover = true;
+        }
         // Outside the rear table's domain the front override (and the speed cap) still act:
         // only the rear half is unknown (module docs).
-        let rear = match rear.value {
+        let rear = match self.rear_value_now(&rear) {
             Ok(w) => w,
             Err(fault) => {
                 if lost.is_none() {

@@ -80,7 +80,8 @@ impl Controller<'_> {
 
     /// The interval of the ego's speed at time `t` (m/s, error included): from the kept
     /// measurement nearest `t`, moved to `t` within the accelerations possible in between (at
-    /// most `pending`, at least the band's lowest).
+    /// most `pending`, at least the band's lowest, or the emergency's level while its effect
+    /// may last).
     pub(super) fn ego_speed_interval_at(&self, t: u64, model: &Model) -> (f32, f32) {
         let distance = |e: &(u64, f32)| e.0.abs_diff(t);
         let Some(&(t_e, v)) = self
@@ -96,7 +97,7 @@ impl Controller<'_> {
             t_e,
             t,
             pending,
-            model.ego.min,
+            self.hardest_braking_from(t.min(t_e), model),
         )
     }
 

@@ -1,0 +1,234 @@
+//! The emergency authority: braking harder than the band where braking at its floor at once
+//! cannot keep the leader's worst case off the car, as hard as the front needs and no harder
+//! than the follower allows (the controller's module docs: emergencies).
+
+use table_format::front::{front_value, FrontModel};
+use table_format::rear::{lights_on_within, rear_gap_after, ReactingFollower};
+
+use super::certificate::{profile, LeaderMemo, Model, Ramp};
+use super::history::seconds;
+use super::Controller;
+use crate::math;
+
+/// How many lag time constants after the last command below the band takes force the
+/// actuator's acceleration is taken back in the band: a first-order lag still passes on
+/// `e^-10` of the excess then (2e-4 m/s^2 from 8 m/s^2 to a 3.5 m/s^2 band).
+const AFTERMATH_LAGS: u64 = 10;
+
+/// A command at or below this (m/s^2) keeps a run of braking commands going, and so the
+/// brake lights on once [`lights_on_within`] of the run's start has passed; a command above it
+/// ends the run (the follower's reaction starts again at the next one).
+pub(super) const LIGHTS_COMMAND: f32 = -0.5;
+
+/// The last braking below the band, while its effect may last.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct EmergencyMemo {
+    /// The hardest braking level commanded while its effect lasts, m/s^2 (positive).
+    pub(super) level: f32,
+    /// When the last command below the band was issued, microseconds.
+    pub(super) last_below_band_us: u64,
+}
+
+/// What the emergency authority commands this period.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct EmergencyBraking {
+    /// The command, below the band's floor, m/s^2.
+    pub(super) command: f32,
+    /// Its braking level, m/s^2 (positive).
+    pub(super) level: f32,
+}
+
+impl Controller<'_> {
+    /// Until when (microseconds) the last command below the band may still pull the
+    /// actuator's acceleration below it: a period, the dead time and [`AFTERMATH_LAGS`] lag
+    /// time constants after it was issued. `None` when no such command was issued.
+    pub(super) fn emergency_effect_until(&self) -> Option<u64> {
+        let c = &self.config;
+        let memo = self.emergency?;
+        Some(
+            memo.last_below_band_us
+                .saturating_add(u64::from(c.period_us))
+                .saturating_add(u64::from(c.plant.actuator_dead_time_us))
+                .saturating_add(AFTERMATH_LAGS * u64::from(c.plant.actuator_lag_us)),
+        )
+    }
+
+    /// From when the brake lights are on for sure if this period's command is at or below
+    /// [`LIGHTS_COMMAND`] (microseconds): the run's, if one is under way, else a run's that
+    /// starts now, from what the actuator may be doing ([`lights_on_within`], every command of
+    /// the run at or below [`LIGHTS_COMMAND`]). `None` if the bound is not finite.
+    pub(super) fn lights_on_from(&self, now: u64, model: &Model) -> Option<u64> {
+        if let Some(on) = self.lights_on_us {
+            return Some(on);
+        }
+        let c = &self.config;
+        let dead = seconds(u64::from(c.plant.actuator_dead_time_us));
+        let lag = seconds(u64::from(c.plant.actuator_lag_us));
+        let pending = self.pending(now, model);
+        let within = lights_on_within(
+            dead,
+            lag,
+            pending,
+            pending,
+            LIGHTS_COMMAND,
+            f32::INFINITY,
+            -LIGHTS_COMMAND,
+        );
+        now.checked_add(math::micros(within)?)
+    }
+
+    /// Whether the effect of a braking below the band may reach time `t`, or after it.
+    pub(super) fn emergency_reaches(&self, t: u64) -> bool {
+        self.emergency_effect_until().is_some_and(|end| t <= end)
+    }
+
+    /// The hardest acceleration the ego may have had from `t` on: the band's floor, or the
+    /// emergency's level while its effect may last.
+    pub(super) fn hardest_braking_from(&self, t: u64, model: &Model) -> f32 {
+        match self.emergency {
+            Some(memo) if self.emergency_reaches(t) => math::min(-memo.level, model.ego.min),
+            _ => model.ego.min,
+        }
+    }
+
+    /// The emergency authority's command where the step found the front not certified and
+    /// nothing passing (`enforce_front`'s jump to the band's floor): `None` where braking at the
+    /// band's floor at once keeps the leader's worst case above the front margin (the band
+    /// suffices), where no emergency authority is configured, or where the follower allows no
+    /// braking harder than the band.
+    ///
+    /// Otherwise the gentlest level between the band's floor and the emergency level that
+    /// keeps the front above its margin, or the emergency level when none does, lowered to
+    /// what the follower allows; it is commanded at once, and the actuator builds it up. The
+    /// front is judged as the step judges it (the worst corner of the leader's measurement,
+    /// through the delays), the ego's acceleration held at what is pending until the command
+    /// takes force through the dead time and the lag, then ramping at the emergency's jerk (a
+    /// brake that builds up no faster than declared); its value is nearly affine in
+    /// `1 / level` (the stopping distance), so a secant there, checked, finds the level in at
+    /// most four evaluations. The rear is [`rear_gap_after`] at the worst corner of the
+    /// follower's measurement box at its time `t_f`: the ego braking at most at the level (or
+    /// the hardest since `t_f`) from then on, the follower accelerating at most at its model's
+    /// top until its reaction time after the lights come on ([`lights_on_within`] from the run's
+    /// first command, every later command of the run at or below the band's floor), then
+    /// braking at its model's hardest.
+    pub(super) fn emergency_braking(
+        &self,
+        model: &Model,
+        leader: &LeaderMemo,
+        now: u64,
+        pending: f32,
+    ) -> Option<EmergencyBraking> {
+        let e = model.emergency?;
+        let c = &self.config;
+        let beta = -model.ego.min;
+        let dead_us = u64::from(c.plant.actuator_dead_time_us);
+        let lag = seconds(u64::from(c.plant.actuator_lag_us));
+        let sensors = &c.sensors;
+        let margin = c.certificate.front_margin;
+        // The front's worst corner, as `measured_front`.
+        let gap = sensors.range(leader.track.gap).0;
+        let leader_at_m = math::max(
+            leader.ego.0 + sensors.range_rate(leader.track.rel_speed).0,
+            0.0,
+        );
+        let ego_high = leader.ego.1;
+        // Every command of the run is at or below the band's floor from now on. The ego's
+        // acceleration is bounded as the actuator's declared dead time and lag bound it (a hold
+        // of what is pending until the commands take force, plus the lag), and then, braking
+        // no faster than the emergency's build-up, along a ramp from there: the least braking
+        // either allows, whichever is slower.
+        let (response, _) = profile(
+            leader.at_us,
+            Ramp {
+                start_us: now,
+                from: -beta,
+            },
+            dead_us,
+            lag,
+            f32::INFINITY,
+        );
+        let ahead = |level: f32| {
+            front_value(
+                gap,
+                leader_at_m,
+                ego_high,
+                &FrontModel {
+                    ego_braking: level,
+                    ..model.front(response, pending, pending, e.jerk)
+                },
+            )
+        };
+        let at_band = ahead(beta);
+        if at_band > margin {
+            return None;
+        }
+        let at_full = ahead(e.level);
+        let (x_band, x_full) = (1.0 / beta, 1.0 / e.level);
+        let level = if at_full > margin && at_full > at_band {
+            // The share of the way from the full level back towards the band's, 10% short of
+            // the secant's root.
+            let share = math::clamp(0.9 * (at_full - margin) / (at_full - at_band), 0.0, 1.0);
+            let candidate = x_full + share * (x_band - x_full);
+            let halfway = 0.5 * (candidate + x_full);
+            if ahead(1.0 / candidate) > margin {
+                1.0 / candidate
+            } else if ahead(1.0 / halfway) > margin {
+                1.0 / halfway
+            } else {
+                e.level
+            }
+        } else {
+            e.level
+        };
+        let level = self.follower_allows(model, now, level)?;
+        Some(EmergencyBraking {
+            command: -level,
+            level,
+        })
+    }
+
+    /// The hardest level up to `wanted` (above the band's floor) that the rear check passes
+    /// ([`Controller::emergency_braking`]): `None` when no level above the band's floor
+    /// passes, the follower's track is not kept, or when the lights come on is not known.
+    fn follower_allows(&self, model: &Model, now: u64, wanted: f32) -> Option<f32> {
+        let c = &self.config;
+        let beta = -model.ego.min;
+        let rear = self.rear?;
+        let lights_on_us = self.lights_on_from(now, model)?;
+        if !math::is_finite(rear.track.gap) {
+            return Some(wanted);
+        }
+        let t_f = rear.at_us;
+        let ego = self.ego_speed_interval_at(t_f, model);
+        let (lo, hi) = c
+            .sensors
+            .error
+            .rear_box(rear.track.gap, rear.track.rel_speed, ego);
+        let (gap, follower_speed, ego_speed) = (lo[0], math::min(hi[1], model.max_speed), lo[2]);
+        let (clock, dark) = if t_f >= lights_on_us {
+            (seconds(t_f - lights_on_us), 0.0)
+        } else {
+            (0.0, seconds(lights_on_us - t_f))
+        };
+        let follower = ReactingFollower {
+            reaction_time: model.follower.reaction_time + dark,
+            ..model.follower
+        };
+        let since_t_f = -self.hardest_braking_from(t_f, model);
+        let passes = |level: f32| {
+            let value = rear_gap_after(
+                gap,
+                ego_speed,
+                follower_speed,
+                math::max(level, since_t_f),
+                clock,
+                &follower,
+            );
+            value > c.certificate.rear_margin
+        };
+        [1.0, 0.5, 0.25]
+            .iter()
+            .map(|share| beta + share * (wanted - beta))
+            .find(|level| passes(*level))
+    }
+}
