@@ -9,8 +9,8 @@
 //! longer than the covered age (1 s), so the track ages and is then lost. So every path of the
 //! control step runs: nominal, override (braking at the certificate's level), the aging track
 //! and the certified fallback; then a car cuts in 12 m ahead, 5 m/s slower, and brakes at
-//! 6 m/s^2, so that the emergency answer runs too (below the band, the follower's check
-//! included). The instruction counter's worst case covers them all. Prints a summary over
+//! 6 m/s^2 for 1 s, so that the emergency answer runs too (below the band, the follower's
+//! check included), and the release after it. The instruction counter's worst case covers them all. Prints a summary over
 //! semihosting and exits with status 0 when no gap closed, each of the three modes ran, the
 //! minimum-risk manoeuvre ran exactly when the track was past its covered age, the
 //! certificate's margin never fell below `-CERTIFICATE_TOLERANCE` before the cut-in, and the
@@ -197,8 +197,9 @@ fn follower_acceleration(follower: Car, ego: Car) -> f32 {
 const FAULT: (u32, u32) = (2_500, 2_565);
 
 /// From this period on, a car cuts in 12 m ahead, 5 m/s slower than the ego, and brakes at
-/// the leader model's 6 m/s^2 to a stop: the emergency answer runs (outside the model: the
-/// margin and gap checks end here).
+/// the leader model's 6 m/s^2 for 1 s, then keeps its speed: the emergency answer runs, and
+/// then the release the follower must allow (outside the model: the margin and gap checks end
+/// here).
 const CUT_IN: u32 = 3_000;
 
 #[entry]
@@ -209,7 +210,7 @@ fn main() -> ! {
     let s = config.sensors;
     // A range read long by the declared error.
     let long = |g: f32| g + s.error.range + s.error.range_relative * g;
-    let steps = CUT_IN + 150; // 60 s, then 3 s after the cut-in
+    let steps = CUT_IN + 250; // 60 s, then 5 s after the cut-in
                               // At the gap policy's distance (the certificate's steady gap with the law's room).
     let mut leader = Car { x: 140.0, v: 25.0 };
     let mut last_command = 0.0f32;
@@ -315,7 +316,9 @@ fn main() -> ! {
         if -command.acceleration > max_brake {
             max_brake = -command.acceleration;
         }
-        let a_leader = if k >= CUT_IN {
+        let a_leader = if k >= CUT_IN + 50 {
+            0.0
+        } else if k >= CUT_IN {
             -6.0
         } else {
             leader_acceleration(t, leader.v)
@@ -371,7 +374,7 @@ fn main() -> ! {
         follower.v
     );
     report!(
-        "cut-in 12 m ahead, 5 m/s slower, braking at 6 m/s^2: {} emergency steps, {} below the band, min gap front {} m",
+        "cut-in 12 m ahead, 5 m/s slower, braking at 6 m/s^2 for 1 s: {} emergency steps, {} below the band, min gap front {} m",
         emergency,
         below_band,
         cut_in_front

@@ -5,9 +5,9 @@
 use table_format::front::{front_value, FrontModel};
 use table_format::rear::{lights_on_within, rear_gap_after, ReactingFollower};
 
-use super::certificate::{profile, LeaderMemo, Model, Ramp};
+use super::certificate::{profile, LeaderMemo, Model, Ramp, RearMemo};
 use super::history::seconds;
-use super::Controller;
+use super::{Controller, CERTIFICATE_TOLERANCE};
 use crate::math;
 
 /// How many lag time constants after the last command below the band takes force the
@@ -77,6 +77,49 @@ impl Controller<'_> {
         now.checked_add(math::micros(within)?)
     }
 
+    /// Whether the brake lights may be off for the next period while a braking below the band
+    /// may still act (a command `u` above [`LIGHTS_COMMAND`] ends the lights' run, and the
+    /// follower's reaction starts again at the next braking): the rear check of
+    /// [`Controller::emergency_braking`] for the band's floor, the hardest braking that may
+    /// come next without a check of its own, with the follower's reaction starting only when
+    /// the lights come on again after `u` is held a period and the braking ramp
+    /// (`brake_jerk`) brings the command down to [`LIGHTS_COMMAND`]. Where it fails, the step
+    /// follows that ramp from its last command (the one the last check passed with): the
+    /// lights come on, and the follower, reacting, falls back.
+    pub(super) fn release_allowed(&self, model: &Model, now: u64, u: f32) -> bool {
+        if model.emergency.is_none() {
+            return true;
+        }
+        let c = &self.config;
+        let Some(rear) = self.rear else {
+            return false;
+        };
+        if !math::is_finite(rear.track.gap) {
+            return true;
+        }
+        let dead = seconds(u64::from(c.plant.actuator_dead_time_us));
+        let lag = seconds(u64::from(c.plant.actuator_lag_us));
+        let beta = -model.ego.min;
+        let held = math::max(self.pending(now, model), u);
+        // `u` held a period, then the braking ramp down to the gentlest braking that keeps the
+        // lights on (what the step commands where this check fails); at once without a ramp.
+        let jerk = c.certificate.brake_jerk;
+        let (from, held_for) = if math::is_finite(jerk) {
+            (u + jerk * seconds(u64::from(c.period_us)), 0)
+        } else {
+            (LIGHTS_COMMAND, u64::from(c.period_us))
+        };
+        let within = lights_on_within(dead, lag, held, held, from, jerk, -LIGHTS_COMMAND);
+        let Some(dark) = math::micros(within).map(|w| {
+            now.saturating_add(held_for)
+                .saturating_add(w)
+                .saturating_sub(rear.at_us)
+        }) else {
+            return false;
+        };
+        self.rear_check(model, &rear, beta, 0.0, seconds(dark))
+    }
+
     /// Whether the effect of a braking below the band may reach time `t`, or after it.
     pub(super) fn emergency_reaches(&self, t: u64) -> bool {
         self.emergency_effect_until().is_some_and(|end| t <= end)
@@ -94,8 +137,9 @@ impl Controller<'_> {
     /// The emergency authority's command where the step found the front not certified and
     /// nothing passing (`enforce_front`'s jump to the band's floor): `None` where braking at the
     /// band's floor at once keeps the leader's worst case above the front margin (the band
-    /// suffices), where no emergency authority is configured, or where the follower allows no
-    /// braking harder than the band.
+    /// suffices), where the full level buys no more than [`CERTIFICATE_TOLERANCE`] of front
+    /// value over it, where no emergency authority is configured, or where the follower allows
+    /// no braking harder than the band.
     ///
     /// Otherwise the gentlest level between the band's floor and the emergency level that
     /// keeps the front above its margin, or the emergency level when none does, lowered to
@@ -163,6 +207,11 @@ impl Controller<'_> {
             return None;
         }
         let at_full = ahead(e.level);
+        // Braking harder buys nothing ahead (at a standstill, or a worst case decided before the
+        // braking takes effect): the band's floor.
+        if at_full <= at_band + CERTIFICATE_TOLERANCE {
+            return None;
+        }
         let (x_band, x_full) = (1.0 / beta, 1.0 / e.level);
         let level = if at_full > margin && at_full > at_band {
             // The share of the way from the full level back towards the band's, 10% short of
@@ -191,7 +240,6 @@ impl Controller<'_> {
     /// ([`Controller::emergency_braking`]): `None` when no level above the band's floor
     /// passes, the follower's track is not kept, or when the lights come on is not known.
     fn follower_allows(&self, model: &Model, now: u64, wanted: f32) -> Option<f32> {
-        let c = &self.config;
         let beta = -model.ego.min;
         let rear = self.rear?;
         let lights_on_us = self.lights_on_from(now, model)?;
@@ -199,36 +247,49 @@ impl Controller<'_> {
             return Some(wanted);
         }
         let t_f = rear.at_us;
-        let ego = self.ego_speed_interval_at(t_f, model);
-        let (lo, hi) = c
-            .sensors
-            .error
-            .rear_box(rear.track.gap, rear.track.rel_speed, ego);
-        let (gap, follower_speed, ego_speed) = (lo[0], math::min(hi[1], model.max_speed), lo[2]);
         let (clock, dark) = if t_f >= lights_on_us {
             (seconds(t_f - lights_on_us), 0.0)
         } else {
             (0.0, seconds(lights_on_us - t_f))
         };
+        [1.0, 0.5, 0.25]
+            .iter()
+            .map(|share| beta + share * (wanted - beta))
+            .find(|level| self.rear_check(model, &rear, *level, clock, dark))
+    }
+
+    /// The rear check: [`rear_gap_after`] above `rear_margin` at the worst corner of the kept
+    /// follower measurement's box at its time, for an ego braking at most at `level` (or the
+    /// hardest since then) and a follower whose reaction has run `clock` seconds, or starts
+    /// `dark` seconds after the measurement.
+    fn rear_check(
+        &self,
+        model: &Model,
+        rear: &RearMemo,
+        level: f32,
+        clock: f32,
+        dark: f32,
+    ) -> bool {
+        let c = &self.config;
+        let ego = self.ego_speed_interval_at(rear.at_us, model);
+        let (lo, hi) = c
+            .sensors
+            .error
+            .rear_box(rear.track.gap, rear.track.rel_speed, ego);
+        let (gap, follower_speed, ego_speed) = (lo[0], math::min(hi[1], model.max_speed), lo[2]);
         let follower = ReactingFollower {
             reaction_time: model.follower.reaction_time + dark,
             ..model.follower
         };
-        let since_t_f = -self.hardest_braking_from(t_f, model);
-        let passes = |level: f32| {
-            let value = rear_gap_after(
-                gap,
-                ego_speed,
-                follower_speed,
-                math::max(level, since_t_f),
-                clock,
-                &follower,
-            );
-            value > c.certificate.rear_margin
-        };
-        [1.0, 0.5, 0.25]
-            .iter()
-            .map(|share| beta + share * (wanted - beta))
-            .find(|level| passes(*level))
+        let since = -self.hardest_braking_from(rear.at_us, model);
+        let value = rear_gap_after(
+            gap,
+            ego_speed,
+            follower_speed,
+            math::max(level, since),
+            clock,
+            &follower,
+        );
+        value > c.certificate.rear_margin
     }
 }

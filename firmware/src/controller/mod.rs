@@ -77,7 +77,12 @@
 //! below -0.5 m/s^2 began, while it lasts (the dead time and lag from what is pending); the
 //! reaction counts from there, so a follower close behind allows more as the braking goes on.
 //! Where it allows nothing beyond `beta` the answer is `beta`: the car ahead is not bought with
-//! the car behind.
+//! the car behind. The lights go off again (a command above -0.5 m/s^2 at the end of a run
+//! that went below the band, or any while that braking may still act) only where the follower
+//! allows it: where, its reaction starting again when they next come on, braking at `beta` then
+//! keeps the same check; else the command is -0.5 m/s^2, the lights stay on, and the follower,
+//! reacting, falls back (`emergency::release_allowed`: the authority kept until a lower one
+//! certifies, `table_format::authority`'s rule).
 //!
 //! This is an answer, not a certificate: the front is outside the model already. What follows
 //! it is stated, not assumed away: the rear table's value holds only while the ego brakes
@@ -384,6 +389,9 @@ pub struct Controller<'t> {
     /// From when the brake lights are on for sure, while every command since a run of braking
     /// commands began has been at or below [`emergency::LIGHTS_COMMAND`] (`None`: no run).
     lights_on_us: Option<u64>,
+    /// The lights' run under way has had a command below the band: its end is a release the
+    /// follower must allow (`Controller::release_allowed`).
+    run_went_below_band: bool,
     /// The certificate of the state measured in the last standby period (reset whenever a
     /// step is engaged): what an engagement is judged by.
     standby_certificate: Result<Certificate, DriverError>,
@@ -436,6 +444,7 @@ impl<'t> Controller<'t> {
             rear: None,
             emergency: None,
             lights_on_us: None,
+            run_went_below_band: false,
             standby_certificate: Err(DriverError::CertificateUnknown),
             ego_history: Deque::new(),
         }
@@ -525,6 +534,7 @@ impl<'t> Controller<'t> {
         self.front_chain = false;
         // The lights' run ends with the commands it was argued from.
         self.lights_on_us = None;
+        self.run_went_below_band = false;
         self.issued.forget();
         self.ramp = None;
         self.last_command = None;
@@ -652,6 +662,8 @@ impl<'t> Controller<'t> {
             Some(m) if c <= emergency::LIGHTS_COMMAND => self.lights_on_from(now, &m),
             _ => None,
         };
+        self.run_went_below_band = self.lights_on_us.is_some()
+            && (self.run_went_below_band || model.is_some_and(|m| c < m.ego.min));
         let jerk = self.config.certificate.brake_jerk;
         let h = seconds(u64::from(self.config.period_us));
         self.ramp = match (model, floor) {
@@ -858,6 +870,24 @@ impl<'t> Controller<'t> {
             false => None,
         }
         .filter(|e| e.command < model.ego.min);
+        // The end of a run that braked below the band, or the lights off while such a braking
+        // may still act: the follower must allow it, or the lights go on (module docs:
+        // emergencies).
+        if below_band.is_none()
+            && (self.run_went_below_band || self.emergency_reaches(now))
+            && front.command > emergency::LIGHTS_COMMAND
+            && !self.release_allowed(&model, now, front.command)
+        {
+            // Down the braking ramp the last check passed with, to the lights' braking.
+            let jerk = self.config.certificate.brake_jerk;
+            let down = if math::is_finite(jerk) {
+                self.last_command_or_unknown(&model)
+                    - jerk * seconds(u64::from(self.config.period_us))
+            } else {
+                emergency::LIGHTS_COMMAND
+            };
+            front.command = math::min(front.command, math::max(emergency::LIGHTS_COMMAND, down));
+        }
         if let Some(e) = below_band {
             front.command = e.command;
             let effect_lasts = self.emergency_reaches(now);
