@@ -9,7 +9,7 @@
 //! | `0x130` | ego speed | 0-1 speed `u16` 0.01 m/s, 2 flags (bit 0: valid), 3 age `u8` ms, 4 counter, 5 CRC |
 //! | `0x131` | actuator state ([`crate::Inputs::ego_acceleration`]) | 0-1 acceleration `i16` 0.001 m/s^2 (the largest of the powertrain's realised acceleration and its requests in force and in flight), 2 flags (bit 0: valid), 3 age `u8` ms, 4 counter, 5 CRC |
 //! | `0x140` | driver request ([`crate::controller::DriverRequest`]) | 0 request (1 engage/SET, 2 cancel, 3 resume, 4 set speed, 5 time gap), 1-2 value `u16` (set speed 0.01 m/s; time-gap setting), 3 counter, 4 CRC; one request per frame, delivered one per period in order (up to 4 queued) |
-//! | `0x200` | acceleration request (sent) | 0-1 acceleration `i16` 0.001 m/s^2, 2 mode (0 nominal, 1 override, 2 minimum risk, 3 uncertified, 4 standby: not for the actuator), 3 status ([`status_byte`]: certified, takeover request, the tracks' states), 4 counter, 5 CRC |
+//! | `0x200` | acceleration request (sent) | 0-1 acceleration `i16` 0.001 m/s^2, 2 mode (bits 0-6: 0 nominal, 1 override, 2 minimum risk, 3 uncertified, 4 standby: not for the actuator; bit 7: an emergency, [`crate::Command::emergency`]: the actuator is to deliver it as an automatic emergency braking, beyond the comfort band or faster than ISO 15622's jerk limit), 3 status ([`status_byte`]: certified, takeover request, the tracks' states), 4 counter, 5 CRC |
 //!
 //! # End-to-end protection (after AUTOSAR E2E profile 1)
 //! - **CRC**: CRC-8 SAE J1850 (polynomial 0x1D, initial value 0xFF, final XOR 0xFF, the
@@ -262,8 +262,9 @@ pub fn encode_driver_request(request: &DriverRequest, counter: u8) -> [u8; 5] {
     [code, v0, v1, counter, frame_crc(DRIVER_REQUEST_ID, &body)]
 }
 
-/// Encodes an acceleration request's payload: the acceleration, the mode, the status byte
-/// ([`status_byte`]), the counter and the CRC.
+/// Encodes an acceleration request's payload: the acceleration, the mode (its bit 7 set for an
+/// emergency, [`Command::emergency`]), the status byte ([`status_byte`]), the counter and the
+/// CRC.
 pub fn encode_command(command: &Command, counter: u8) -> [u8; 6] {
     let [a0, a1] = quantize_i16(command.acceleration * 1000.0).to_le_bytes();
     let mode = match command.mode {
@@ -272,7 +273,7 @@ pub fn encode_command(command: &Command, counter: u8) -> [u8; 6] {
         Mode::MinimumRisk => 2,
         Mode::Uncertified => 3,
         Mode::Standby => 4,
-    };
+    } | u8::from(command.emergency) << 7;
     let status = status_byte(command);
     let body = [a0, a1, mode, status, counter];
     [

@@ -204,6 +204,14 @@ fn every_single_bit_flip_and_a_wrong_identifier_fail_the_crc() {
     // Certified, takeover, leader new (3), follower aging (1).
     assert_eq!(sent[3], 0b0010_1111);
     assert_eq!(sent[4], 5);
+    // Override (1), no emergency; an emergency braking below the band sets the mode's bit 7.
+    assert_eq!(sent[2], 1);
+    cmd.acceleration = -7.5;
+    cmd.emergency = true;
+    let sent = can::encode_command(&cmd, 6);
+    assert_eq!(sent[2], 0x81);
+    assert_eq!(i16::from_le_bytes([sent[0], sent[1]]), -7_500);
+    assert_eq!(sent[5], can::frame_crc(can::ACCEL_REQUEST_ID, &sent[..5]));
 }
 
 #[test]
