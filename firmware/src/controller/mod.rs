@@ -80,9 +80,10 @@
 //! the car behind. The lights go off again (a command above -0.5 m/s^2 at the end of a run
 //! that went below the band, or any while that braking may still act) only where the follower
 //! allows it: where, its reaction starting again when they next come on, braking at `beta` then
-//! keeps the same check; else the command is -0.5 m/s^2, the lights stay on, and the follower,
-//! reacting, falls back (`emergency::release_allowed`: the authority kept until a lower one
-//! certifies, `table_format::authority`'s rule).
+//! keeps the same check (the command held a period, then the braking ramp down to -0.5 m/s^2
+//! lighting them); else the command follows that ramp from the last command, the lights come
+//! on, and the follower, reacting, falls back (`emergency::release_allowed`: the authority kept
+//! until a lower one certifies, `table_format::authority`'s rule).
 //!
 //! This is an answer, not a certificate: the front is outside the model already. What follows
 //! it is stated, not assumed away: the rear table's value holds only while the ego brakes
