@@ -97,6 +97,11 @@ pub struct CertificateConfig {
     /// on, s (default [`CAREFUL_DRIVER_REACTION`], 1.15 s: UN R157's careful driver), at most
     /// 5 s: what the emergency authority's rear check waits for.
     pub follower_reaction_time: f32,
+    /// The command (m/s^2, negative) at or below which the vehicle's brake lights are on once
+    /// the actuator delivers it (default -0.5): the follower's reaction is counted only from a
+    /// run of such commands ([`lights_on_within`](table_format::rear::lights_on_within) after
+    /// it began). In `[-3.5, 0)`, and no harder than the table's band.
+    pub lights_command: f32,
 }
 
 /// The vehicle the certificate covers: the actuator's dead time and lag, and the envelope.
@@ -190,7 +195,8 @@ impl Config {
     /// Whether the configuration lies within the limits the certificate is argued for: a period
     /// of 10 to 100 ms, a stale limit of 1 to [`MAX_STALE_PERIODS`] periods, a dead time and a
     /// lag within their limits, finite non-negative margins and gains, an emergency level
-    /// within the envelope built up at 0.5 m/s^3 or faster, a follower reaction of 0 to 5 s.
+    /// within the envelope built up at 0.5 m/s^3 or faster, a follower reaction of 0 to 5 s, a
+    /// lights' command in `[-3.5, 0)`.
     pub fn is_valid(&self) -> bool {
         let finite_non_negative = [
             self.law.set_speed,
@@ -233,11 +239,14 @@ impl Config {
             && e.jerk >= 0.5;
         let reaction = self.certificate.follower_reaction_time;
         let reaction = math::is_finite(reaction) && (0.0..=5.0).contains(&reaction);
+        let lights = self.certificate.lights_command;
+        let lights = math::is_finite(lights) && lights < 0.0 && lights >= ISO_15622_LIMITS.0;
         finite_non_negative
             && time_gaps
             && jerk
             && emergency
             && reaction
+            && lights
             && self.law.stop_deceleration >= 0.3
             && (MIN_PERIOD_US..=MAX_PERIOD_US).contains(&self.period_us)
             && (1..=MAX_STALE_PERIODS).contains(&self.stale_periods)
@@ -332,6 +341,7 @@ impl Default for CertificateConfig {
             rear_margin: 0.0,
             emergency: DRY_ROAD_EMERGENCY,
             follower_reaction_time: CAREFUL_DRIVER_REACTION,
+            lights_command: -0.5,
         }
     }
 }

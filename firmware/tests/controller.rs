@@ -753,6 +753,19 @@ fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
         ..ideal()
     };
     assert!(!beyond.is_valid());
+    // A lights' command of zero or harder than ISO 15622's braking is not one either, and one
+    // harder than the table's band is refused with the table.
+    for lights in [0.0, 0.1, -3.6, f32::NAN] {
+        let mut bad = ideal();
+        bad.certificate.lights_command = lights;
+        assert!(!bad.is_valid(), "{lights}");
+    }
+    let mut soft_band = ideal();
+    soft_band.certificate.lights_command = -3.5;
+    assert!(soft_band.is_valid());
+    let bytes = split_table((-3.0, 2.0));
+    let cmd = Controller::new(&bytes, soft_band).step(&inputs((60.0, 0.0), (40.0, 0.0), 25.0));
+    assert_eq!(fault_of(cmd), Fault::InvalidConfig);
     assert!(ideal().is_valid());
 }
 

@@ -280,6 +280,10 @@ fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
     if ego.min < envelope.min_acceleration || ego.max > envelope.max_acceleration {
         return Err(Fault::TableOutsideEnvelope);
     }
+    // A lights' command the band cannot give would leave the follower's reaction uncounted.
+    if config.certificate.lights_command < ego.min {
+        return Err(Fault::InvalidConfig);
+    }
     match header.verification {
         Some(v)
             if v.is_complete()

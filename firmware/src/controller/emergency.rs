@@ -15,11 +15,6 @@ use crate::math;
 /// `e^-10` of the excess then (2e-4 m/s^2 from 8 m/s^2 to a 3.5 m/s^2 band).
 const AFTERMATH_LAGS: u64 = 10;
 
-/// A command at or below this (m/s^2) keeps a run of braking commands going, and so the
-/// brake lights on once [`lights_on_within`] of the run's start has passed; a command above it
-/// ends the run (the follower's reaction starts again at the next one).
-pub(super) const LIGHTS_COMMAND: f32 = -0.5;
-
 /// The last braking below the band, while its effect may last.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct EmergencyMemo {
@@ -39,6 +34,16 @@ pub(super) struct EmergencyBraking {
 }
 
 impl Controller<'_> {
+    /// The vehicle's declared lights' command ([`CertificateConfig::lights_command`]): one at
+    /// or below it keeps a run of braking commands going, and so the brake lights on once
+    /// [`lights_on_within`] of the run's start has passed; one above it ends the run (the
+    /// follower's reaction starts again at the next one).
+    ///
+    /// [`CertificateConfig::lights_command`]: crate::CertificateConfig::lights_command
+    pub(super) fn lights_command(&self) -> f32 {
+        self.config.certificate.lights_command
+    }
+
     /// Until when (microseconds) the last command below the band may still pull the
     /// actuator's acceleration below it: a period, the dead time and [`AFTERMATH_LAGS`] lag
     /// time constants after it was issued. `None` when no such command was issued.
@@ -54,9 +59,9 @@ impl Controller<'_> {
     }
 
     /// From when the brake lights are on for sure if this period's command is at or below
-    /// [`LIGHTS_COMMAND`] (microseconds): the run's, if one is under way, else a run's that
+    /// the lights' command (microseconds): the run's, if one is under way, else a run's that
     /// starts now, from what the actuator may be doing ([`lights_on_within`], every command of
-    /// the run at or below [`LIGHTS_COMMAND`]). `None` if the bound is not finite.
+    /// the run at or below the lights' command). `None` if the bound is not finite.
     pub(super) fn lights_on_from(&self, now: u64, model: &Model) -> Option<u64> {
         if let Some(on) = self.lights_on_us {
             return Some(on);
@@ -70,20 +75,20 @@ impl Controller<'_> {
             lag,
             pending,
             pending,
-            LIGHTS_COMMAND,
+            self.lights_command(),
             f32::INFINITY,
-            -LIGHTS_COMMAND,
+            -self.lights_command(),
         );
         now.checked_add(math::micros(within)?)
     }
 
     /// Whether the brake lights may be off for the next period while a braking below the band
-    /// may still act (a command `u` above [`LIGHTS_COMMAND`] ends the lights' run, and the
+    /// may still act (a command `u` above the lights' command ends the lights' run, and the
     /// follower's reaction starts again at the next braking): the rear check of
     /// [`Controller::emergency_braking`] for the band's floor, the hardest braking that may
     /// come next without a check of its own, with the follower's reaction starting only when
     /// the lights come on again after `u` is held a period and the braking ramp
-    /// (`brake_jerk`) brings the command down to [`LIGHTS_COMMAND`]. Where it fails, the step
+    /// (`brake_jerk`) brings the command down to the lights' command. Where it fails, the step
     /// follows that ramp from its last command (the one the last check passed with): the
     /// lights come on, and the follower, reacting, falls back.
     pub(super) fn release_allowed(&self, model: &Model, now: u64, u: f32) -> bool {
@@ -107,9 +112,9 @@ impl Controller<'_> {
         let (from, held_for) = if math::is_finite(jerk) {
             (u + jerk * seconds(u64::from(c.period_us)), 0)
         } else {
-            (LIGHTS_COMMAND, u64::from(c.period_us))
+            (self.lights_command(), u64::from(c.period_us))
         };
-        let within = lights_on_within(dead, lag, held, held, from, jerk, -LIGHTS_COMMAND);
+        let within = lights_on_within(dead, lag, held, held, from, jerk, -self.lights_command());
         let Some(dark) = math::micros(within).map(|w| {
             now.saturating_add(held_for)
                 .saturating_add(w)

@@ -44,7 +44,7 @@ pub enum Fault {
     ClockWentBackwards,
     /// The configuration is outside the limits the certificate is argued for (period, stale
     /// limit, dead time or lag above their limits, a negative or non-finite value, an envelope
-    /// without braking or acceleration).
+    /// without braking or acceleration, a lights' command harder than the table's band).
     InvalidConfig,
     /// The table's band of ego accelerations does not fit inside the vehicle's envelope.
     TableOutsideEnvelope,

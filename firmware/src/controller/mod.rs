@@ -74,16 +74,18 @@
 //! ego's brake lights are on for sure, then brakes at its clip's hardest (6 m/s^2 on the
 //! deployed table), the ego braking at most at that level (or the hardest since `t_f`). The
 //! lights are on from [`table_format::rear::lights_on_within`] after a run of commands at or
-//! below -0.5 m/s^2 began, while it lasts (the dead time and lag from what is pending); the
+//! below the vehicle's declared lights' command began ([`CertificateConfig::lights_command`],
+//! -0.5 m/s^2 by default), while it lasts (the dead time and lag from what is pending); the
 //! reaction counts from there, so a follower close behind allows more as the braking goes on.
 //! Where it allows nothing beyond `beta` the answer is `beta`: the car ahead is not bought with
-//! the car behind. The lights go off again (a command above -0.5 m/s^2 at the end of a run
-//! that went below the band, or any while that braking may still act) only where the follower
-//! allows it: where, its reaction starting again when they next come on, braking at `beta` then
-//! keeps the same check (the command held a period, then the braking ramp down to -0.5 m/s^2
-//! lighting them); else the command follows that ramp from the last command, the lights come
-//! on, and the follower, reacting, falls back (`emergency::release_allowed`: the authority kept
-//! until a lower one certifies, `table_format::authority`'s rule).
+//! the car behind. The lights go off again (a command above the lights' command at the end of
+//! a run that went below the band, or any while that braking may still act) only where the
+//! follower allows it: where, its reaction starting again when they next come on, braking at
+//! `beta` then keeps the same check (the command held a period, then the braking ramp down to
+//! the lights' command lighting them); else the command follows that ramp from the last
+//! command, the lights come on, and the follower, reacting, falls back
+//! (`emergency::release_allowed`: the authority kept until a lower one certifies,
+//! `table_format::authority`'s rule).
 //!
 //! This is an answer, not a certificate: the front is outside the model already. What follows
 //! it is stated, not assumed away: the rear table's value holds only while the ego brakes
@@ -388,7 +390,7 @@ pub struct Controller<'t> {
     /// emergencies).
     emergency: Option<EmergencyMemo>,
     /// From when the brake lights are on for sure, while every command since a run of braking
-    /// commands began has been at or below [`emergency::LIGHTS_COMMAND`] (`None`: no run).
+    /// commands began has been at or below the lights' command (`None`: no run).
     lights_on_us: Option<u64>,
     /// The lights' run under way has had a command below the band: its end is a release the
     /// follower must allow (`Controller::release_allowed`).
@@ -660,7 +662,7 @@ impl<'t> Controller<'t> {
         let c = command.acceleration;
         // The brake lights' run (module docs: emergencies).
         self.lights_on_us = match model {
-            Some(m) if c <= emergency::LIGHTS_COMMAND => self.lights_on_from(now, &m),
+            Some(m) if c <= self.lights_command() => self.lights_on_from(now, &m),
             _ => None,
         };
         self.run_went_below_band = self.lights_on_us.is_some()
@@ -876,7 +878,7 @@ impl<'t> Controller<'t> {
         // emergencies).
         if below_band.is_none()
             && (self.run_went_below_band || self.emergency_reaches(now))
-            && front.command > emergency::LIGHTS_COMMAND
+            && front.command > self.lights_command()
             && !self.release_allowed(&model, now, front.command)
         {
             // Down the braking ramp the last check passed with, to the lights' braking.
@@ -885,9 +887,9 @@ impl<'t> Controller<'t> {
                 self.last_command_or_unknown(&model)
                     - jerk * seconds(u64::from(self.config.period_us))
             } else {
-                emergency::LIGHTS_COMMAND
+                self.lights_command()
             };
-            front.command = math::min(front.command, math::max(emergency::LIGHTS_COMMAND, down));
+            front.command = math::min(front.command, math::max(self.lights_command(), down));
         }
         if let Some(e) = below_band {
             front.command = e.command;
