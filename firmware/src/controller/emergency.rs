@@ -24,15 +24,6 @@ pub(super) struct EmergencyMemo {
     pub(super) last_below_band_us: u64,
 }
 
-/// What the emergency authority commands this period.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct EmergencyBraking {
-    /// The command, below the band's floor, m/s^2.
-    pub(super) command: f32,
-    /// Its braking level, m/s^2 (positive).
-    pub(super) level: f32,
-}
-
 impl Controller<'_> {
     /// The vehicle's declared lights' command ([`CertificateConfig::lights_command`]): one at
     /// or below it keeps a run of braking commands going, and so the brake lights on once
@@ -66,17 +57,24 @@ impl Controller<'_> {
         if let Some(on) = self.lights_on_us {
             return Some(on);
         }
-        let c = &self.config;
-        let dead = seconds(u64::from(c.plant.actuator_dead_time_us));
-        let lag = seconds(u64::from(c.plant.actuator_lag_us));
         let pending = self.pending(now, model);
+        self.lights_on_after(now, pending, self.lights_command(), f32::INFINITY)
+    }
+
+    /// When the brake lights are on for sure (microseconds) if, from `now`, the actuator's
+    /// acceleration and the commands in its dead time are at most `held` and every command is
+    /// at most the ramp from `from` at `jerk` down to the lights' command
+    /// ([`lights_on_within`] through the declared dead time and lag). `None` if the bound is
+    /// not finite.
+    fn lights_on_after(&self, now: u64, held: f32, from: f32, jerk: f32) -> Option<u64> {
+        let c = &self.config;
         let within = lights_on_within(
-            dead,
-            lag,
-            pending,
-            pending,
-            self.lights_command(),
-            f32::INFINITY,
+            seconds(u64::from(c.plant.actuator_dead_time_us)),
+            seconds(u64::from(c.plant.actuator_lag_us)),
+            held,
+            held,
+            from,
+            jerk,
             -self.lights_command(),
         );
         now.checked_add(math::micros(within)?)
@@ -102,9 +100,6 @@ impl Controller<'_> {
         if !math::is_finite(rear.track.gap) {
             return true;
         }
-        let dead = seconds(u64::from(c.plant.actuator_dead_time_us));
-        let lag = seconds(u64::from(c.plant.actuator_lag_us));
-        let beta = -model.ego.min;
         let held = math::max(self.pending(now, model), u);
         // `u` held a period, then the braking ramp down to the gentlest braking that keeps the
         // lights on (what the step commands where this check fails); at once without a ramp.
@@ -114,15 +109,11 @@ impl Controller<'_> {
         } else {
             (self.lights_command(), u64::from(c.period_us))
         };
-        let within = lights_on_within(dead, lag, held, held, from, jerk, -self.lights_command());
-        let Some(dark) = math::micros(within).map(|w| {
-            now.saturating_add(held_for)
-                .saturating_add(w)
-                .saturating_sub(rear.at_us)
-        }) else {
+        let Some(on) = self.lights_on_after(now.saturating_add(held_for), held, from, jerk) else {
             return false;
         };
-        self.rear_check(model, &rear, beta, 0.0, seconds(dark))
+        let dark = seconds(on.saturating_sub(rear.at_us));
+        self.rear_check(model, &rear, -model.ego.min, 0.0, dark)
     }
 
     /// Whether the effect of a braking below the band may reach time `t`, or after it.
@@ -139,7 +130,8 @@ impl Controller<'_> {
         }
     }
 
-    /// The emergency authority's command where the step found the front not certified and
+    /// The emergency authority's braking level (m/s^2, positive, harder than the band's floor;
+    /// commanded at once as its negative) where the step found the front not certified and
     /// nothing passing (`enforce_front`'s jump to the band's floor): `None` where braking at the
     /// band's floor at once keeps the leader's worst case above the front margin (the band
     /// suffices), where the full level buys no more than [`CERTIFICATE_TOLERANCE`] of front
@@ -158,7 +150,7 @@ impl Controller<'_> {
     /// follower's measurement box at its time `t_f`: the ego braking at most at the level (or
     /// the hardest since `t_f`) from then on, the follower accelerating at most at its model's
     /// top until its reaction time after the lights come on ([`lights_on_within`] from the run's
-    /// first command, every later command of the run at or below the band's floor), then
+    /// first command, every later command of the run at or below the lights' command), then
     /// braking at its model's hardest.
     pub(super) fn emergency_braking(
         &self,
@@ -166,7 +158,7 @@ impl Controller<'_> {
         leader: &LeaderMemo,
         now: u64,
         pending: f32,
-    ) -> Option<EmergencyBraking> {
+    ) -> Option<f32> {
         let e = model.emergency?;
         let c = &self.config;
         let beta = -model.ego.min;
@@ -218,7 +210,7 @@ impl Controller<'_> {
             return None;
         }
         let (x_band, x_full) = (1.0 / beta, 1.0 / e.level);
-        let level = if at_full > margin && at_full > at_band {
+        let level = if at_full > margin {
             // The share of the way from the full level back towards the band's, 10% short of
             // the secant's root.
             let share = math::clamp(0.9 * (at_full - margin) / (at_full - at_band), 0.0, 1.0);
@@ -234,11 +226,8 @@ impl Controller<'_> {
         } else {
             e.level
         };
-        let level = self.follower_allows(model, now, level)?;
-        Some(EmergencyBraking {
-            command: -level,
-            level,
-        })
+        self.follower_allows(model, now, level)
+            .filter(|level| *level > beta)
     }
 
     /// The hardest level up to `wanted` (above the band's floor) that the rear check passes

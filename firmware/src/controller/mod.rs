@@ -871,8 +871,7 @@ impl<'t> Controller<'t> {
         let below_band = match front.jumped {
             true => self.emergency_braking(&model, &leader, now, pending),
             false => None,
-        }
-        .filter(|e| e.command < model.ego.min);
+        };
         // The end of a run that braked below the band, or the lights off while such a braking
         // may still act: the follower must allow it, or the lights go on (module docs:
         // emergencies).
@@ -891,13 +890,13 @@ impl<'t> Controller<'t> {
             };
             front.command = math::min(front.command, math::max(self.lights_command(), down));
         }
-        if let Some(e) = below_band {
-            front.command = e.command;
+        if let Some(level) = below_band {
+            front.command = -level;
             let effect_lasts = self.emergency_reaches(now);
             self.emergency = Some(EmergencyMemo {
                 level: match self.emergency {
-                    Some(m) if effect_lasts => math::max(m.level, e.level),
-                    _ => e.level,
+                    Some(m) if effect_lasts => math::max(m.level, level),
+                    _ => level,
                 },
                 last_below_band_us: now,
             });
