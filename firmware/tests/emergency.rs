@@ -50,6 +50,10 @@ impl Cars {
 #[derive(Debug, Default)]
 struct Run {
     hardest: f32,
+    /// The first command flagged an emergency after the cut-in (the answer's level).
+    first_answer: Option<f32>,
+    /// The cars at the cut-in.
+    at_cut_in: Option<Cars>,
     below_band_periods: usize,
     /// Seconds from the cut-in to the first command below the band.
     first_below_band: Option<f64>,
@@ -114,10 +118,14 @@ fn cut_in_closing(
             // The follower as the run asks, whatever the law did before.
             cars.x[2] = cars.x[1] - follower_gap;
             cars.v[2] = cars.v[1] + faster;
+            run.at_cut_in = Some(cars);
         }
         let cmd = c.step(&cars.inputs(k * 20_000));
         let a = cmd.acceleration;
         run.hardest = run.hardest.min(a);
+        if k >= 100 && cmd.emergency && cmd.takeover && run.first_answer.is_none() {
+            run.first_answer = Some(a);
+        }
         if a > -0.5 && run.below_band_periods > 0 && run.released.is_none() {
             run.released = Some(t - 2.0);
             run.at_release = Some((
@@ -216,12 +224,43 @@ fn a_close_follower_holds_the_emergency_authority_back() {
 fn a_cut_in_the_band_answers_gets_no_emergency_braking() {
     let run = cut_in(20.0, 40.0, 21.0, 2.0, 150.0);
     assert!(run.least_gap_leader > 0.0, "{run:?}");
-    assert!(
-        run.hardest <= -3.5 + 1e-6,
-        "the band's floor was needed: {run:?}"
-    );
+    assert!(run.hardest >= -3.5 - 1e-6, "{run:?}");
+    assert!(run.first_answer.is_some(), "{run:?}");
     assert_eq!(run.below_band_periods, 0, "{run:?}");
     assert_eq!(run.after_emergency, 0, "{run:?}");
+}
+
+/// A cut-in that needs less than the band's floor gets less: a car 55 m ahead at the ego's
+/// 20 m/s, inside the certified gap (about 60 m) but far from the worst case, is answered at
+/// once with the gentlest braking that keeps its worst case (braking at 6 m/s^2 from the
+/// cut-in) clear, flagged an emergency with the takeover request, not with the band's
+/// 3.5 m/s^2: held, that level keeps the front margin against the worst case, and 85% of it
+/// would not. The promise is kept in closed loop: the same cut-in braking at 6 m/s^2 to a
+/// stop is not hit.
+#[test]
+fn a_cut_in_that_needs_less_than_the_band_gets_less() {
+    let cruising = cut_in(20.0, 55.0, 20.0, 0.0, 150.0);
+    let answer = cruising.first_answer.expect("the cut-in is answered");
+    assert!(answer > -3.0 && answer <= -0.5, "{cruising:?}");
+    assert!(cruising.hardest > -3.0, "{cruising:?}");
+    assert!(cruising.least_gap_leader > 40.0, "{cruising:?}");
+    // The answer's level held from the cut-in keeps the worst case clear by the front
+    // margin (0.5 m); 85% of it does not: it is near the gentlest that does.
+    let held = |level: f64| {
+        let mut cars = cruising.at_cut_in.expect("a cut-in");
+        let mut least = f64::INFINITY;
+        for _ in 0..2_000 {
+            cars.advance([-6.0, level, 0.0], 0.01);
+            least = least.min(cars.x[0] - cars.x[1]);
+        }
+        least
+    };
+    assert!(held(f64::from(answer)) > 0.5 - 0.01, "{answer}");
+    assert!(held(0.85 * f64::from(answer)) < 0.5, "{answer}");
+    let braking = cut_in(20.0, 55.0, 20.0, 6.0, 150.0);
+    assert_eq!(braking.first_answer, Some(answer), "{braking:?}");
+    assert!(braking.least_gap_leader > 0.0, "{braking:?}");
+    assert_eq!(braking.below_band_periods, 0, "{braking:?}");
 }
 
 /// With the emergency authority at the band's level (none), the first cut-in is braked at

@@ -495,8 +495,12 @@ pub struct CutInSummary {
     pub recognised_at_once: usize,
     /// Cut-ins whose front was not certified at the first track.
     pub front_uncertified: usize,
-    /// Of those, the ones braked at beta within one period of the first track.
-    pub beta_within_one_period: usize,
+    /// Of those, the ones answered (the emergency answer, or a braking at beta) within one
+    /// period of the first track.
+    pub answered_within_one_period: usize,
+    /// The mean of those answers' first command, m/s^2: as hard as the leader's worst case
+    /// needs.
+    pub mean_first_answer: f32,
     /// The mean hardest command in the 5 s after a cut-in, m/s^2.
     pub mean_hardest_command: f32,
     /// Collisions after a cut-in.
@@ -637,6 +641,11 @@ fn cut_in_summary(outcomes: &[(u64, Outcome)]) -> CutInSummary {
         .filter_map(|(_, o)| o.cut_in.as_ref().map(|c| (o, c)))
         .collect();
     let n = cuts.len().max(1) as f32;
+    let answers: Vec<f32> = cuts
+        .iter()
+        .filter(|(_, c)| c.answered_periods.is_some_and(|p| p <= 1))
+        .filter_map(|(_, c)| c.first_answer)
+        .collect();
     let delivered: Vec<f32> = cuts.iter().filter_map(|(_, c)| c.delivered_after).collect();
     CutInSummary {
         episodes: cuts.len(),
@@ -650,10 +659,8 @@ fn cut_in_summary(outcomes: &[(u64, Outcome)]) -> CutInSummary {
             .iter()
             .filter(|(_, c)| c.front_certified_at_delivery == Some(false))
             .count(),
-        beta_within_one_period: cuts
-            .iter()
-            .filter(|(_, c)| c.beta_periods.is_some_and(|p| p <= 1))
-            .count(),
+        answered_within_one_period: answers.len(),
+        mean_first_answer: answers.iter().sum::<f32>() / answers.len().max(1) as f32,
         mean_hardest_command: cuts
             .iter()
             .map(|(_, c)| c.hardest_command.min(2.0))
@@ -839,8 +846,8 @@ pub struct CampaignTotals {
     pub emergencies: EmergencyCauses,
     /// Cut-ins over every group.
     pub cut_ins: usize,
-    /// Cut-ins with an uncertified front not braked at beta within one period.
-    pub cut_ins_braked_late: usize,
+    /// Cut-ins with an uncertified front not answered within one period.
+    pub cut_ins_answered_late: usize,
     /// Collisions after a cut-in that braking at beta from the first track would have avoided.
     pub cut_in_collisions_avoidable: usize,
     /// Collisions after a cut-in with the follower (the ego hit from behind).
@@ -965,7 +972,7 @@ pub fn run_campaign(
     }
     for c in groups.iter().filter_map(|s| s.cut_ins) {
         totals.cut_ins += c.episodes;
-        totals.cut_ins_braked_late += c.front_uncertified - c.beta_within_one_period;
+        totals.cut_ins_answered_late += c.front_uncertified - c.answered_within_one_period;
         totals.cut_in_collisions_avoidable += c.collisions - c.unavoidable;
         totals.cut_in_collisions_behind += c.collisions_behind;
         totals.cut_in_collisions_unavoidable_at_emergency += c.unavoidable_at_emergency;

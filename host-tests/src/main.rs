@@ -485,12 +485,12 @@ fn campaign(args: CampaignArgs) -> Result<()> {
     plotted?;
     if settings.cut_in.is_some() {
         println!();
-        println!("| leader | follower | cut-ins | first track after [s] (mean, max) | recognised at once | front uncertified | of those at beta within one period | mean hardest command [m/s^2] | braked harder than the band (episodes) | collisions | of them hit from behind | of them unavoidable (at beta) | R157 requires avoiding | collisions unavoidable at the emergency authority | of the others, hit from behind there | preventable, not prevented |");
-        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+        println!("| leader | follower | cut-ins | first track after [s] (mean, max) | recognised at once | front uncertified | of those answered within one period | their first answer, mean [m/s^2] | mean hardest command [m/s^2] | braked harder than the band (episodes) | collisions | of them hit from behind | of them unavoidable (at beta) | R157 requires avoiding | collisions unavoidable at the emergency authority | of the others, hit from behind there | preventable, not prevented |");
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         for summary in &report.groups {
             if let Some(c) = summary.cut_ins {
                 println!(
-                    "| {:?} | {:?} | {} | {:.3}, {:.3} | {} | {} | {} | {:.2} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                    "| {:?} | {:?} | {} | {:.3}, {:.3} | {} | {} | {} | {:.2} | {:.2} | {} | {} | {} | {} | {} | {} | {} | {} |",
                     summary.leader,
                     summary.follower,
                     c.episodes,
@@ -498,7 +498,8 @@ fn campaign(args: CampaignArgs) -> Result<()> {
                     c.delivered_after_max,
                     c.recognised_at_once,
                     c.front_uncertified,
-                    c.beta_within_one_period,
+                    c.answered_within_one_period,
+                    c.mean_first_answer,
                     c.mean_hardest_command,
                     summary.below_band_episodes,
                     c.collisions,
@@ -543,14 +544,14 @@ fn campaign(args: CampaignArgs) -> Result<()> {
     );
     if settings.cut_in.is_some() {
         println!(
-            "cut-ins: {}; {} not braked at beta within one period of the new track \
+            "cut-ins: {}; {} not answered within one period of the new track \
              while the front was uncertified; {} collisions the humans had not made \
              unavoidable, {} with the follower; at the emergency authority ({} m/s^2) {} unavoidable ahead, {} hit from \
              behind instead by the follower as it drove ({} by the IDM at its closest time gap \
              answering at once, {} answering after {} s), and {} preventable (by it or R157's \
              rule) but not prevented",
             t.cut_ins,
-            t.cut_ins_braked_late,
+            t.cut_ins_answered_late,
             t.cut_in_collisions_avoidable,
             t.cut_in_collisions_behind,
             host_tests::campaign::EMERGENCY_BRAKING,

@@ -163,7 +163,7 @@ pub struct Score {
     pub leader_hardest_braking: f32,
     /// The engagement itself was an emergency: the firmware could not certify its first
     /// measured state (a true start at the certified set's edge, its error box past it) and
-    /// braked at beta at once.
+    /// gave the emergency answer.
     pub engaged_in_emergency: bool,
     /// The largest ego speed, m/s.
     pub max_ego_speed: f32,
@@ -247,9 +247,12 @@ pub struct CutInScore {
     /// How many periods after that delivery the firmware reported the track as a new
     /// vehicle (0: in the same period).
     pub recognised_periods: Option<u64>,
-    /// How many periods after that delivery the first command was braking at beta (when the
-    /// front was not certified at the delivery).
-    pub beta_periods: Option<u64>,
+    /// How many periods after that delivery the first command was the emergency answer (flagged
+    /// [`firmware::Command::emergency`], as hard as the leader's worst case needs) or a braking
+    /// at beta, when the front was not certified at the delivery.
+    pub answered_periods: Option<u64>,
+    /// That command, m/s^2.
+    pub first_answer: Option<f32>,
     /// Whether the firmware's front half was certified at the delivery.
     pub front_certified_at_delivery: Option<bool>,
     /// The hardest command in the 5 s after the cut-in, m/s^2.
@@ -458,7 +461,8 @@ impl<'t> World<'t> {
             rel_speed,
             delivered_after: None,
             recognised_periods: None,
-            beta_periods: None,
+            answered_periods: None,
+            first_answer: None,
             front_certified_at_delivery: None,
             hardest_command: f32::INFINITY,
             r157_preventable: (kind == CutInKind::Leader)
@@ -498,11 +502,12 @@ impl<'t> World<'t> {
         if score.recognised_periods.is_none() && state == firmware::TrackState::New {
             score.recognised_periods = Some(since);
         }
-        if score.beta_periods.is_none()
+        if score.answered_periods.is_none()
             && score.front_certified_at_delivery == Some(false)
-            && command.acceleration <= self.model.band_min
+            && (command.emergency || command.acceleration <= self.model.band_min)
         {
-            score.beta_periods = Some(since);
+            score.answered_periods = Some(since);
+            score.first_answer = Some(command.acceleration);
         }
     }
 

@@ -61,7 +61,7 @@ use firmware::{
 };
 
 /// Tells the instruction counter that the step just counted was an emergency (the cut-in
-/// phase: the band's floor at once, or the emergency authority below it).
+/// phase: the answer in the band, or the emergency authority below it).
 #[no_mangle]
 #[inline(never)]
 pub extern "C" fn hjacc_mode_emergency() {

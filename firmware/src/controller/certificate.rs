@@ -603,7 +603,8 @@ impl<'t> Controller<'t> {
     /// the ego's speed, the braking ramp): the certified front value and speed headroom of the
     /// state, and the command, which is the proposal under the speed cap if its look-ahead
     /// passes, else the gentlest braking down to the ramp's floor that passes, else the ramp
-    /// (or, where the state's front is not certified, beta at once).
+    /// (or, where the state's front is not certified, beta at once: the step then makes it the
+    /// emergency answer, `Controller::emergency_answer`).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn enforce_front(
         &self,
@@ -708,8 +709,9 @@ impl<'t> Controller<'t> {
             // (a certified measurement certifies the truth, and the ramp keeps it certified:
             // measurement noise moves the corner, not the truth), unless even the box's best
             // corner is not certified (then the truth is not: a leader beyond its model);
-            // otherwise (an engagement or a cut-in into an uncertified state) beta at once: an
-            // emergency, the best answer, not a promise.
+            // otherwise (an engagement or a cut-in into an uncertified state) beta at once, which
+            // the step makes the emergency answer (as hard as the worst case needs): the best
+            // answer, not a promise.
             // The test of the truth is an upper bound of the true state's front value: the
             // box's best corner (the longest gap, the fastest leader, the slowest ego), with
             // the ego following the committed ramp's commands at once, no dead time, no lag,

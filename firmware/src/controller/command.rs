@@ -46,8 +46,9 @@ pub struct Command {
     /// or the command is a minimum-risk manoeuvre.
     pub takeover: bool,
     /// The command is the emergency answer to a front the certificate no longer covers (a
-    /// cut-in, an engagement into an uncertified state, a leader outside its model): the
-    /// band's floor at once, or a braking below the band under the emergency authority; or it
+    /// cut-in, an engagement into an uncertified state, a leader outside its model): a braking
+    /// at once as hard as the leader's worst case needs, within the band where the band
+    /// suffices, below it under the emergency authority where it does not; or it
     /// brakes faster than ISO 15622's jerk limit at the ego's speed allows
     /// ([`crate::iso15622`]; a brake ramp configured above the limit). The takeover request is
     /// raised with it.

@@ -1,6 +1,7 @@
-//! The emergency authority: braking harder than the band where braking at its floor at once
-//! cannot keep the leader's worst case off the car, as hard as the front needs and no harder
-//! than the follower allows (the controller's module docs: emergencies).
+//! The emergency answer, as hard as the leader's worst case needs: gentler than the band's
+//! floor where that suffices, and harder under the emergency authority where braking at the
+//! band's floor at once cannot keep the leader's worst case off the car, no harder than the
+//! follower allows (the controller's module docs: emergencies).
 
 use table_format::front::{front_value, FrontModel};
 use table_format::rear::{lights_on_within, rear_gap_after, ReactingFollower};
@@ -14,6 +15,14 @@ use crate::math;
 /// actuator's acceleration is taken back in the band: a first-order lag still passes on
 /// `e^-10` of the excess then (2e-4 m/s^2 from 8 m/s^2 to a 3.5 m/s^2 band).
 const AFTERMATH_LAGS: u64 = 10;
+
+/// The worst corner of the leader's measurement box: the least gap, the slowest leader and
+/// the fastest ego (m, m/s, m/s).
+struct WorstCorner {
+    gap: f32,
+    leader_speed: f32,
+    ego_speed: f32,
+}
 
 /// The last braking below the band, while its effect may last.
 #[derive(Debug, Clone, Copy)]
@@ -83,7 +92,7 @@ impl Controller<'_> {
     /// Whether the brake lights may be off for the next period while a braking below the band
     /// may still act (a command `u` above the lights' command ends the lights' run, and the
     /// follower's reaction starts again at the next braking): the rear check of
-    /// [`Controller::emergency_braking`] for the band's floor, the hardest braking that may
+    /// [`Controller::below_band`] for the band's floor, the hardest braking that may
     /// come next without a check of its own, with the follower's reaction starting only when
     /// the lights come on again after `u` is held a period and the braking ramp
     /// (`brake_jerk`) brings the command down to the lights' command. Where it fails, the step
@@ -130,69 +139,152 @@ impl Controller<'_> {
         }
     }
 
-    /// The emergency authority's braking level (m/s^2, positive, harder than the band's floor;
-    /// commanded at once as its negative) where the step found the front not certified and
-    /// nothing passing (`enforce_front`'s jump to the band's floor): `None` where braking at the
-    /// band's floor at once keeps the leader's worst case above the front margin (the band
-    /// suffices), where the full level buys no more than [`CERTIFICATE_TOLERANCE`] of front
-    /// value over it, where no emergency authority is configured, or where the follower allows
-    /// no braking harder than the band.
+    /// The emergency answer's braking level (m/s^2, positive; commanded at once as its
+    /// negative) where the step found the front not certified and nothing passing
+    /// (`enforce_front`'s jump): as hard as the leader's worst case needs, not a fixed level.
     ///
-    /// Otherwise the gentlest level between the band's floor and the emergency level that
-    /// keeps the front above its margin, or the emergency level when none does, lowered to
-    /// what the follower allows; it is commanded at once, and the actuator builds it up. The
-    /// front is judged as the step judges it (the worst corner of the leader's measurement,
-    /// through the delays), the ego's acceleration held at what is pending until the command
-    /// takes force through the dead time and the lag, then ramping at the emergency's jerk (a
-    /// brake that builds up no faster than declared); its value is nearly affine in
-    /// `1 / level` (the stopping distance), so a secant there, checked, finds the level in at
-    /// most four evaluations. The rear is [`rear_gap_after`] at the worst corner of the
-    /// follower's measurement box at its time `t_f`: the ego braking at most at the level (or
-    /// the hardest since `t_f`) from then on, the follower accelerating at most at its model's
-    /// top until its reaction time after the lights come on ([`lights_on_within`] from the run's
-    /// first command, every later command of the run at or below the lights' command), then
-    /// braking at its model's hardest.
-    pub(super) fn emergency_braking(
+    /// The front is judged as the step judges it: the worst corner of the leader's
+    /// measurement, the ego's acceleration held at what is `pending` until the command takes
+    /// force through the dead time and the lag. Where braking at the band's floor then keeps
+    /// the worst case above the front margin, the answer is the gentlest level between the
+    /// committed ramp's command for this period (`floor`; no gentler: the ramp's own command)
+    /// and the band's floor that does ([`Controller::gentlest_in_band`]): a comfort response
+    /// where comfort suffices. Otherwise the emergency authority's level
+    /// ([`Controller::below_band`]), or the band's floor where it has none or buys nothing.
+    pub(super) fn emergency_answer(
         &self,
         model: &Model,
         leader: &LeaderMemo,
         now: u64,
         pending: f32,
-    ) -> Option<f32> {
-        let e = model.emergency?;
+        floor: f32,
+    ) -> f32 {
         let c = &self.config;
         let beta = -model.ego.min;
-        let dead_us = u64::from(c.plant.actuator_dead_time_us);
-        let lag = seconds(u64::from(c.plant.actuator_lag_us));
         let sensors = &c.sensors;
-        let margin = c.certificate.front_margin;
         // The front's worst corner, as `measured_front`.
-        let gap = sensors.range(leader.track.gap).0;
-        let leader_at_m = math::max(
-            leader.ego.0 + sensors.range_rate(leader.track.rel_speed).0,
-            0.0,
-        );
-        let ego_high = leader.ego.1;
-        // Every command of the run is at or below the band's floor from now on. The ego's
-        // acceleration is bounded as the actuator's declared dead time and lag bound it (a hold
-        // of what is pending until the commands take force, plus the lag), and then, braking
-        // no faster than the emergency's build-up, along a ramp from there: the least braking
-        // either allows, whichever is slower.
+        let corner = WorstCorner {
+            gap: sensors.range(leader.track.gap).0,
+            leader_speed: math::max(
+                leader.ego.0 + sensors.range_rate(leader.track.rel_speed).0,
+                0.0,
+            ),
+            ego_speed: leader.ego.1,
+        };
+        // Every command from now on is at or below the answer. The ego's acceleration is
+        // bounded as the actuator's declared dead time and lag bound it: a hold of what is
+        // pending until the command takes force, plus the lag.
         let (response, _) = profile(
             leader.at_us,
             Ramp {
                 start_us: now,
                 from: -beta,
             },
-            dead_us,
-            lag,
+            u64::from(c.plant.actuator_dead_time_us),
+            seconds(u64::from(c.plant.actuator_lag_us)),
             f32::INFINITY,
         );
+        self.gentlest_in_band(model, &corner, response, pending, floor)
+            .or_else(|| self.below_band(model, &corner, now, response, pending))
+            .unwrap_or(beta)
+    }
+
+    /// The gentlest braking level in the band that keeps the leader's worst case at `corner`
+    /// above the front margin, commanded at once: `None` where not even the band's floor does.
+    /// Through the band's actuator (a dead time and a first-order lag: a hold of `pending` for
+    /// `response`, then the level, the bound `table_format::front`'s module docs derive), the
+    /// front value is nearly affine in `1 / level` (the stopping distance): a secant there
+    /// between the committed ramp's command (`floor`) and the band's floor, 10% short of its
+    /// root, checked, then halfway back, checked, else the band's floor: at most four front
+    /// evaluations. What follows it: with no ramp under way, the step starts the braking ramp
+    /// through the answer (`Controller::step`), and the next step's committed ramp (the same
+    /// hold, then the answer falling at the jerk towards the band's floor) is at or below the
+    /// level held, so its front value is at least this one at the same corner; with a ramp
+    /// under way the step keeps it (as for the band's floor: the answer is at or below its
+    /// command), and the next step judges the state again.
+    fn gentlest_in_band(
+        &self,
+        model: &Model,
+        corner: &WorstCorner,
+        response: f32,
+        pending: f32,
+        floor: f32,
+    ) -> Option<f32> {
+        let beta = -model.ego.min;
+        let margin = self.config.certificate.front_margin;
         let ahead = |level: f32| {
             front_value(
-                gap,
-                leader_at_m,
-                ego_high,
+                corner.gap,
+                corner.leader_speed,
+                corner.ego_speed,
+                &FrontModel {
+                    ego_braking: level,
+                    ..model.front(response, pending, pending, f32::INFINITY)
+                },
+            )
+        };
+        let at_band = ahead(beta);
+        // (A NaN is not in the band: the comparison is false.)
+        let band_suffices = at_band > margin;
+        if !band_suffices {
+            return None;
+        }
+        // No gentler than the ramp's own command, and a braking (the lights' command at the
+        // least: an answer the follower sees).
+        let gentlest = math::clamp(-floor, -self.lights_command(), beta);
+        if gentlest >= beta {
+            return Some(beta);
+        }
+        let at_gentlest = ahead(gentlest);
+        if at_gentlest > margin {
+            return Some(gentlest);
+        }
+        let (x_band, x_gentlest) = (1.0 / beta, 1.0 / gentlest);
+        let share = math::clamp(0.9 * (at_band - margin) / (at_band - at_gentlest), 0.0, 1.0);
+        let candidate = x_band + share * (x_gentlest - x_band);
+        let halfway = 0.5 * (candidate + x_band);
+        [candidate, halfway]
+            .iter()
+            .map(|x| 1.0 / x)
+            .find(|level| ahead(*level) > margin)
+            .or(Some(beta))
+    }
+
+    /// The emergency authority's braking level (m/s^2, positive, harder than the band's
+    /// floor) where braking at the band's floor at once cannot keep the leader's worst case at
+    /// `corner` above the front margin: `None` where the full level buys no more than
+    /// [`CERTIFICATE_TOLERANCE`] of front value over the band's floor, where no emergency
+    /// authority is configured, or where the follower allows no braking harder than the band.
+    ///
+    /// Otherwise the gentlest level between the band's floor and the emergency level that
+    /// keeps the front above its margin, or the emergency level when none does, lowered to
+    /// what the follower allows; it is commanded at once, and the actuator builds it up. The
+    /// ego's acceleration is held at what is `pending` for `response` (the dead time and the
+    /// lag), then ramps at the emergency's jerk (a brake that builds up no faster than
+    /// declared: the slower of the two); its value is nearly affine in `1 / level` (the
+    /// stopping distance), so a secant there, checked, finds the level in at most four
+    /// evaluations. The rear is [`rear_gap_after`] at the worst corner of the follower's
+    /// measurement box at its time `t_f`: the ego braking at most at the level (or the hardest
+    /// since `t_f`) from then on, the follower accelerating at most at its model's top until
+    /// its reaction time after the lights come on ([`lights_on_within`] from the run's first
+    /// command, every later command of the run at or below the lights' command), then braking
+    /// at its model's hardest.
+    fn below_band(
+        &self,
+        model: &Model,
+        corner: &WorstCorner,
+        now: u64,
+        response: f32,
+        pending: f32,
+    ) -> Option<f32> {
+        let e = model.emergency?;
+        let beta = -model.ego.min;
+        let margin = self.config.certificate.front_margin;
+        let ahead = |level: f32| {
+            front_value(
+                corner.gap,
+                corner.leader_speed,
+                corner.ego_speed,
                 &FrontModel {
                     ego_braking: level,
                     ..model.front(response, pending, pending, e.jerk)
@@ -200,9 +292,6 @@ impl Controller<'_> {
             )
         };
         let at_band = ahead(beta);
-        if at_band > margin {
-            return None;
-        }
         let at_full = ahead(e.level);
         // Braking harder buys nothing ahead (at a standstill, or a worst case decided before the
         // braking takes effect): the band's floor.
@@ -231,7 +320,7 @@ impl Controller<'_> {
     }
 
     /// The hardest level up to `wanted` (above the band's floor) that the rear check passes
-    /// ([`Controller::emergency_braking`]): `None` when no level above the band's floor
+    /// ([`Controller::below_band`]): `None` when no level above the band's floor
     /// passes, the follower's track is not kept, or when the lights come on is not known.
     fn follower_allows(&self, model: &Model, now: u64, wanted: f32) -> Option<f32> {
         let beta = -model.ego.min;

@@ -53,9 +53,17 @@
 //! look-ahead certifies the true state, and the ramp keeps it certified: measurement noise
 //! moves the corner, not the truth; the best corner bounds the true value from above, so where
 //! it fails the truth is not certified); otherwise (an engagement into an uncertified state, a cut-in, a leader
-//! beyond its model) the command is the emergency answer: `beta` at once, or harder under the
-//! emergency authority (below). Every period of it is flagged in [`Command::emergency`] with
-//! the takeover request, as is any command that drops faster than ISO 15622's jerk limit.
+//! beyond its model) the command is the emergency answer: a braking at once as hard as the
+//! leader's worst case needs. Where `beta` at once keeps that worst case (at the error box's
+//! worst corner, through the dead time and the lag) above the front margin, it is the gentlest
+//! level between the committed ramp's command and `beta` that does (a secant in `1 / level`,
+//! checked; at least the brake lights' command): a cut-in 55 m ahead at the ego's 20 m/s gets
+//! about 2.8 m/s^2, not 3.5. Where `beta` does not, it is harder, under the emergency authority
+//! (below). With no ramp under way the step starts one through the answer, whose next front
+//! value is at least the answer's (the same hold, then a braking at least as hard); with one
+//! under way the answer is at or below its command, and the ramp is kept. Every period of it
+//! is flagged in [`Command::emergency`] with the takeover request, as is any command that
+//! drops faster than ISO 15622's jerk limit.
 //!
 //! # Emergencies: the emergency authority, bought from the follower
 //! The vehicle declares a second braking, its full one ([`CertificateConfig::emergency`]:
@@ -226,8 +234,9 @@
 //! - **Cut-ins**: a leader measurement whose range is below the least the last track's vehicle
 //!   can have closed to is a new vehicle ([`TrackState::New`], [`Event::NewLeader`]). It is used in
 //!   the period it arrives; where its front value is below the margin no command passes the
-//!   look-ahead (it is non-increasing in the command) and the command is beta, with the
-//!   takeover request ([`Command::takeover`]). A cut-in is outside the model: the certificate
+//!   look-ahead (it is non-increasing in the command) and the command is the emergency answer
+//!   (above: as hard as the leader's worst case needs), with the takeover request
+//!   ([`Command::takeover`]). A cut-in is outside the model: the certificate
 //!   cannot promise what follows, only the best answer.
 //!
 //! # Faults and the minimum-risk manoeuvre
@@ -866,12 +875,19 @@ impl<'t> Controller<'t> {
         };
         let pending = self.pending(leader.at_us.min(t_e), &model);
         let mut front = self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, proposal);
-        // Where the band's floor at once was the answer, the emergency authority may brake
-        // harder (module docs: emergencies).
-        let below_band = match front.jumped {
-            true => self.emergency_braking(&model, &leader, now, pending),
+        // The emergency answer: as hard as the leader's worst case needs, gentler than the
+        // band's floor where that suffices, harder under the emergency authority where it does
+        // not (module docs: emergencies).
+        let answer = match front.jumped {
+            true => {
+                let floor = self.ramp_floor(now, &model);
+                let level = self.emergency_answer(&model, &leader, now, pending, floor);
+                front.command = -level;
+                Some(level)
+            }
             false => None,
         };
+        let below_band = answer.filter(|level| -*level < model.ego.min);
         // The end of a run that braked below the band, or the lights off while such a braking
         // may still act: the follower must allow it, or the lights go on (module docs:
         // emergencies).
@@ -891,7 +907,6 @@ impl<'t> Controller<'t> {
             front.command = math::min(front.command, math::max(self.lights_command(), down));
         }
         if let Some(level) = below_band {
-            front.command = -level;
             let effect_lasts = self.emergency_reaches(now);
             self.emergency = Some(EmergencyMemo {
                 level: match self.emergency {
@@ -927,7 +942,7 @@ impl<'t> Controller<'t> {
         let front_certified = front.value > self.config.certificate.front_margin;
         let mut command = with_tracks(Command::bare(front.command, mode, lost));
         command.takeover = lost.is_some() || !front_certified;
-        // The emergency answer (the band's floor at once, or the emergency authority), every
+        // The emergency answer (in the band, or under the emergency authority), every
         // period it is given.
         if front.jumped {
             command.emergency = true;
