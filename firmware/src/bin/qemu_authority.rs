@@ -5,7 +5,8 @@
 //! 1.15 s, over 576 states (the ego at 5-33 m/s, the leader 8-120 m ahead and as fast or slower,
 //! the follower 3-40 m behind, the ego braking hard, holding or accelerating, its lights off or
 //! on for 1 s). Each call is bracketed by the instruction counter's markers and filed under its
-//! decision (drive, comfort, emergency). Prints how many of each over semihosting and exits with
+//! decision (drive: the law's proposal passed; graded: a braking between the comfort level and
+//! it; brake: under the braking in force). Prints how many of each over semihosting and exits with
 //! status 0 when every decision was reached at least once; 1 otherwise. The firmware's step does
 //! not run this rule yet: the figure says what it would cost.
 #![no_std]
@@ -25,9 +26,7 @@ use markers::{hjacc_step_begin, hjacc_step_end};
 use cortex_m as _;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
-use table_format::authority::{
-    Authority, Braking, Decision, State, TwoAuthorities, DRY_ROAD_EMERGENCY,
-};
+use table_format::authority::{Braking, Decision, State, TwoAuthorities, DRY_ROAD_EMERGENCY};
 use table_format::rear::{lights_on_within, ReactingFollower};
 use table_format::{Game, Table};
 
@@ -40,17 +39,19 @@ pub extern "C" fn hjacc_mode_drive() {
     black_box(0x5eed_0020u32);
 }
 
-/// Files the call just counted under "comfort": a braking under the comfort authority.
+/// Files the call just counted under "graded": a braking between the comfort level and the
+/// proposal passed the look-ahead.
 #[no_mangle]
 #[inline(never)]
-pub extern "C" fn hjacc_mode_comfort() {
+pub extern "C" fn hjacc_mode_graded() {
     black_box(0x5eed_0021u32);
 }
 
-/// Files the call just counted under "emergency": a braking under the emergency authority.
+/// Files the call just counted under "brake": nothing passed, a braking under the braking in
+/// force.
 #[no_mangle]
 #[inline(never)]
-pub extern "C" fn hjacc_mode_emergency() {
+pub extern "C" fn hjacc_mode_brake() {
     black_box(0x5eed_0022u32);
 }
 
@@ -63,6 +64,9 @@ fn fail() -> ! {
     debug::exit(debug::EXIT_FAILURE);
     loop {}
 }
+
+/// The law's proposal in every state: a gentle acceleration.
+const PROPOSAL: f32 = 0.5;
 
 #[entry]
 fn main() -> ! {
@@ -91,7 +95,7 @@ fn main() -> ! {
         front_margin: config.certificate.front_margin,
         rear_margin: config.certificate.rear_margin,
     };
-    let (mut drive, mut comfort, mut emergency) = (0u32, 0u32, 0u32);
+    let (mut drive, mut graded, mut brake) = (0u32, 0u32, 0u32);
     for v in [5.0f32, 15.0, 25.0, 33.0] {
         for gap_leader in [8.0f32, 25.0, 60.0, 120.0] {
             for leader_speed in [v - 3.0, v] {
@@ -106,7 +110,7 @@ fn main() -> ! {
                                 ego_speed: v,
                                 ego_acceleration: a,
                             };
-                            let in_force = (a < 0.0).then_some(Authority::Emergency);
+                            let in_force = model.emergency;
                             let lights = if a < 0.0 { lights } else { 0.0 };
                             hjacc_step_begin();
                             let e = DRY_ROAD_EMERGENCY;
@@ -115,23 +119,23 @@ fn main() -> ! {
                                 black_box(&s),
                                 in_force,
                                 black_box(lights),
-                                black_box(0.5),
+                                black_box(PROPOSAL),
                                 0.02,
                             );
                             black_box((on, d));
                             hjacc_step_end();
                             match d {
-                                Decision::Drive(_) => {
+                                Decision::Drive { command, .. } if command >= PROPOSAL => {
                                     drive += 1;
                                     hjacc_mode_drive();
                                 }
-                                Decision::Brake(Authority::Comfort) => {
-                                    comfort += 1;
-                                    hjacc_mode_comfort();
+                                Decision::Drive { .. } => {
+                                    graded += 1;
+                                    hjacc_mode_graded();
                                 }
-                                Decision::Brake(Authority::Emergency) => {
-                                    emergency += 1;
-                                    hjacc_mode_emergency();
+                                Decision::Brake(_) => {
+                                    brake += 1;
+                                    hjacc_mode_brake();
                                 }
                             }
                         }
@@ -140,13 +144,13 @@ fn main() -> ! {
             }
         }
     }
-    let ok = drive > 0 && comfort > 0 && emergency > 0;
+    let ok = drive > 0 && graded > 0 && brake > 0;
     hprintln!(
-        "authority: {} decisions: drive {}, comfort {}, emergency {}",
-        drive + comfort + emergency,
+        "authority: {} decisions: drive {}, graded {}, brake {}",
+        drive + graded + brake,
         drive,
-        comfort,
-        emergency
+        graded,
+        brake
     );
     hprintln!("result: {}", if ok { "PASS" } else { "FAIL" });
     debug::exit(if ok {
