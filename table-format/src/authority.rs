@@ -168,8 +168,8 @@ pub struct TwoAuthorities {
 /// level the follower allows away from zero.
 pub const LEAST_LEVEL: f32 = 1.0;
 
-/// The bisection steps of [`TwoAuthorities::allowed_level`]: 7 m/s^2 halved 9 times is below
-/// [`LEVEL_RESOLUTION`].
+/// The steps of [`TwoAuthorities::allowed_level`]'s search: even bisecting every other step,
+/// 7 m/s^2 comes within a few [`LEVEL_RESOLUTION`]s; its false positions mostly do better.
 pub const LEVEL_STEPS: u32 = 9;
 
 /// How close to the hardest level the follower allows [`TwoAuthorities::allowed_level`]
@@ -248,33 +248,68 @@ impl TwoAuthorities {
     }
 
     /// The hardest level in `[least, emergency.level]` at which the rear value (the lights on
-    /// for `clock` seconds, the follower's reaction taken `dark` longer) clears the rear margin, m/s^2, to
-    /// within [`LEVEL_RESOLUTION`]: the braking the follower allows. `None` where not even
-    /// `least` does (or NaN). The rear value is non-increasing in the level (an ego that brakes
-    /// harder is never farther from the follower), so a bisection keeping the end that clears
-    /// finds it; it is far from affine in `1 / level` where the least gap comes while both
-    /// brake (a secant there returned 1.9 m/s^2 where 5.3 clears). The emergency level if it
-    /// clears; at most [`LEVEL_STEPS`] + 2 rear evaluations.
+    /// for `clock` seconds, the follower's reaction taken `dark` longer) clears the rear
+    /// margin, m/s^2, to within [`LEVEL_RESOLUTION`] where [`LEVEL_STEPS`] steps reach it: the
+    /// braking the follower allows. `None` where not even `least` does (or NaN). The rear value
+    /// is non-increasing in the level (an ego that brakes harder is never farther from the
+    /// follower), so a bracket that keeps a clearing end finds it; the steps are the Illinois
+    /// method's false positions (the value is smooth between the points where its least gap
+    /// moves from one phase to another), with a bisection wherever a false position would leave
+    /// the bracket or two steps did not halve it. It is far from affine in `1 / level` where
+    /// the least gap comes while both brake (a secant there returned 1.9 m/s^2 where 5.3
+    /// clears). The emergency level if it clears; every level returned clears (the bracket's
+    /// clearing end); at most [`LEVEL_STEPS`] + 2 rear evaluations.
     pub fn allowed_level(&self, s: &State, clock: f32, dark: f32, least: f32) -> Option<f32> {
         let top = self.emergency.level;
         let margin = self.rear_margin;
-        let clears = |level: f32| self.rear(s, level, clock, dark) > margin;
-        if clears(top) {
+        let slack = |level: f32| self.rear(s, level, clock, dark) - margin;
+        let at_top = slack(top);
+        if at_top > 0.0 {
             return Some(top);
         }
-        if !(least < top && clears(least)) {
+        // (NaN compares false: no level.)
+        let searchable = least < top;
+        if !searchable {
             return None;
         }
-        let (mut lo, mut hi) = (least, top);
-        for _ in 0..LEVEL_STEPS {
-            if hi - lo <= LEVEL_RESOLUTION {
+        let at_least = slack(least);
+        let clears = at_least > 0.0;
+        if !clears {
+            return None;
+        }
+        // The bracket: `lo` clears (slack above zero), `hi` does not.
+        let (mut lo, mut at_lo, mut hi, mut at_hi) = (least, at_least, top, at_top);
+        let mut kept = 0i8;
+        let mut width_before = hi - lo;
+        for step in 0..LEVEL_STEPS {
+            let width = hi - lo;
+            if width <= LEVEL_RESOLUTION {
                 break;
             }
-            let mid = 0.5 * (lo + hi);
-            if clears(mid) {
-                lo = mid;
+            let stalled = step % 2 == 0 && step > 0 && width > 0.5 * width_before;
+            if step % 2 == 0 {
+                width_before = width;
+            }
+            let false_position = hi - at_hi * width / (at_hi - at_lo);
+            let mid = if !stalled && false_position > lo && false_position < hi {
+                false_position
             } else {
-                hi = mid;
+                0.5 * (lo + hi)
+            };
+            let at_mid = slack(mid);
+            if at_mid > 0.0 {
+                (lo, at_lo) = (mid, at_mid);
+                // Illinois: the end kept twice in a row has its value halved.
+                if kept < 0 {
+                    at_hi *= 0.5;
+                }
+                kept = -1;
+            } else {
+                (hi, at_hi) = (mid, at_mid);
+                if kept > 0 {
+                    at_lo *= 0.5;
+                }
+                kept = 1;
             }
         }
         Some(lo)
@@ -710,7 +745,7 @@ mod tests {
     /// Emergency braking only where it must: following at 30 m/s 10% beyond the least gap
     /// certified against a 9.8 m/s^2 leader, with a follower that reacts after 1.15 s 62 m
     /// behind (it allows the full 8 m/s^2; the least gap is 20.7 m) and 32 m behind (it allows
-    /// 5.76 m/s^2, and the least gap is 39.9 m). A leader that brakes at 3.5 m/s^2 to standstill, with a law that brakes with
+    /// 5.77 m/s^2, and the least gap is 39.7 m). A leader that brakes at 3.5 m/s^2 to standstill, with a law that brakes with
     /// it, passes the look-ahead throughout: no period of braking under either authority. A
     /// law that holds its speed a second longer gets a braking that passes: none either. A
     /// leader that brakes at 9.8 m/s^2 gets a braking beyond the comfort authority. None
