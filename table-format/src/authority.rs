@@ -96,7 +96,7 @@
 use core::cell::OnceCell;
 
 use crate::front::{front_value, least_braking, FrontModel};
-use crate::rear::{rear_gap_after, ReactingFollower};
+use crate::rear::{hardest_clearing, rear_gap_after, ReactingFollower};
 
 /// A braking the certificate argues with: its level and how fast it builds up.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -167,10 +167,6 @@ pub struct TwoAuthorities {
 /// gap worth following at (450 m at 30 m/s at 1 m/s^2), and the bound keeps the search for the
 /// level the follower allows away from zero.
 pub const LEAST_LEVEL: f32 = 1.0;
-
-/// The steps of [`TwoAuthorities::allowed_level`]'s search: even bisecting every other step,
-/// 7 m/s^2 comes within a few [`LEVEL_RESOLUTION`]s; its false positions mostly do better.
-pub const LEVEL_STEPS: u32 = 9;
 
 /// How close to the hardest level the follower allows [`TwoAuthorities::allowed_level`]
 /// comes, m/s^2 (it never returns more).
@@ -249,70 +245,13 @@ impl TwoAuthorities {
 
     /// The hardest level in `[least, emergency.level]` at which the rear value (the lights on
     /// for `clock` seconds, the follower's reaction taken `dark` longer) clears the rear
-    /// margin, m/s^2, to within [`LEVEL_RESOLUTION`] where [`LEVEL_STEPS`] steps reach it: the
-    /// braking the follower allows. `None` where not even `least` does (or NaN). The rear value
-    /// is non-increasing in the level (an ego that brakes harder is never farther from the
-    /// follower), so a bracket that keeps a clearing end finds it; the steps are the Illinois
-    /// method's false positions (the value is smooth between the points where its least gap
-    /// moves from one phase to another), with a bisection wherever a false position would leave
-    /// the bracket or two steps did not halve it. It is far from affine in `1 / level` where
-    /// the least gap comes while both brake (a secant there returned 1.9 m/s^2 where 5.3
-    /// clears). The emergency level if it clears; every level returned clears (the bracket's
-    /// clearing end); at most [`LEVEL_STEPS`] + 2 rear evaluations.
+    /// margin, m/s^2, to within [`LEVEL_RESOLUTION`]: the braking the follower allows
+    /// ([`crate::rear::hardest_clearing`]). The emergency level if it clears; `None` where not
+    /// even `least` does (or NaN). Every level returned clears.
     pub fn allowed_level(&self, s: &State, clock: f32, dark: f32, least: f32) -> Option<f32> {
-        let top = self.emergency.level;
         let margin = self.rear_margin;
         let slack = |level: f32| self.rear(s, level, clock, dark) - margin;
-        let at_top = slack(top);
-        if at_top > 0.0 {
-            return Some(top);
-        }
-        // (NaN compares false: no level.)
-        let searchable = least < top;
-        if !searchable {
-            return None;
-        }
-        let at_least = slack(least);
-        let clears = at_least > 0.0;
-        if !clears {
-            return None;
-        }
-        // The bracket: `lo` clears (slack above zero), `hi` does not.
-        let (mut lo, mut at_lo, mut hi, mut at_hi) = (least, at_least, top, at_top);
-        let mut kept = 0i8;
-        let mut width_before = hi - lo;
-        for step in 0..LEVEL_STEPS {
-            let width = hi - lo;
-            if width <= LEVEL_RESOLUTION {
-                break;
-            }
-            let stalled = step % 2 == 0 && step > 0 && width > 0.5 * width_before;
-            if step % 2 == 0 {
-                width_before = width;
-            }
-            let false_position = hi - at_hi * width / (at_hi - at_lo);
-            let mid = if !stalled && false_position > lo && false_position < hi {
-                false_position
-            } else {
-                0.5 * (lo + hi)
-            };
-            let at_mid = slack(mid);
-            if at_mid > 0.0 {
-                (lo, at_lo) = (mid, at_mid);
-                // Illinois: the end kept twice in a row has its value halved.
-                if kept < 0 {
-                    at_hi *= 0.5;
-                }
-                kept = -1;
-            } else {
-                (hi, at_hi) = (mid, at_mid);
-                if kept > 0 {
-                    at_lo *= 0.5;
-                }
-                kept = 1;
-            }
-        }
-        Some(lo)
+        hardest_clearing(slack, least, self.emergency.level, LEVEL_RESOLUTION)
     }
 
     /// The certificate's two halves (m, each less its margin) for braking along `braking`'s
