@@ -197,11 +197,12 @@ impl Controller<'_> {
     /// between the committed ramp's command (`floor`) and the band's floor, 10% short of its
     /// root, checked, then halfway back, checked, else the band's floor: at most four front
     /// evaluations. What follows it: with no ramp under way, the step starts the braking ramp
-    /// through the answer (`Controller::step`), and the next step's committed ramp (the same
-    /// hold, then the answer falling at the jerk towards the band's floor) is at or below the
-    /// level held, so its front value is at least this one at the same corner; with a ramp
-    /// under way the step keeps it (as for the band's floor: the answer is at or below its
-    /// command), and the next step judges the state again.
+    /// through the answer (`Controller::step`); the next step's committed ramp has the same
+    /// hold, then the continuous ramp through the answer's period (`brake_jerk h` gentler than
+    /// the answer at its start, harder after its first period), so its front value at the same
+    /// corner is this one less a few micrometres, or more. With a ramp under way the step keeps
+    /// it (as for the band's floor: the answer is at or below its command). Either way the next
+    /// step judges the state again.
     fn gentlest_in_band(
         &self,
         model: &Model,

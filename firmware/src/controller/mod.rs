@@ -59,9 +59,12 @@
 //! level between the committed ramp's command and `beta` that does (a secant in `1 / level`,
 //! checked; at least the brake lights' command): a cut-in 55 m ahead at the ego's 20 m/s gets
 //! about 2.8 m/s^2, not 3.5. Where `beta` does not, it is harder, under the emergency authority
-//! (below). With no ramp under way the step starts one through the answer, whose next front
-//! value is at least the answer's (the same hold, then a braking at least as hard); with one
-//! under way the answer is at or below its command, and the ramp is kept. Every period of it
+//! (below). With no ramp under way the step starts one through the answer: the next step's
+//! front value has the same hold, then the continuous ramp the certificate argues with, which
+//! starts `brake_jerk h` (0.05 m/s^2) gentler than the answer and brakes harder from its first
+//! period on, so it is the answer's less a few micrometres, or more. With a ramp under way the
+//! answer is at or below its command, and the ramp is kept. Either way the next step judges
+//! the state again. Every period of it
 //! is flagged in [`Command::emergency`] with the takeover request, as is any command that
 //! drops faster than ISO 15622's jerk limit.
 //!
