@@ -117,16 +117,6 @@ pub const DRY_ROAD_EMERGENCY: Braking = Braking {
     jerk: 12.0,
 };
 
-/// Which authority a braking is under.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Authority {
-    /// The comfort band: ISO 15622's limits.
-    Comfort,
-    /// The vehicle's full braking.
-    Emergency,
-}
-
 /// The state the rule decides on, exact, SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct State {
@@ -190,14 +180,6 @@ pub enum Decision {
 }
 
 impl TwoAuthorities {
-    /// The braking of an authority.
-    pub fn braking(&self, authority: Authority) -> Braking {
-        match authority {
-            Authority::Comfort => self.comfort,
-            Authority::Emergency => self.emergency,
-        }
-    }
-
     /// The emergency authority's build-up at `level`.
     fn at_level(&self, level: f32) -> Braking {
         Braking {
@@ -912,9 +894,9 @@ mod tests {
                 ego_speed: ve,
                 ego_acceleration: a,
             };
-            let authority = if emergency { Authority::Emergency } else { Authority::Comfort };
-            let rear = m.margins(&s, m.braking(authority), 0.0).1 + m.rear_margin;
-            let brute = rear_by_integration(&m, &s, m.braking(authority));
+            let braking = if emergency { m.emergency } else { m.comfort };
+            let rear = m.margins(&s, braking, 0.0).1 + m.rear_margin;
+            let brute = rear_by_integration(&m, &s, braking);
             prop_assert!(f64::from(rear) <= brute + 0.01, "{} above {}", rear, brute);
         }
     }

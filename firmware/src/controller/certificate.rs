@@ -548,6 +548,19 @@ impl<'t> Controller<'t> {
         needed * (1.0 + sensors.error.range_relative) + sensors.error.range
     }
 
+    /// The worst point of the leader measurement's error box at its time: the least gap, the
+    /// slowest leader (the ego's lowest speed at `t_m` plus the least range rate), the fastest
+    /// ego; the front value is non-decreasing in the first two and non-increasing in the third.
+    pub(super) fn worst_corner(&self, leader: &LeaderMemo) -> WorstCorner {
+        let sensors = &self.config.sensors;
+        let (ego_low, ego_high) = leader.ego;
+        WorstCorner {
+            gap: sensors.range(leader.track.gap).0,
+            leader_speed: math::max(ego_low + sensors.range_rate(leader.track.rel_speed).0, 0.0),
+            ego_speed: ego_high,
+        }
+    }
+
     /// The front half of the certificate at a measured state (module docs: the delays, the
     /// measurement error, the ego's speed): the front value at the error box's worst corner and
     /// the speed headroom at its worst and best corners, for the committed ramp argued from the
@@ -565,13 +578,12 @@ impl<'t> Controller<'t> {
         let dead_us = u64::from(c.plant.actuator_dead_time_us);
         let lag = seconds(u64::from(c.plant.actuator_lag_us));
         let jerk = c.certificate.brake_jerk;
-        // The worst point of the error box: the least gap, the slowest leader (the ego's lowest
-        // speed at `t_m` plus the least range rate), the fastest ego; the front value is
-        // non-decreasing in the first two and non-increasing in the third.
         let sensors = &c.sensors;
-        let gap = sensors.range(leader.track.gap).0;
-        let (ego_low, ego_high) = leader.ego;
-        let leader_at_m = math::max(ego_low + sensors.range_rate(leader.track.rel_speed).0, 0.0);
+        let WorstCorner {
+            gap,
+            leader_speed: leader_at_m,
+            ego_speed: ego_high,
+        } = self.worst_corner(leader);
         let (ego_now_low, ego_now_high) = sensors.ego_speed(ego_speed);
         let committed = self.committed_ramp(now, model);
         let (response, ramp_from) = profile(leader.at_us, committed, dead_us, lag, jerk);
@@ -771,6 +783,39 @@ impl<'t> Controller<'t> {
             jumped,
             passed,
         }
+    }
+}
+
+/// The worst corner of the leader measurement's error box ([`Controller::worst_corner`]).
+pub(super) struct WorstCorner {
+    /// The least gap, m,
+    pub(super) gap: f32,
+    /// the slowest leader, m/s,
+    pub(super) leader_speed: f32,
+    /// and the fastest ego, m/s.
+    pub(super) ego_speed: f32,
+}
+
+impl WorstCorner {
+    /// The front value at this corner for the ego held at `hold` for `response`, then braking
+    /// at `level` built up at `jerk` from `hold` (at once for an infinite `jerk`).
+    pub(super) fn front_at(
+        &self,
+        model: &Model,
+        response: f32,
+        hold: f32,
+        level: f32,
+        jerk: f32,
+    ) -> f32 {
+        front_value(
+            self.gap,
+            self.leader_speed,
+            self.ego_speed,
+            &FrontModel {
+                ego_braking: level,
+                ..model.front(response, hold, hold, jerk)
+            },
+        )
     }
 }
 

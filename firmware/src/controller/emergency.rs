@@ -3,10 +3,9 @@
 //! band's floor at once cannot keep the leader's worst case off the car, no harder than the
 //! follower allows (the controller's module docs: emergencies).
 
-use table_format::front::{front_value, FrontModel};
 use table_format::rear::{lights_on_within, rear_gap_after, ReactingFollower};
 
-use super::certificate::{profile, LeaderMemo, Model, Ramp, RearMemo};
+use super::certificate::{profile, LeaderMemo, Model, Ramp, RearMemo, WorstCorner};
 use super::history::seconds;
 use super::{Controller, CERTIFICATE_TOLERANCE};
 use crate::math;
@@ -15,14 +14,6 @@ use crate::math;
 /// actuator's acceleration is taken back in the band: a first-order lag still passes on
 /// `e^-10` of the excess then (2e-4 m/s^2 from 8 m/s^2 to a 3.5 m/s^2 band).
 const AFTERMATH_LAGS: u64 = 10;
-
-/// The worst corner of the leader's measurement box: the least gap, the slowest leader and
-/// the fastest ego (m, m/s, m/s).
-struct WorstCorner {
-    gap: f32,
-    leader_speed: f32,
-    ego_speed: f32,
-}
 
 /// The last braking below the band, while its effect may last.
 #[derive(Debug, Clone, Copy)]
@@ -161,16 +152,7 @@ impl Controller<'_> {
     ) -> f32 {
         let c = &self.config;
         let beta = -model.ego.min;
-        let sensors = &c.sensors;
-        // The front's worst corner, as `measured_front`.
-        let corner = WorstCorner {
-            gap: sensors.range(leader.track.gap).0,
-            leader_speed: math::max(
-                leader.ego.0 + sensors.range_rate(leader.track.rel_speed).0,
-                0.0,
-            ),
-            ego_speed: leader.ego.1,
-        };
+        let corner = self.worst_corner(leader);
         // Every command from now on is at or below the answer. The ego's acceleration is
         // bounded as the actuator's declared dead time and lag bound it: a hold of what is
         // pending until the command takes force, plus the lag.
@@ -213,17 +195,7 @@ impl Controller<'_> {
     ) -> Option<f32> {
         let beta = -model.ego.min;
         let margin = self.config.certificate.front_margin;
-        let ahead = |level: f32| {
-            front_value(
-                corner.gap,
-                corner.leader_speed,
-                corner.ego_speed,
-                &FrontModel {
-                    ego_braking: level,
-                    ..model.front(response, pending, pending, f32::INFINITY)
-                },
-            )
-        };
+        let ahead = |level: f32| corner.front_at(model, response, pending, level, f32::INFINITY);
         let at_band = ahead(beta);
         // (A NaN is not in the band: the comparison is false.)
         let band_suffices = at_band > margin;
@@ -281,17 +253,7 @@ impl Controller<'_> {
         let e = model.emergency?;
         let beta = -model.ego.min;
         let margin = self.config.certificate.front_margin;
-        let ahead = |level: f32| {
-            front_value(
-                corner.gap,
-                corner.leader_speed,
-                corner.ego_speed,
-                &FrontModel {
-                    ego_braking: level,
-                    ..model.front(response, pending, pending, e.jerk)
-                },
-            )
-        };
+        let ahead = |level: f32| corner.front_at(model, response, pending, level, e.jerk);
         let at_band = ahead(beta);
         let at_full = ahead(e.level);
         // Braking harder buys nothing ahead (at a standstill, or a worst case decided before the
