@@ -65,7 +65,7 @@ pub use header::{
 pub use sensing::{MeasurementError, SensorBounds};
 pub use table::{EgoAction, Lookup, Table, BOX_INTERIOR};
 #[cfg(feature = "std")]
-pub use writer::{encode, with_verification, TableContents, ValueBits};
+pub use writer::{encode, with_leader, with_verification, TableContents, ValueBits};
 
 /// How far below its level a split table's rear value may read at a control period between
 /// the periods `solver verify` proves it over, m: the rear half's stated tolerance at every

@@ -182,9 +182,36 @@ fn preamble_and_header(header: &Header<'_>, payload: usize) -> Result<Vec<u8>, E
 /// The table `bytes` with `verification` in its header: the payload is copied byte for byte
 /// (nothing is quantized again), the header length and the CRC are written anew.
 pub fn with_verification(bytes: &[u8], verification: Verification) -> Result<Vec<u8>, Error> {
+    rewrite_header(bytes, |header| {
+        header.verification = Some(verification);
+        Ok(())
+    })
+}
+
+/// The split three-car table `bytes` with its leader's acceleration bounds declared as
+/// `leader`: the rear table's values are the rear game's, which the leader does not enter
+/// (the split), so the payload and the verification record are copied as they are. For
+/// running the deployed rear table against another leader (a harder one: 9.8 m/s^2). Refused
+/// for any other game.
+pub fn with_leader(bytes: &[u8], leader: Bounds) -> Result<Vec<u8>, Error> {
+    rewrite_header(bytes, |header| match &mut header.game {
+        Game::ThreeCarSplit { leader: l, .. } => {
+            *l = leader;
+            Ok(())
+        }
+        _ => Err(Error::InvalidHeader("not a split three-car table")),
+    })
+}
+
+/// The table `bytes` with its header changed by `change`: the payload copied byte for byte,
+/// the header length and the CRC written anew.
+fn rewrite_header(
+    bytes: &[u8],
+    change: impl FnOnce(&mut Header) -> Result<(), Error>,
+) -> Result<Vec<u8>, Error> {
     let table = crate::Table::parse(bytes)?;
     let mut header = table.header().clone();
-    header.verification = Some(verification);
+    change(&mut header)?;
     header.validate()?;
     // `parse` has checked the preamble, the header length and the trailer.
     let malformed = Error::InvalidHeader("header length");
