@@ -102,6 +102,26 @@ pub struct CertificateConfig {
     /// run of such commands ([`lights_on_within`](table_format::rear::lights_on_within) after
     /// it began). In `[-3.5, 0)`, and no harder than the table's band.
     pub lights_command: f32,
+    /// Which brakings the certificate argues with ([`Authorities`]).
+    pub authorities: Authorities,
+}
+
+/// Which brakings the certificate argues with, and so which follower its rear half holds
+/// against (the controller's module docs: the certificate).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Authorities {
+    /// The comfort band alone: every command in `[-beta, a_max]` but the emergency answer,
+    /// the front argued with the braking ramp to `beta`, the rear half the table's (the
+    /// paper's IDM follower, proven cell by cell by `solver verify`). The default.
+    ComfortBand,
+    /// Two authorities: the law and the graded override in the comfort band, and the
+    /// certificate argued with the emergency authority's build-up at the hardest level the
+    /// follower allows (`table_format::authority`'s rule through the delays and the error
+    /// boxes); the rear half in closed form against a follower that reacts after
+    /// [`CertificateConfig::follower_reaction_time`] to the brake lights
+    /// (`table_format::rear`). The table gives the models, not the rear value.
+    Two,
 }
 
 /// The vehicle the certificate covers: the actuator's dead time and lag, and the envelope.
@@ -241,7 +261,13 @@ impl Config {
         let reaction = math::is_finite(reaction) && (0.0..=5.0).contains(&reaction);
         let lights = self.certificate.lights_command;
         let lights = math::is_finite(lights) && lights < 0.0 && lights >= ISO_15622_LIMITS.0;
+        // Two authorities argue with a ramp and grade the override in the comfort band.
+        let authorities = self.certificate.authorities == Authorities::ComfortBand
+            || (math::is_finite(self.certificate.brake_jerk)
+                && math::is_finite(e.jerk)
+                && self.certificate.override_policy == OverridePolicy::Graded);
         finite_non_negative
+            && authorities
             && time_gaps
             && jerk
             && emergency
@@ -342,6 +368,7 @@ impl Default for CertificateConfig {
             emergency: DRY_ROAD_EMERGENCY,
             follower_reaction_time: CAREFUL_DRIVER_REACTION,
             lights_command: -0.5,
+            authorities: Authorities::ComfortBand,
         }
     }
 }

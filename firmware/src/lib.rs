@@ -45,9 +45,9 @@ pub mod math;
 pub mod sensing;
 
 pub use controller::{
-    Braking, Certificate, CertificateConfig, Certifier, Command, Config, Controller, DriverError,
-    DriverRequest, DriverState, Event, FallbackConfig, Fault, LawConfig, Mode, OverridePolicy,
-    PlantConfig, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
+    Authorities, Braking, Certificate, CertificateConfig, Certifier, Command, Config, Controller,
+    DriverError, DriverRequest, DriverState, Event, FallbackConfig, Fault, LawConfig, Mode,
+    OverridePolicy, PlantConfig, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
 };
 pub use hardware::{Actuator, Clock, Sensors, Watchdog};
 pub use inputs::{Inputs, Measurement, Track};

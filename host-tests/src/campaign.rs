@@ -9,7 +9,7 @@
 //! with humans that keep to the model, collisions and losses must both be zero, or the
 //! certificate is wrong.
 
-use firmware::{Certifier, Config};
+use firmware::{Authorities, Certificate, Certifier, Config};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
@@ -180,15 +180,14 @@ pub fn in_iso_scope(o: &Outcome) -> bool {
     o.leader_hardest_braking <= crate::humans::COMFORT_BRAKING + 1e-3 && !o.engaged_in_emergency
 }
 
-/// Draws an initial state over the whole certified set (`margin > 0` for an actuator at rest
-/// that takes `response_time` to brake): each speed is zero with probability 0.15 and uniform
-/// in `[0, max_speed]` otherwise; gaps are uniform in `[0, 150]` m ahead and over the rear grid
-/// behind. `None` after 10,000 rejected draws.
+/// Draws an initial state over the whole certified set (`margin > 0` by `judge`, the
+/// certificate of a true state for an actuator at rest): each speed is zero with probability
+/// 0.15 and uniform in `[0, max_speed]` otherwise; gaps are uniform in `[0, 150]` m ahead and
+/// over the rear grid behind. `None` after 10,000 rejected draws.
 pub fn sample_start(
-    certifier: &Certifier<'_>,
+    judge: &impl Fn([f32; 5]) -> Option<Certificate>,
     model: &HumanModel,
     gap_max: f32,
-    response_time: f32,
     rng: &mut impl Rng,
 ) -> Option<([Car; 3], f32)> {
     let vmax = model.max_speed;
@@ -204,7 +203,7 @@ pub fn sample_start(
         let gap_leader = rng.random_range(0.0..=150.0f32);
         let gap_follower = rng.random_range(0.0..=gap_max);
         let state = [gap_leader, vl, gap_follower, vf, ve];
-        if let Some(certificate) = certifier.certificate_with_response(state, response_time, 0.0) {
+        if let Some(certificate) = judge(state) {
             let margin = certificate.margin();
             if certificate.is_certified() {
                 let ego = Car { x: 0.0, v: ve };
@@ -241,30 +240,51 @@ pub fn run_episode(
     let model = HumanModel::of(table)?;
     let gap_max = table.axis_bounds(0)?.max;
     let response_time = episode.actuator.dead_time + episode.actuator.lag;
-    let (cars, initial_margin) =
-        sample_start(&certifier, &model, gap_max, response_time, &mut rng)?;
-    let initial = state_of(cars);
-    let mut humans = Humans::new(table, episode.leader, episode.follower, &mut rng)?;
-    let start = Start {
-        cars,
-        engaged_acceleration: 0.0,
+    let judge = |state: [f32; 5]| match config.certificate.authorities {
+        Authorities::ComfortBand => certifier.certificate_with_response(state, response_time, 0.0),
+        Authorities::Two => certifier.certificate_two_authorities(
+            state,
+            episode.actuator.dead_time,
+            episode.actuator.lag,
+        ),
     };
-    let sensors = match episode.sensors {
-        Sensing::Fixed(m) => m,
-        Sensing::Datasheet => {
-            SensorModel::datasheet(config.sensors, config.sensors.max_track_age_us, &mut rng)
+    // With two authorities the braking the certificate argues with is the firmware's choice,
+    // from its measurements: the episode starts as a driver's engagement does, from a period in
+    // standby, and only where the firmware accepts it (its own certificate positive); a refused
+    // one draws another start.
+    let two = config.certificate.authorities == Authorities::Two;
+    let mut attempts = 0;
+    let (initial, initial_margin, mut humans, mut world) = loop {
+        attempts += 1;
+        let (cars, initial_margin) = sample_start(&judge, &model, gap_max, &mut rng)?;
+        let humans = Humans::new(table, episode.leader, episode.follower, &mut rng)?;
+        let start = Start {
+            cars,
+            engaged_acceleration: 0.0,
+        };
+        let sensors = match episode.sensors {
+            Sensing::Fixed(m) => m,
+            Sensing::Datasheet => {
+                SensorModel::datasheet(config.sensors, config.sensors.max_track_age_us, &mut rng)
+            }
+        };
+        let mut world = World::new(
+            bytes,
+            config,
+            model,
+            start,
+            sensors,
+            episode.actuator,
+            Tolerances::default(),
+            rng.random(),
+        );
+        if !two || world.engage_from_standby(0.0, 0.0).is_ok() {
+            break (state_of(cars), initial_margin, humans, world);
+        }
+        if attempts >= 1_000 {
+            return None;
         }
     };
-    let mut world = World::new(
-        bytes,
-        config,
-        model,
-        start,
-        sensors,
-        episode.actuator,
-        Tolerances::default(),
-        rng.random(),
-    );
     let h = world.period_seconds();
     let steps = (episode.seconds / h).round() as u64;
     let cut_in_at = episode

@@ -20,7 +20,7 @@ use host_tests::campaign::{run_episode, CutInKind, Sensing, Trace};
 use host_tests::sim::ActuatorModel;
 use host_tests::SensorModel;
 use indicatif::{ProgressBar, ProgressStyle};
-use table_format::Table;
+use table_format::{Game, Table};
 
 #[derive(Parser)]
 #[command(about = "Closed-loop campaigns of the hjacc firmware")]
@@ -114,6 +114,63 @@ fn table_bytes(table: &Option<PathBuf>) -> Result<&'static [u8]> {
             .leak(),
         None => firmware::DEFAULT_TABLE,
     })
+}
+
+/// Which brakings the firmware's certificate argues with ([`firmware::Authorities`]).
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum AuthoritiesArg {
+    /// The comfort band alone, the rear half the table's (the default configuration).
+    Band,
+    /// Two authorities: the emergency authority's build-up at the level the follower allows.
+    Two,
+}
+
+/// The certificate's configuration and the leader it is run against.
+#[derive(clap::Args)]
+struct CertificateArgs {
+    /// Which brakings the certificate argues with.
+    #[arg(long, value_enum, default_value_t = AuthoritiesArg::Band)]
+    authorities: AuthoritiesArg,
+    /// The leader's hardest braking, m/s^2 (positive): the table's leader declared anew
+    /// (`table_format::with_leader`; the rear table does not depend on it). The table's own
+    /// without it.
+    #[arg(long, value_name = "M_PER_S2")]
+    leader_braking: Option<f32>,
+}
+
+impl CertificateArgs {
+    /// The table's bytes with the leader declared, and the configuration.
+    fn resolve(&self, bytes: &'static [u8]) -> Result<(&'static [u8], firmware::Config)> {
+        let bytes = match self.leader_braking {
+            Some(b) => {
+                anyhow::ensure!(
+                    b.is_finite() && b > 0.0,
+                    "--leader-braking must be a finite braking above 0 m/s^2 (got {b})"
+                );
+                let table = Table::parse(bytes)
+                    .map_err(|e| anyhow::anyhow!("the table does not parse: {e}"))?;
+                let Game::ThreeCarSplit { leader, .. } = table.header().game else {
+                    anyhow::bail!("--leader-braking needs a split three-car table");
+                };
+                table_format::with_leader(
+                    bytes,
+                    table_format::Bounds {
+                        min: -b,
+                        max: leader.max,
+                    },
+                )
+                .map_err(|e| anyhow::anyhow!("--leader-braking {b}: {e}"))?
+                .leak()
+            }
+            None => bytes,
+        };
+        let mut config = firmware::Config::default();
+        config.certificate.authorities = match self.authorities {
+            AuthoritiesArg::Band => firmware::Authorities::ComfortBand,
+            AuthoritiesArg::Two => firmware::Authorities::Two,
+        };
+        Ok((bytes, config))
+    }
 }
 
 /// A split table and its model of the humans.
@@ -357,6 +414,8 @@ struct CampaignArgs {
     /// A table file to run instead of the firmware's default table.
     #[arg(long, value_name = "FILE")]
     table: Option<PathBuf>,
+    #[command(flatten)]
+    certificate: CertificateArgs,
 }
 
 fn campaign(args: CampaignArgs) -> Result<()> {
@@ -372,7 +431,9 @@ fn campaign(args: CampaignArgs) -> Result<()> {
         lag,
         out,
         table,
+        certificate,
     } = args;
+    let (bytes, config) = certificate.resolve(table_bytes(&table)?)?;
     anyhow::ensure!(
         latency == 0 || sensors == SensorsArg::Exact,
         "--latency is for --sensors exact; the datasheet sensors draw their own"
@@ -394,12 +455,11 @@ fn campaign(args: CampaignArgs) -> Result<()> {
             dead_time: dead_time_ms * 1e-3,
             lag,
         },
-        config: firmware::Config::default(),
+        config,
     };
     settings
         .check()
         .map_err(|e| anyhow::anyhow!("--{} {}", e.field.replace('_', "-"), e.reason))?;
-    let bytes = table_bytes(&table)?;
     let (table, _) = split_table(bytes)?;
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     let bar = ProgressBar::new((host_tests::campaign::GROUPS.len() * episodes) as u64);

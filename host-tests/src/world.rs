@@ -388,6 +388,9 @@ pub struct World<'t> {
     grade: f32,
     /// The emergency run under way and its cause (`None`: the last period was not one).
     emergency_run: Option<EmergencyCause>,
+    /// Since when the ego's brake lights are on: its actual acceleration at or below the
+    /// vehicle's declared lights' command (`None`: off).
+    lights_on_since_us: Option<u64>,
 }
 
 /// What started an emergency run ([`EmergencyCauses`]).
@@ -430,6 +433,7 @@ impl<'t> World<'t> {
             iso: crate::iso::IsoCheck::new(1.0),
             grade: 0.0,
             emergency_run: None,
+            lights_on_since_us: None,
         }
     }
 
@@ -527,6 +531,20 @@ impl<'t> World<'t> {
         self.controller.request(request)
     }
 
+    /// An engagement as a driver makes it: the controller disengaged, one period in standby
+    /// (the humans holding `a_leader` and `a_follower`, the ego's actuator told nothing new),
+    /// then resumed, which the controller refuses unless the state it measured in standby is
+    /// certified ([`firmware::DriverError::NotCertified`]).
+    pub fn engage_from_standby(
+        &mut self,
+        a_leader: f32,
+        a_follower: f32,
+    ) -> Result<(), firmware::DriverError> {
+        self.controller.request(firmware::DriverRequest::Cancel)?;
+        self.step(a_leader, a_follower, None);
+        self.controller.request(firmware::DriverRequest::Resume)
+    }
+
     /// The firmware's controller.
     pub fn controller(&self) -> &Controller<'t> {
         &self.controller
@@ -562,14 +580,22 @@ impl<'t> World<'t> {
     /// after the firmware's step and before its command goes to the actuator.
     pub fn certificate(&self) -> Option<Certificate> {
         let now_us = self.period * self.period_us;
-        let (_, pending) = self.actuator.response(now_us, self.model.band_min);
+        // The band's floor bounds what is pending where every command is in the band; with
+        // two authorities the braking may go below it, and the actuator's own state is the
+        // bound.
+        let floor = match self.controller.config().certificate.authorities {
+            firmware::Authorities::ComfortBand => self.model.band_min,
+            firmware::Authorities::Two => f32::NEG_INFINITY,
+        };
+        let (_, pending) = self.actuator.response(now_us, floor);
         let model = self.actuator.model();
-        self.controller.certificate_with_actuator(
+        self.controller.certificate_with_actuator_and_lights(
             state_of(self.cars),
             now_us,
             model.dead_time_us(),
             model.lag,
             pending,
+            self.lights_on_since_us,
         )
     }
 
@@ -615,6 +641,10 @@ impl<'t> World<'t> {
             .sensors
             .measure(now_us, self.cars, actuator_state, &mut self.rng);
         let mut command = self.controller.step(&inputs);
+        // The lights as they are (the actuator's own acceleration, not the firmware's account).
+        self.lights_on_since_us = (self.actuator.acceleration()
+            <= self.controller.config().certificate.lights_command)
+            .then(|| self.lights_on_since_us.unwrap_or(now_us));
         if let Some(a) = command_override {
             command.acceleration = a;
         }
@@ -626,7 +656,8 @@ impl<'t> World<'t> {
             s.min_rear = s.min_rear.min(c.rear);
             s.min_speed = s.min_speed.min(c.speed);
         }
-        if s.certificate_lost.is_none() {
+        // Nothing is claimed in standby: the driver drives.
+        if s.certificate_lost.is_none() && command.mode != Mode::Standby {
             if let Some(half) = self.tolerances.lost(certificate.as_ref()) {
                 s.certificate_lost = Some((t, command.mode.into(), half));
             }

@@ -7,10 +7,11 @@ use table_format::front::{front_value, least_braking, FrontModel};
 use table_format::rear::ReactingFollower;
 use table_format::{Bounds, FollowerModel, Game, Table};
 
+use super::authorities::Look;
 use super::history::seconds;
 use super::{Config, Controller, Fault, OverridePolicy};
 use crate::inputs::Track;
-use crate::math;
+use crate::{iso15622, math};
 
 /// e^-5: what a first-order lag still passes on, after five time constants, of a command older
 /// than that.
@@ -105,23 +106,31 @@ pub(super) struct Model {
 }
 
 impl Model {
-    /// The front model with a response of `hold` for `response_time`, then the braking ramp
-    /// from `ramp_from` at `jerk`.
+    /// The front model with a response of `hold` for `response_time`, then the ramp from
+    /// `ramp_from` along `braking` (its jerk, down to its level).
     pub(super) fn front(
         &self,
         response_time: f32,
         hold: f32,
         ramp_from: f32,
-        jerk: f32,
+        braking: Braking,
     ) -> FrontModel {
         FrontModel {
             leader_braking: self.leader_braking,
-            ego_braking: -self.ego.min,
+            ego_braking: braking.level,
             response_time,
             response_acceleration: hold,
             ramp_from,
-            jerk,
+            jerk: braking.jerk,
             max_speed: self.max_speed,
+        }
+    }
+
+    /// The comfort band's braking: `beta` built up at `jerk`.
+    pub(super) fn band_braking(&self, jerk: f32) -> Braking {
+        Braking {
+            level: -self.ego.min,
+            jerk,
         }
     }
 }
@@ -139,6 +148,7 @@ pub struct Certifier<'t> {
     front_margin: f32,
     rear_margin: f32,
     brake_jerk: f32,
+    lights_command: f32,
 }
 
 impl<'t> Certifier<'t> {
@@ -155,6 +165,7 @@ impl<'t> Certifier<'t> {
             front_margin: config.certificate.front_margin,
             rear_margin: config.certificate.rear_margin,
             brake_jerk: config.certificate.brake_jerk,
+            lights_command: config.certificate.lights_command,
         })
     }
 
@@ -190,6 +201,72 @@ impl<'t> Certifier<'t> {
         )
     }
 
+    /// With two authorities ([`Authorities::Two`](crate::Authorities::Two)): the certificate at
+    /// the true state `(gap_leader, leader_speed, gap_follower, follower_speed, ego_speed)` for
+    /// an ego at rest in its actuator (acceleration zero, nothing in its dead time) of dead
+    /// time `dead_time` and lag `lag` (s), braking from now along the emergency authority's
+    /// build-up at the hardest level from the band's floor up to its own that the follower
+    /// allows (at the band's floor where none does): the front through the delays (a hold of
+    /// `dead_time + lag`), the rear against the reacting follower, whose reaction starts where
+    /// the lights are on for sure ([`table_format::rear::lights_on_within`]). What a start
+    /// certified for a controller engaged there means. `None` without an emergency authority.
+    pub fn certificate_two_authorities(
+        &self,
+        state: [f32; 5],
+        dead_time: f32,
+        lag: f32,
+    ) -> Option<Certificate> {
+        let model = &self.model;
+        let e = model.emergency?;
+        let [gap_leader, leader_speed, gap_follower, follower_speed, ego_speed] = state;
+        let on = table_format::rear::lights_on_within(
+            dead_time,
+            lag,
+            0.0,
+            0.0,
+            0.0,
+            e.jerk,
+            -self.lights_command,
+        );
+        let follower = ReactingFollower {
+            reaction_time: model.follower.reaction_time + on,
+            ..model.follower
+        };
+        let rear = |level: f32| {
+            table_format::rear::rear_gap_after(
+                gap_follower,
+                ego_speed,
+                follower_speed,
+                level,
+                0.0,
+                &follower,
+            ) - self.rear_margin
+        };
+        let beta = -model.ego.min;
+        let level = table_format::rear::hardest_clearing(
+            rear,
+            beta,
+            e.level,
+            table_format::authority::LEVEL_RESOLUTION,
+        )
+        .unwrap_or(beta);
+        let braking = Braking {
+            level,
+            jerk: e.jerk,
+        };
+        let front = front_value(
+            gap_leader,
+            leader_speed,
+            ego_speed,
+            &model.front(dead_time + lag, 0.0, 0.0, braking),
+        );
+        Some(Certificate {
+            front: front - self.front_margin,
+            rear: rear(level),
+            speed: model.max_ego_speed - ego_speed,
+        })
+    }
+
     /// The certificate at a true state for an ego holding `hold` for `response` seconds, then
     /// ramping down from `ramp_from` at `jerk` to beta.
     pub(super) fn certificate_with_profile(
@@ -213,7 +290,7 @@ impl<'t> Certifier<'t> {
             gap_leader,
             leader_speed,
             ego_speed,
-            &model.front(response, hold, ramp_from, jerk),
+            &model.front(response, hold, ramp_from, model.band_braking(jerk)),
         );
         let peak = ego_speed + speed_rise(hold, response, ramp_from, jerk);
         Some(self.certificate_of(front, rear, model.max_ego_speed - peak))
@@ -279,6 +356,12 @@ fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
     };
     if ego.min < envelope.min_acceleration || ego.max > envelope.max_acceleration {
         return Err(Fault::TableOutsideEnvelope);
+    }
+    // Two authorities need an emergency authority harder than the band.
+    if config.certificate.authorities == crate::config::Authorities::Two
+        && config.certificate.emergency.level <= -ego.min
+    {
+        return Err(Fault::InvalidConfig);
     }
     // A lights' command the band cannot give would leave the follower's reaction uncounted.
     if config.certificate.lights_command < ego.min {
@@ -424,7 +507,29 @@ impl<'t> Controller<'t> {
         lag: f32,
         pending: f32,
     ) -> Option<Certificate> {
-        let jerk = self.config.certificate.brake_jerk;
+        self.certificate_with_actuator_and_lights(state, now_us, dead_time_us, lag, pending, None)
+    }
+
+    /// [`Controller::certificate_with_actuator`], with the brake lights as they are: on since
+    /// `lights_on_since_us` (the actuator's acceleration at or below the lights' command since
+    /// then), or off (`None`). With two authorities the follower's reaction is counted from
+    /// them, not from the controller's own bookkeeping: where they are on and the last command
+    /// keeps them on, from when they came on; otherwise from when the braking in force, from
+    /// the last command on, brings them on through that actuator
+    /// ([`table_format::rear::lights_on_within`]). In the comfort band they do not enter.
+    pub fn certificate_with_actuator_and_lights(
+        &self,
+        state: [f32; 5],
+        now_us: u64,
+        dead_time_us: u64,
+        lag: f32,
+        pending: f32,
+        lights_on_since_us: Option<u64>,
+    ) -> Option<Certificate> {
+        let certifier = self.certifier.as_ref().ok()?;
+        let model = &certifier.model;
+        let braking = self.braking_in_force(model);
+        let jerk = braking.jerk;
         let h = u64::from(self.config.period_us);
         let last = self.last_command?;
         let ramp = self.ramp.unwrap_or(Ramp {
@@ -433,10 +538,63 @@ impl<'t> Controller<'t> {
         });
         let (response, ramp_from) = profile(now_us, ramp, dead_time_us, lag, jerk);
         let hold = math::max(math::max(pending, last), ramp_from);
-        self.certifier
-            .as_ref()
-            .ok()?
-            .certificate_with_profile(state, response, hold, ramp_from, jerk)
+        if !self.two_authorities() {
+            return certifier.certificate_with_profile(state, response, hold, ramp_from, jerk);
+        }
+        // Two authorities: the front along the braking in force, the rear against the
+        // reacting follower, its reaction counted from when the lights are on for sure (the
+        // run under way, or the braking's ramp from the last command, from the next period),
+        // the ego braking at most at the braking's level (or harder while an earlier braking
+        // may still act).
+        let [gap_leader, leader_speed, gap_follower, follower_speed, ego_speed] = state;
+        let front = front_value(
+            gap_leader,
+            leader_speed,
+            ego_speed,
+            &model.front(response, hold, ramp_from, braking),
+        );
+        let lights = self.config.certificate.lights_command;
+        let on = match lights_on_since_us {
+            Some(since) if last <= lights => since,
+            _ => {
+                let within = table_format::rear::lights_on_within(
+                    seconds(dead_time_us),
+                    lag,
+                    hold,
+                    hold,
+                    last,
+                    jerk,
+                    -lights,
+                );
+                now_us
+                    .saturating_add(h)
+                    .checked_add(math::micros(within)?)?
+            }
+        };
+        let (clock, dark) = if now_us >= on {
+            (seconds(now_us - on), 0.0)
+        } else {
+            (0.0, seconds(on - now_us))
+        };
+        let follower = ReactingFollower {
+            reaction_time: model.follower.reaction_time + dark,
+            ..model.follower
+        };
+        let level = math::max(braking.level, -self.hardest_braking_from(now_us, model));
+        let rear = table_format::rear::rear_gap_after(
+            gap_follower,
+            ego_speed,
+            follower_speed,
+            level,
+            clock,
+            &follower,
+        );
+        let peak = ego_speed + speed_rise(hold, response, ramp_from, jerk);
+        Some(Certificate {
+            front: front - self.config.certificate.front_margin,
+            rear: rear - self.config.certificate.rear_margin,
+            speed: model.max_ego_speed - peak,
+        })
     }
 
     /// What the actuator may be doing before the controller's own commands are known: the
@@ -487,16 +645,16 @@ impl<'t> Controller<'t> {
     }
 
     /// The hardest braking the ramp allows now: the committed ramp's command for the period
-    /// from `now` (module docs: the braking ramp), at least beta.
+    /// from `now` (module docs: the braking ramp), no harder than the braking in force.
     pub(super) fn ramp_floor(&self, now: u64, model: &Model) -> f32 {
-        let jerk = self.config.certificate.brake_jerk;
+        let Braking { level, jerk } = self.braking_in_force(model);
         if !math::is_finite(jerk) {
-            return model.ego.min;
+            return -level;
         }
         let ramp = self.committed_ramp(now, model);
         let h = seconds(u64::from(self.config.period_us));
         let into = seconds(now.saturating_sub(ramp.start_us)) + h;
-        math::clamp(ramp.from - jerk * into, model.ego.min, model.ego.max)
+        math::clamp(ramp.from - jerk * into, -level, model.ego.max)
     }
 
     /// The least measured gap at which a command of zero passes the look-ahead behind a leader
@@ -538,8 +696,7 @@ impl<'t> Controller<'t> {
         let tail = self.lag_tail(model);
         let front = FrontModel {
             leader_braking,
-            ego_braking: braking.level,
-            ..model.front(age + h + dead + lag, tail, 0.0, braking.jerk)
+            ..model.front(age + h + dead + lag, tail, 0.0, braking)
         };
         // The front value is the gap plus a function of the speeds; the measured gap `m` has
         // its least true gap at `(m - e) / (1 + r)` (sensing's module docs).
@@ -564,7 +721,8 @@ impl<'t> Controller<'t> {
     /// The front half of the certificate at a measured state (module docs: the delays, the
     /// measurement error, the ego's speed): the front value at the error box's worst corner and
     /// the speed headroom at its worst and best corners, for the committed ramp argued from the
-    /// leader's measurement and from the ego's.
+    /// leader's measurement and from the ego's, along `braking` (the braking in force).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn measured_front(
         &self,
         model: &Model,
@@ -573,11 +731,12 @@ impl<'t> Controller<'t> {
         t_e: u64,
         now: u64,
         pending: f32,
+        braking: Braking,
     ) -> MeasuredFront {
         let c = &self.config;
         let dead_us = u64::from(c.plant.actuator_dead_time_us);
         let lag = seconds(u64::from(c.plant.actuator_lag_us));
-        let jerk = c.certificate.brake_jerk;
+        let jerk = braking.jerk;
         let sensors = &c.sensors;
         let WorstCorner {
             gap,
@@ -591,7 +750,7 @@ impl<'t> Controller<'t> {
             gap,
             leader_at_m,
             ego_high,
-            &model.front(response, math::max(pending, ramp_from), ramp_from, jerk),
+            &model.front(response, math::max(pending, ramp_from), ramp_from, braking),
         );
         let (response_e, ramp_from_e) = profile(t_e, committed, dead_us, lag, jerk);
         let rise = speed_rise(
@@ -613,10 +772,12 @@ impl<'t> Controller<'t> {
 
     /// The front half applied to a `proposal` (module docs: the delays, the measurement error,
     /// the ego's speed, the braking ramp): the certified front value and speed headroom of the
-    /// state, and the command, which is the proposal under the speed cap if its look-ahead
-    /// passes, else the gentlest braking down to the ramp's floor that passes, else the ramp
-    /// (or, where the state's front is not certified, beta at once: the step then makes it the
-    /// emergency answer, `Controller::emergency_answer`).
+    /// state along the braking in force, and the command, which is the proposal under the
+    /// speed cap if its look-ahead (along `look`: `None` where the follower allows no braking,
+    /// and nothing passes) passes, else the gentlest braking down to the override's floor that
+    /// passes, else the ramp of the braking in force (or, where the state's front is not
+    /// certified, beta at once: the step then makes it the emergency answer,
+    /// `Controller::emergency_answer`).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn enforce_front(
         &self,
@@ -627,12 +788,14 @@ impl<'t> Controller<'t> {
         now: u64,
         pending: f32,
         proposal: f32,
+        look: Option<Look>,
     ) -> FrontCheck {
         let c = &self.config;
         let h_us = u64::from(c.period_us);
         let dead_us = u64::from(c.plant.actuator_dead_time_us);
         let lag = seconds(u64::from(c.plant.actuator_lag_us));
-        let jerk = c.certificate.brake_jerk;
+        let in_force = self.braking_in_force(model);
+        let jerk = in_force.jerk;
         let t_m = leader.at_us;
         let sensors = &c.sensors;
         let (ego_low, _) = leader.ego;
@@ -644,7 +807,7 @@ impl<'t> Controller<'t> {
             value,
             headroom,
             best_headroom,
-        } = self.measured_front(model, leader, ego_speed, t_e, now, pending);
+        } = self.measured_front(model, leader, ego_speed, t_e, now, pending, in_force);
         // The look-ahead (module docs): `u` held for one period, then the ramp from `u`. Its
         // hold is `max(pending, u + tail)`: the lag averages every command ever issued, and the
         // window's older ones (up to the band's top) still pass `tail` on top of `u`.
@@ -653,8 +816,22 @@ impl<'t> Controller<'t> {
             start_us: now.saturating_add(h_us),
             from: u,
         };
-        // `u`'s ramp seen from `t_0`: its response, hold and the ramp's value at the hold's end.
-        let seen_from = |t_0: u64, u: f32| {
+        // The look-ahead's braking: the band's in the band (the braking in force), the level the
+        // follower allows with two authorities. (Without one nothing passes: its jerk stands in
+        // for the speed cap's profile.)
+        let up_to = look.map_or(f32::NEG_INFINITY, |l| l.up_to);
+        // With two authorities the comfort band's braking is tried first, where the follower
+        // allows it (its lights along its own ramp): a braking in force at the comfort jerk
+        // follows ISO 15622's limit.
+        let comfort = look
+            .filter(|l| l.comfort_lights_on_us.is_some())
+            .map(|_| model.band_braking(c.certificate.brake_jerk));
+        let look = look.map(|l| l.braking);
+        // The speed cap argues with the slower of the ramps (the peak is higher).
+        let speed_jerk = math::min(look.map_or(jerk, |b| b.jerk), c.certificate.brake_jerk);
+        // `u`'s ramp at `jerk` seen from `t_0`: its response, hold and the ramp's value at the
+        // hold's end.
+        let seen_from = |t_0: u64, u: f32, jerk: f32| {
             let (response, from) = profile(t_0, after(u), dead_us, lag, jerk);
             (
                 response,
@@ -663,18 +840,42 @@ impl<'t> Controller<'t> {
             )
         };
         let peak_of = |u: f32| {
-            let (response, hold, from) = seen_from(t_e, u);
-            ego_now + speed_rise(hold, response, from, jerk)
+            let (response, hold, from) = seen_from(t_e, u, speed_jerk);
+            ego_now + speed_rise(hold, response, from, speed_jerk)
         };
-        let ahead = |u: f32| {
-            let (response, hold, from) = seen_from(t_m, u);
+        // The look-ahead along a braking; a command braking harder than its level does not
+        // pass: the follower allows no more (`table_format::authority`).
+        let along = |u: f32, b: Braking| {
+            if u < -b.level {
+                return f32::NEG_INFINITY;
+            }
+            let (response, hold, from) = seen_from(t_m, u, b.jerk);
             front_value(
                 gap,
                 leader_at_m,
                 ego_high,
-                &model.front(response, hold, from, jerk),
+                &model.front(response, hold, from, b),
             )
         };
+        let margin_front = c.certificate.front_margin;
+        // The braking a command passes with (the comfort band's first), and its value; else
+        // the look-ahead's value.
+        let named = |u: f32| -> (Option<Braking>, f32) {
+            if let Some(b) = comfort {
+                let v = along(u, b);
+                if v > margin_front {
+                    return (Some(b), v);
+                }
+            }
+            match look {
+                Some(b) => {
+                    let v = along(u, b);
+                    ((v > margin_front).then_some(b), v)
+                }
+                None => (None, f32::NEG_INFINITY),
+            }
+        };
+        let ahead = |u: f32| named(u).1;
         let floor = self.ramp_floor(now, model);
         // First the speed: the largest command whose response keeps the ego in the domain
         // (the peak is non-decreasing in `u`; bisection, keeping the end that passes).
@@ -697,8 +898,14 @@ impl<'t> Controller<'t> {
             }
             (lo, true)
         };
+        // The follower caps the command as the speed does: the look-ahead holds up to `up_to`
+        // (without a look-ahead nothing passes, and the cap is moot).
         let capped = math::min(proposal, speed_cap);
-        let margin_front = c.certificate.front_margin;
+        let capped = if look.is_some() {
+            math::min(capped, up_to)
+        } else {
+            capped
+        };
         let at_capped = ahead(capped);
         let passes = room && at_capped > margin_front;
         let certified = value > margin_front && headroom >= 0.0;
@@ -707,12 +914,32 @@ impl<'t> Controller<'t> {
         let command = if passes {
             capped
         } else {
-            let graded =
-                c.certificate.override_policy == OverridePolicy::Graded && room && capped > floor;
+            // The override's floor: the ramp's in the band; with two authorities the comfort
+            // band's, reached at ISO 15622's jerk limit (the ramp of the braking in force is an
+            // emergency), no harder than the look-ahead's level.
+            let (graded_floor, at_floor) = if self.two_authorities() {
+                let comfort = math::max(
+                    self.last_command_or_unknown(model)
+                        - iso15622::jerk_limit(ego_now) * seconds(h_us),
+                    model.ego.min,
+                );
+                let lowest = look.map_or(comfort, |b| math::max(comfort, -b.level));
+                (lowest, ahead(lowest))
+            } else {
+                (floor, value)
+            };
+            let graded = c.certificate.override_policy == OverridePolicy::Graded
+                && room
+                && capped > graded_floor;
             let gentler = if graded {
-                least_braking(capped, at_capped, floor, value, margin_front, |u| {
-                    ahead(u) > margin_front
-                })
+                least_braking(
+                    capped,
+                    at_capped,
+                    graded_floor,
+                    at_floor,
+                    margin_front,
+                    |u| ahead(u) > margin_front,
+                )
             } else {
                 None
             };
@@ -749,7 +976,7 @@ impl<'t> Controller<'t> {
                     gap_high,
                     leader_high,
                     ego_low,
-                    &model.front(at_once, from, from, jerk),
+                    &model.front(at_once, from, from, in_force),
                 ) > margin_front
             };
             // The noise rule needs a chain of certified steps behind it (`front_chain`): at an
@@ -774,8 +1001,20 @@ impl<'t> Controller<'t> {
                 }
             }
         };
-        let command = math::clamp(command, model.ego.min, model.ego.max);
+        let command = math::clamp(
+            command,
+            math::min(model.ego.min, -in_force.level),
+            model.ego.max,
+        );
+        // The braking the command passed with: in the band the look-ahead's (one braking);
+        // with two authorities the comfort band's where it passed with it.
+        let named = match (passed, comfort) {
+            (false, _) => None,
+            (true, None) => look,
+            (true, Some(_)) => named(command).0,
+        };
         FrontCheck {
+            named,
             command,
             overridden: !passes || capped < proposal,
             value,
@@ -811,10 +1050,7 @@ impl WorstCorner {
             self.gap,
             self.leader_speed,
             self.ego_speed,
-            &FrontModel {
-                ego_braking: level,
-                ..model.front(response, hold, hold, jerk)
-            },
+            &model.front(response, hold, hold, Braking { level, jerk }),
         )
     }
 }
@@ -853,6 +1089,8 @@ pub(super) struct FrontCheck {
     /// The command passed the look-ahead: the true state one period on is certified, whatever
     /// this period's measurement error (the look-ahead took the minimum over the whole box).
     pub(super) passed: bool,
+    /// The braking the passed look-ahead certified the next state with.
+    pub(super) named: Option<Braking>,
 }
 
 /// The rear value over a box of rear states: the intervals of `gap_follower`, the follower's

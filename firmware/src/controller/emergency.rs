@@ -58,7 +58,13 @@ impl Controller<'_> {
             return Some(on);
         }
         let pending = self.pending(now, model);
-        self.lights_on_after(now, pending, self.lights_command(), f32::INFINITY)
+        let run = self.lights_on_after(now, pending, self.lights_command(), f32::INFINITY);
+        // The on-time the certificate argued with holds too: the run's commands are under its
+        // ramp (they are at or below the lights' command, where that ramp ends).
+        match (run, self.lights_expected_us) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
     }
 
     /// When the brake lights are on for sure (microseconds) if, from `now`, the actuator's
@@ -66,7 +72,7 @@ impl Controller<'_> {
     /// at most the ramp from `from` at `jerk` down to the lights' command
     /// ([`lights_on_within`] through the declared dead time and lag). `None` if the bound is
     /// not finite.
-    fn lights_on_after(&self, now: u64, held: f32, from: f32, jerk: f32) -> Option<u64> {
+    pub(super) fn lights_on_after(&self, now: u64, held: f32, from: f32, jerk: f32) -> Option<u64> {
         let c = &self.config;
         let within = lights_on_within(
             seconds(u64::from(c.plant.actuator_dead_time_us)),
@@ -304,10 +310,7 @@ impl Controller<'_> {
             .find(|level| self.rear_check(model, &rear, *level, clock, dark))
     }
 
-    /// The rear check: [`rear_gap_after`] above `rear_margin` at the worst corner of the kept
-    /// follower measurement's box at its time, for an ego braking at most at `level` (or the
-    /// hardest since then) and a follower whose reaction has run `clock` seconds, or starts
-    /// `dark` seconds after the measurement.
+    /// The rear check: [`Controller::rear_gap`] above `rear_margin`.
     fn rear_check(
         &self,
         model: &Model,
@@ -316,6 +319,21 @@ impl Controller<'_> {
         clock: f32,
         dark: f32,
     ) -> bool {
+        self.rear_gap(model, rear, level, clock, dark) > self.config.certificate.rear_margin
+    }
+
+    /// [`rear_gap_after`] at the worst corner of the kept follower measurement's box at its
+    /// time, for an ego braking at most at `level` (or the hardest since then) and a follower
+    /// whose reaction has run `clock` seconds, or starts `dark` seconds after the measurement,
+    /// m.
+    pub(super) fn rear_gap(
+        &self,
+        model: &Model,
+        rear: &RearMemo,
+        level: f32,
+        clock: f32,
+        dark: f32,
+    ) -> f32 {
         let c = &self.config;
         let ego = self.ego_speed_interval_at(rear.at_us, model);
         let (lo, hi) = c
@@ -328,14 +346,13 @@ impl Controller<'_> {
             ..model.follower
         };
         let since = -self.hardest_braking_from(rear.at_us, model);
-        let value = rear_gap_after(
+        rear_gap_after(
             gap,
             ego_speed,
             follower_speed,
             math::max(level, since),
             clock,
             &follower,
-        );
-        value > c.certificate.rear_margin
+        )
     }
 }

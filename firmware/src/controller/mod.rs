@@ -109,6 +109,51 @@
 //! braking; a driver who answers a gentle braking gently and is then surprised by a harder one
 //! is outside it.
 //!
+//! # Two authorities (opt-in): the braking the follower allows, inside the certificate
+//! With [`CertificateConfig::authorities`] set to [`Authorities::Two`] the certificate is
+//! `table_format::authority`'s, through the delays and the error boxes: a state is certified by
+//! a [`Braking`] in force `B` (a level and a build-up) when the front value along `B`'s ramp
+//! (the committed ramp above, at `B`'s jerk down to `B`'s level) exceeds `front_margin`, the
+//! rear value of `B` against the follower that reacts `follower_reaction_time` after the brake
+//! lights (`table_format::rear::rear_gap_after` at the worst corner of the kept follower
+//! measurement's box at its time, the ego braking at most at `B`'s level or the hardest since
+//! then) exceeds `rear_margin`, and the speed headroom is not negative. The rear table is not
+//! used (the follower's model is the reacting one); its header gives the models.
+//! - **The look-ahead** of a command `u` is argued along the emergency authority's build-up at
+//!   the hardest level from `beta` to the emergency level that the follower allows when `u` is
+//!   held a period and that ramp from `u` lights the brakes
+//!   (`authorities::look_ahead_braking`, [`table_format::rear::hardest_clearing`] to 0.02 m/s^2),
+//!   or along the comfort band's braking (`beta` at `brake_jerk`) where its front passes and
+//!   the rear clears with its own, slower, lights: a command that passes names the braking it
+//!   passed with, which is in force from then on. One level serves every command up to the one
+//!   it was found for (a gentler command lights the brakes no later), so the command is capped
+//!   there, as by the speed: where the follower allows nothing after the law's proposal, the
+//!   level is sought for the last command, then for the comfort band's step down from it, then
+//!   for the lights' command. A command braking harder than the level does not pass.
+//! - **The override** grades its braking between the refused command and the comfort band's
+//!   floor reached at ISO 15622's jerk limit (`last - jerk_limit h`, at least `-beta`); where
+//!   nothing passes, the command follows the ramp of the braking in force (an emergency, by the
+//!   jerk check, where that is the emergency authority's).
+//! - **Why it is invariant**: as for the band, with `B` in place of `beta`: a passed look-ahead
+//!   certifies the state a period on along the braking it names (the front as above; the rear
+//!   because the ego brakes at most at that level from then on and the lights come on no later
+//!   than it argued), and along `B`'s own ramp the front value does not decrease and the rear
+//!   value with the lights' clock does not decrease while they stay on (`table_format::rear`).
+//!   The lights are counted from a run of commands at or below the lights' command, or from the
+//!   earlier time the certificate last argued with while the commands stay under its ramp.
+//! - **The law's steady gap** is the certificate's with the braking the follower allowed the
+//!   last look-ahead ([`Controller::allowed_braking`]): a close follower makes the car keep more
+//!   room ahead.
+//! - **Engagement**: in standby the braking in force is the one a look-ahead from what the
+//!   actuator is doing finds, and the engagement is judged by its certificate.
+//!
+//! What it does not do yet: levels below `beta` (the command history keeps its largest command,
+//! so the ego's braking since a measurement is taken as hard as `beta`); move off from
+//! standstill with a follower at the IDM's jam distance behind (the follower's model lets it
+//! accelerate blind until it sees the lights, and no braking certifies that), so in stop and
+//! go the car is held, by the emergency authority's ramp; QEMU's cost figures are for the
+//! comfort band (docs/closed-loop.md has the closed-loop figures).
+//!
 //! # Delays: the measurements' age, the actuator's dead time and lag
 //! The configuration declares the actuator's dead time `D` (a command acts `D` after it is
 //! issued, at most 100 ms) and the time constant `tau` of its first-order lag (at most 0.3 s);
@@ -309,6 +354,7 @@
 //! delays is argued above and checked by property tests; its `f32` evaluation is within about
 //! 1.4 mm (measured), inside [`CERTIFICATE_TOLERANCE`].
 
+mod authorities;
 mod certificate;
 mod command;
 mod emergency;
@@ -318,9 +364,9 @@ mod law;
 mod tracks;
 
 pub use crate::config::{
-    CertificateConfig, Config, Envelope, FallbackConfig, LawConfig, OverridePolicy, PlantConfig,
-    CLOCK_RECOVERY_PERIODS, ISO_15622_LIMITS, MAX_ACTUATOR_LAG_US, MAX_DEAD_TIME_US, MAX_PERIOD_US,
-    MAX_STALE_PERIODS, MAX_STEP_GAP_PERIODS, MIN_PERIOD_US, TIME_GAP_SETTINGS,
+    Authorities, CertificateConfig, Config, Envelope, FallbackConfig, LawConfig, OverridePolicy,
+    PlantConfig, CLOCK_RECOVERY_PERIODS, ISO_15622_LIMITS, MAX_ACTUATOR_LAG_US, MAX_DEAD_TIME_US,
+    MAX_PERIOD_US, MAX_STALE_PERIODS, MAX_STEP_GAP_PERIODS, MIN_PERIOD_US, TIME_GAP_SETTINGS,
 };
 pub use crate::driver::{DriverError, DriverRequest, DriverState};
 pub use certificate::{
@@ -373,6 +419,14 @@ pub struct Controller<'t> {
     /// The braking ramp under way (`None`: the last command passed the look-ahead): the
     /// commands follow it since its start, not only from now (module docs: the braking ramp).
     ramp: Option<Ramp>,
+    /// The last command passed the look-ahead (its ramp, if one was under way, ends).
+    passed: bool,
+    /// With two authorities, the braking in force: the one the last passed look-ahead named,
+    /// or the standby certificate's before an engagement (`None`: not known).
+    in_force: Option<Braking>,
+    /// With two authorities, the hardest braking the follower allowed the last look-ahead: the
+    /// law's steady gap is the certificate's with it.
+    allowed: Option<Braking>,
     /// The last command issued (`None` before the first, and after a cancel or a clock jump:
     /// then what the actuator does is only known from its reported state).
     last_command: Option<f32>,
@@ -401,6 +455,9 @@ pub struct Controller<'t> {
     /// The last braking below the band, while its effect may last (module docs:
     /// emergencies).
     emergency: Option<EmergencyMemo>,
+    /// With two authorities and the lights off: when the braking the certificate last argued
+    /// with brings them on for sure, while every command since is under its ramp.
+    lights_expected_us: Option<u64>,
     /// From when the brake lights are on for sure, while every command since a run of braking
     /// commands began has been at or below the lights' command (`None`: no run).
     lights_on_us: Option<u64>,
@@ -448,6 +505,9 @@ impl<'t> Controller<'t> {
             events: Deque::new(),
             issued: IssuedCommands::new(),
             ramp: None,
+            passed: false,
+            in_force: None,
+            allowed: None,
             last_command: None,
             reported_acceleration: None,
             driver: DriverState::new(&config),
@@ -459,6 +519,7 @@ impl<'t> Controller<'t> {
             rear: None,
             emergency: None,
             lights_on_us: None,
+            lights_expected_us: None,
             run_went_below_band: false,
             standby_certificate: Err(DriverError::CertificateUnknown),
             ego_history: Deque::new(),
@@ -500,6 +561,13 @@ impl<'t> Controller<'t> {
     /// The driver's state: engaged or not, the set speed, the time-gap setting.
     pub fn driver(&self) -> DriverState {
         self.driver
+    }
+
+    /// With two authorities ([`Authorities::Two`]), the hardest braking the follower allowed
+    /// the last look-ahead (`None` before one, where it allowed none, and in the comfort band):
+    /// the law's steady gap is the certificate's with it.
+    pub fn allowed_braking(&self) -> Option<Braking> {
+        self.allowed.filter(|_| self.two_authorities())
     }
 
     /// The desired gap of the nominal law at `speed` with the driver's time-gap setting, m:
@@ -549,9 +617,11 @@ impl<'t> Controller<'t> {
         self.front_chain = false;
         // The lights' run ends with the commands it was argued from.
         self.lights_on_us = None;
+        self.lights_expected_us = None;
         self.run_went_below_band = false;
         self.issued.forget();
         self.ramp = None;
+        self.in_force = None;
         self.last_command = None;
         self.law.reset();
     }
@@ -615,6 +685,7 @@ impl<'t> Controller<'t> {
         }
         let model = self.certifier.as_ref().ok().map(|c| c.model);
         let floor = model.map(|m| self.ramp_floor(now, &m));
+        self.passed = false;
         let command = if !self.driver.engaged {
             self.standby(inputs)
         } else if let Some(fault) = jump {
@@ -679,17 +750,21 @@ impl<'t> Controller<'t> {
         };
         self.run_went_below_band = self.lights_on_us.is_some()
             && (self.run_went_below_band || model.is_some_and(|m| c < m.ego.min));
-        let jerk = self.config.certificate.brake_jerk;
+        // A command that passed the look-ahead ends the ramp: the next step's committed ramp
+        // is the one the look-ahead argued with, from this command.
         let h = seconds(u64::from(self.config.period_us));
         self.ramp = match (model, floor) {
-            (Some(m), Some(floor)) if c <= floor => Some(self.ramp.unwrap_or(Ramp {
-                start_us: now,
-                from: if c <= m.ego.min || !math::is_finite(jerk) {
-                    m.ego.min
-                } else {
-                    c + jerk * h
-                },
-            })),
+            (Some(m), Some(floor)) if c <= floor && !self.passed => {
+                let Braking { level, jerk } = self.braking_in_force(&m);
+                Some(self.ramp.unwrap_or(Ramp {
+                    start_us: now,
+                    from: if c <= -level || !math::is_finite(jerk) {
+                        -level
+                    } else {
+                        c + jerk * h
+                    },
+                }))
+            }
             _ => None,
         };
         self.last_command = Some(c);
@@ -729,10 +804,28 @@ impl<'t> Controller<'t> {
             return command;
         };
         let pending = self.pending(leader.at_us.min(t_e), &model);
-        let front = self.measured_front(&model, &leader, v, t_e, now, pending);
-        let certificate = match (&self.certifier, self.rear_value_now(&rear)) {
-            (Ok(c), Ok(w)) => Ok(c.certificate_of(front.value, w, front.headroom)),
-            _ => Err(DriverError::NotCertified),
+        // With two authorities, the braking an engagement starts with: the look-ahead's (the
+        // hardest the follower allows).
+        if self.two_authorities() {
+            let doing = self.last_command_or_unknown(&model);
+            self.in_force = self.look_ahead_braking(&model, now, doing);
+        }
+        let braking = self.braking_in_force(&model);
+        let front = self.measured_front(&model, &leader, v, t_e, now, pending, braking);
+        let certificate = if self.two_authorities() {
+            match self.in_force {
+                Some(b) => Ok(Certificate {
+                    front: front.value - self.config.certificate.front_margin,
+                    rear: self.rear_slack(&model, now, b),
+                    speed: front.headroom,
+                }),
+                None => Err(DriverError::NotCertified),
+            }
+        } else {
+            match (&self.certifier, self.rear_value_now(&rear)) {
+                (Ok(c), Ok(w)) => Ok(c.certificate_of(front.value, w, front.headroom)),
+                _ => Err(DriverError::NotCertified),
+            }
         };
         command.margin = certificate.ok().map(|c| c.margin());
         self.standby_certificate = certificate;
@@ -750,7 +843,7 @@ impl<'t> Controller<'t> {
         math::max(-deceleration, last - step)
     }
 
-    fn minimum_risk(&self, inputs: &Inputs, fault: Fault) -> Command {
+    fn minimum_risk(&mut self, inputs: &Inputs, fault: Fault) -> Command {
         let deceleration = self.mrm_deceleration(inputs);
         let mut command = Command::bare(
             self.comfortable(deceleration, inputs),
@@ -761,6 +854,7 @@ impl<'t> Controller<'t> {
         let Ok(Certifier { model, .. }) = &self.certifier else {
             return command;
         };
+        let model = *model;
         let planned = math::clamp(command.acceleration, model.ego.min, model.ego.max);
         command.acceleration = planned;
         // The front half still applies where its inputs are good (module docs): the manoeuvre
@@ -770,10 +864,15 @@ impl<'t> Controller<'t> {
             (self.leader, self.check_ego_speed(&inputs.ego_speed, now))
         {
             let t_e = inputs.ego_speed.timestamp_us;
-            let pending = self.pending(leader.at_us.min(t_e), model);
-            command.acceleration = self
-                .enforce_front(model, &leader, ego_speed, t_e, now, pending, planned)
-                .command;
+            let pending = self.pending(leader.at_us.min(t_e), &model);
+            let look = self.look_ahead(&model, now, planned, ego_speed);
+            if self.two_authorities() && self.in_force.is_none() {
+                self.in_force = look.map(|l| l.braking);
+            }
+            let front =
+                self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, planned, look);
+            self.note_decision(&model, now, front.passed, front.named, look);
+            command.acceleration = front.command;
             command.leader = self.track_state(leader.at_us, now);
         }
         command
@@ -836,6 +935,13 @@ impl<'t> Controller<'t> {
             (_, TrackState::Lost) => Some(Fault::FollowerStale),
             _ => None,
         };
+        // An engagement without a standby period before it (or after a clock jump) starts with
+        // the braking a look-ahead from what the actuator may be doing argues with: its
+        // certificate is judged by it.
+        if self.two_authorities() && self.in_force.is_none() {
+            let doing = self.last_command_or_unknown(&model);
+            self.in_force = self.look_ahead_braking(&model, now, doing);
+        }
         let proposal = match lost {
             Some(_) => math::clamp(
                 self.comfortable(self.mrm_deceleration(inputs), inputs),
@@ -861,7 +967,11 @@ impl<'t> Controller<'t> {
                     time_gap: config.time_gap(self.driver.time_gap_setting),
                     // Only a vehicle ahead needs the gap policy (one front evaluation).
                     steady_gap: if math::is_finite(leader.track.gap) {
-                        self.steady_gap(ego_speed)
+                        self.steady_gap_with(
+                            ego_speed,
+                            model.leader_braking,
+                            self.allowed.unwrap_or(self.braking_in_force(&model)),
+                        )
                     } else {
                         f32::INFINITY
                     },
@@ -877,7 +987,14 @@ impl<'t> Controller<'t> {
             }
         };
         let pending = self.pending(leader.at_us.min(t_e), &model);
-        let mut front = self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, proposal);
+        // The look-ahead's braking (with two authorities, the level the follower allows every
+        // command up to the proposal).
+        let look = self.look_ahead(&model, now, proposal, ego_speed);
+        self.allowed = look.map(|l| l.braking);
+        let mut front = self.enforce_front(
+            &model, &leader, ego_speed, t_e, now, pending, proposal, look,
+        );
+        self.note_decision(&model, now, front.passed, front.named, look);
         // The emergency answer: as hard as the leader's worst case needs, gentler than the
         // band's floor where that suffices, harder under the emergency authority where it does
         // not (module docs: emergencies).
@@ -895,6 +1012,7 @@ impl<'t> Controller<'t> {
         // may still act: the follower must allow it, or the lights go on (module docs:
         // emergencies).
         if below_band.is_none()
+            && !self.two_authorities()
             && (self.run_went_below_band || self.emergency_reaches(now))
             && front.command > self.lights_command()
             && !self.release_allowed(&model, now, front.command)
@@ -909,7 +1027,10 @@ impl<'t> Controller<'t> {
             };
             front.command = math::min(front.command, math::max(self.lights_command(), down));
         }
-        if let Some(level) = below_band {
+        // Every command below the band (the emergency answer's, or with two authorities the
+        // ramp of the braking in force) is remembered while its effect may last.
+        if front.command < model.ego.min {
+            let level = -front.command;
             let effect_lasts = self.emergency_reaches(now);
             self.emergency = Some(EmergencyMemo {
                 level: match self.emergency {
@@ -951,6 +1072,16 @@ impl<'t> Controller<'t> {
             command.emergency = true;
             command.takeover = true;
         }
+        // With two authorities the rear half is the braking in force's, in closed form.
+        if self.two_authorities() {
+            let certificate = Certificate {
+                front: front.value - self.config.certificate.front_margin,
+                rear: self.rear_slack(&model, now, self.braking_in_force(&model)),
+                speed: front.headroom,
+            };
+            command.margin = Some(self.note_margin(now, certificate.margin()));
+            return command;
+        }
         // Outside the rear table's domain the front override (and the speed cap) still act:
         // only the rear half is unknown (module docs).
         let rear = match self.rear_value_now(&rear) {
@@ -968,13 +1099,17 @@ impl<'t> Controller<'t> {
             Ok(c) => c.certificate_of(front.value, rear, front.headroom).margin(),
             Err(_) => f32::NAN,
         };
-        // Diagnostics: the state itself is no longer certified (logged once per excursion).
+        command.margin = Some(self.note_margin(now, margin));
+        command
+    }
+
+    /// Diagnostics: the state itself is no longer certified (logged once per excursion).
+    fn note_margin(&mut self, now: u64, margin: f32) -> f32 {
         let outside = margin.is_nan() || margin <= 0.0;
         if outside && !self.margin_lost {
             self.log(Event::MarginLost { at_us: now, margin });
         }
         self.margin_lost = outside;
-        command.margin = Some(margin);
-        command
+        margin
     }
 }

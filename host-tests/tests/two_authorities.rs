@@ -1,0 +1,267 @@
+//! Two authorities in closed loop ([`firmware::Authorities::Two`]): the firmware's certificate
+//! argued with the emergency authority's build-up at the level the follower allows, through
+//! the declared delays and measurement error, behind leaders that may brake at 6 and at
+//! 9.8 m/s^2 (the deployed rear table with its leader declared anew,
+//! [`table_format::with_leader`]).
+
+use firmware::{Authorities, CertificateConfig, Config, DriverRequest, LawConfig};
+use host_tests::campaign::{run_group, Episode, Sensing};
+use host_tests::humans::HumanModel;
+use host_tests::sim::{ActuatorModel, Car, Channel, Noise};
+use host_tests::world::{Start, Tolerances, World};
+use host_tests::{Follower, Leader, SensorModel};
+use table_format::{Bounds, Table};
+
+/// The firmware's declared actuator limits: 100 ms dead time, 0.3 s lag.
+const ACTUATOR_AT_LIMITS: ActuatorModel = ActuatorModel {
+    dead_time: 0.1,
+    lag: 0.3,
+};
+
+/// The deployed table with its leader braking at most at `leader_braking`.
+fn table_bytes(leader_braking: f32) -> &'static [u8] {
+    table_format::with_leader(
+        firmware::DEFAULT_TABLE,
+        Bounds {
+            min: -leader_braking,
+            max: 2.0,
+        },
+    )
+    .unwrap()
+    .leak()
+}
+
+/// Two authorities at the time-gap setting `setting`.
+fn two(setting: u8) -> Config {
+    Config {
+        certificate: CertificateConfig {
+            authorities: Authorities::Two,
+            ..CertificateConfig::default()
+        },
+        law: LawConfig {
+            time_gap_setting: setting,
+            ..LawConfig::default()
+        },
+        ..Config::default()
+    }
+}
+
+/// Tracks 100 ms old, their errors uniform within the declared bounds.
+fn sensors() -> SensorModel {
+    let track = Channel {
+        latency_us: 100_000,
+        ..Channel::IDEAL
+    };
+    SensorModel {
+        noise: Noise::Uniform,
+        bounds: Config::default().sensors,
+        channels: [track, track, Channel::IDEAL],
+    }
+}
+
+/// What a steady-following episode showed.
+#[derive(Debug)]
+struct Following {
+    /// The gap to the leader at the end, m.
+    settled_gap: f32,
+    /// The gap to the follower at the end, m.
+    follower_gap: f32,
+    /// The braking the follower allowed at the end, m/s^2.
+    allowed: Option<f32>,
+    /// The law's desired gap at the end, for that braking, m.
+    desired: f32,
+    /// Periods flagged as emergencies.
+    emergencies: usize,
+    lost: bool,
+    collided: bool,
+}
+
+/// The follower's behaviour in [`follow`].
+#[derive(Clone, Copy)]
+enum Behind {
+    /// None (a follower too far back to matter).
+    Nobody,
+    /// A driver keeping the IDM's jam distance plus `time_gap` times its speed, matching the
+    /// ego's speed (accelerating at most at the IDM's 1 m/s^2): the IDM's closest following.
+    At {
+        /// s.
+        time_gap: f32,
+    },
+}
+
+/// The ego at `speed` behind a leader holding that speed 150 m ahead, the set speed 3 m/s
+/// above it, the follower `behind`; 120 s.
+fn follow(bytes: &'static [u8], config: Config, speed: f32, behind: Behind) -> Following {
+    let follower_gap = match behind {
+        Behind::Nobody => 1e4,
+        Behind::At { time_gap } => 2.0 + time_gap * speed,
+    };
+    let table = Table::parse(bytes).unwrap();
+    let model = HumanModel::of(&table).unwrap();
+    let start = Start {
+        cars: [
+            Car { x: 150.0, v: speed },
+            Car { x: 0.0, v: speed },
+            Car {
+                x: -follower_gap,
+                v: speed,
+            },
+        ],
+        engaged_acceleration: 0.0,
+    };
+    let mut world = World::new(
+        bytes,
+        config,
+        model,
+        start,
+        sensors(),
+        ACTUATOR_AT_LIMITS,
+        Tolerances::default(),
+        7,
+    );
+    world.request(DriverRequest::SetSpeed(speed + 3.0)).unwrap();
+    let steps = (120.0 / world.period_seconds()).round() as usize;
+    let mut emergencies = 0;
+    for _ in 0..steps {
+        let [_, ego, follower] = world.cars();
+        let a_follower = match behind {
+            Behind::Nobody => 0.0,
+            Behind::At { time_gap } => {
+                let want = 2.0 + time_gap * follower.v;
+                (0.5 * (ego.x - follower.x - want) + (ego.v - follower.v)).clamp(-6.0, 1.0)
+            }
+        };
+        if !world.step(0.0, a_follower, None) {
+            break;
+        }
+        emergencies += usize::from(world.last().is_some_and(|(c, _)| c.emergency));
+    }
+    let [leader, ego, follower] = world.cars();
+    let score = world.score();
+    let c = world.controller();
+    let allowed = c.allowed_braking();
+    let desired = c.desired_gap_over(
+        ego.v,
+        c.steady_gap_with(
+            ego.v,
+            model.leader.0.abs(),
+            allowed.unwrap_or(c.config().certificate.emergency),
+        ),
+    );
+    Following {
+        settled_gap: leader.x - ego.x,
+        follower_gap: ego.x - follower.x,
+        allowed: allowed.map(|b| b.level),
+        desired,
+        emergencies,
+        lost: score.certificate_lost.is_some(),
+        collided: score.collision_time.is_some(),
+    }
+}
+
+/// The law honours the driver: behind a leader holding 20 or 30 m/s, the car settles within
+/// 1 m of the larger of the driver's gap (`4 m + time_gap v`) and the certificate's steady gap
+/// with the braking the follower allows plus the law's room
+/// ([`firmware::Controller::desired_gap_over`]), at every setting, against leaders braking at
+/// 6 and at 9.8 m/s^2. With no follower, against 6 m/s^2 at 30 m/s, that meets the issue's
+/// target: at most 46 m at the 1.0 s setting (1.4 s + 4 m), and four different gaps (the
+/// comfort band alone: 107 m at every setting).
+#[test]
+fn the_car_follows_at_the_drivers_time_gap() {
+    for leader_braking in [6.0, 9.8] {
+        let bytes = table_bytes(leader_braking);
+        for speed in [20.0, 30.0] {
+            let gaps: Vec<f32> = (0..4)
+                .map(|setting| {
+                    let alone = follow(bytes, two(setting), speed, Behind::Nobody);
+                    println!("leader {leader_braking}, {speed} m/s, setting {setting}: {alone:?}");
+                    assert!(!alone.lost && !alone.collided, "{alone:?}");
+                    assert_eq!(alone.emergencies, 0, "{alone:?}");
+                    assert_eq!(alone.allowed, Some(8.0), "{alone:?}");
+                    assert!(
+                        (alone.settled_gap - alone.desired).abs() <= 1.0,
+                        "{alone:?}"
+                    );
+                    alone.settled_gap
+                })
+                .collect();
+            if leader_braking == 6.0 {
+                assert!(
+                    gaps.windows(2).all(|w| w[1] > w[0] + 5.0),
+                    "four settings, four gaps: {gaps:?}"
+                );
+                if speed == 30.0 {
+                    assert!(gaps[0] <= 46.0, "{gaps:?}");
+                }
+            }
+        }
+    }
+    let band = follow(table_bytes(6.0), Config::default(), 30.0, Behind::Nobody);
+    assert!(band.settled_gap > 100.0, "{band:?}");
+}
+
+/// The follower sells the braking: a follower at the IDM's closest (its jam distance plus 1 s
+/// behind) allows less of it than the full 8 m/s^2, and the car keeps the room ahead that the
+/// braking it allows needs (30 m/s, the 1.0 s setting), within 1 m of the law's desired gap
+/// for it (2 m: the level moves with the measurement noise), against leaders braking at 6
+/// and at 9.8 m/s^2.
+#[test]
+fn a_close_follower_makes_the_car_keep_more_room_ahead() {
+    for leader_braking in [6.0, 9.8] {
+        let bytes = table_bytes(leader_braking);
+        let alone = follow(bytes, two(0), 30.0, Behind::Nobody);
+        let behind = follow(bytes, two(0), 30.0, Behind::At { time_gap: 1.0 });
+        println!("leader {leader_braking}: no follower {alone:?}\n  follower at 1 s {behind:?}");
+        assert!(!behind.lost && !behind.collided, "{behind:?}");
+        assert!((behind.follower_gap - 32.0).abs() < 1.0, "{behind:?}");
+        assert!(behind.allowed.is_some_and(|l| l < 7.0), "{behind:?}");
+        assert!(
+            behind.settled_gap > alone.settled_gap + 3.0,
+            "{alone:?} {behind:?}"
+        );
+        assert!(
+            (behind.settled_gap - behind.desired).abs() <= 2.0,
+            "{behind:?}"
+        );
+    }
+}
+
+/// Sampled closed loop (the campaign's episodes, fewer of them; `host-tests campaign
+/// --authorities two` runs the whole): certified starts engaged from standby, humans within the
+/// model, the declared sensors and actuator at their limits, leaders at 6 and 9.8 m/s^2: no
+/// collision and no certificate loss.
+#[test]
+fn certified_starts_stay_certified_with_two_authorities() {
+    let mut total = 0;
+    for leader_braking in [6.0, 9.8] {
+        let bytes = table_bytes(leader_braking);
+        let table = Table::parse(bytes).unwrap();
+        for (leader, follower) in [
+            (Leader::HardBrake, Follower::IdmWorstCase),
+            (Leader::StopAndGo, Follower::IdmFixed),
+            (Leader::Random, Follower::IdmRandom),
+            (Leader::Comfortable, Follower::IdmSwitching),
+        ] {
+            let template = Episode {
+                leader,
+                follower,
+                seconds: 120.0,
+                sensors: Sensing::Datasheet,
+                cut_in: None,
+                actuator: ACTUATOR_AT_LIMITS,
+                config: two(2),
+                seed: 1,
+            };
+            let (summary, _) = run_group(&table, bytes, template, 40, &|| {});
+            println!(
+                "leader {leader_braking} {leader:?}/{follower:?}: {} episodes, {} collisions, {} losses, min margin {:.3}",
+                summary.episodes, summary.collisions, summary.certificate_losses, summary.min_margin
+            );
+            assert_eq!(summary.episodes, 40);
+            assert_eq!(summary.collisions, 0, "{leader:?} {follower:?}");
+            assert_eq!(summary.certificate_losses, 0, "{leader:?} {follower:?}");
+            total += summary.episodes;
+        }
+    }
+    assert_eq!(total, 320);
+}
