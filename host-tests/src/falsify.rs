@@ -269,9 +269,17 @@ impl<'t> Setting<'t> {
         (limit(a_leader, leader.v), limit(a_follower, follower.v))
     }
 
-    /// Runs `case` to its end (or its collision); with `trace`, records it.
+    /// Runs `case` to its end (or its collision); with `trace`, records it. With two
+    /// authorities the episode starts as a driver's engagement does (a period in standby, then
+    /// a resume the firmware may refuse: then nothing more happens).
     pub fn run(&self, case: &Case, trace: Option<&mut Trace>) -> Score {
         let mut world = self.world(case);
+        if self.config.certificate.authorities == firmware::Authorities::Two {
+            let (a, b) = self.humans(&world, &case.schedule, case.follower_rule);
+            if world.engage_from_standby(a, b).is_err() {
+                return *world.score();
+            }
+        }
         let steps = (case.seconds / world.period_seconds()).round() as u64;
         let mut trace = trace;
         for _ in 0..steps {
@@ -284,14 +292,23 @@ impl<'t> Setting<'t> {
     }
 
     /// Whether `start` is certified at the true state, the engaged acceleration held through
-    /// the actuator's dead time and lag.
+    /// the actuator's dead time and lag; with two authorities, for an ego at rest in its
+    /// actuator ([`firmware::Certifier::certificate_two_authorities`]; the firmware judges the
+    /// engagement itself, from standby).
     fn certified(&self, start: &Start, actuator: &ActuatorModel) -> Option<firmware::Certificate> {
         let certifier = firmware::Certifier::new(self.table.clone(), &self.config).ok()?;
-        let c = certifier.certificate_with_response(
-            state_of(start.cars),
-            actuator.dead_time + actuator.lag,
-            start.engaged_acceleration,
-        )?;
+        let c = match self.config.certificate.authorities {
+            firmware::Authorities::ComfortBand => certifier.certificate_with_response(
+                state_of(start.cars),
+                actuator.dead_time + actuator.lag,
+                start.engaged_acceleration,
+            )?,
+            firmware::Authorities::Two => certifier.certificate_two_authorities(
+                state_of(start.cars),
+                actuator.dead_time,
+                actuator.lag,
+            )?,
+        };
         c.is_certified().then_some(c)
     }
 

@@ -54,6 +54,8 @@ enum Command {
         /// A table file to run instead of the firmware's default table.
         #[arg(long, value_name = "FILE")]
         table: Option<PathBuf>,
+        #[command(flatten)]
+        certificate: CertificateArgs,
     },
     /// Runs the scenario suite (openpilot's maneuvers, Euro NCAP's CCR tests, hjacc's own
     /// checks) under ISO 15622's comfort checks, with the graded override and the paper's
@@ -90,6 +92,9 @@ enum Command {
         /// A table file to run instead of the firmware's default table.
         #[arg(long, value_name = "FILE")]
         table: Option<PathBuf>,
+        /// The certificate the findings were searched with.
+        #[command(flatten)]
+        certificate: CertificateArgs,
     },
 }
 
@@ -186,15 +191,6 @@ fn split_table(bytes: &'static [u8]) -> Result<(Table<'static>, host_tests::huma
     Ok((table, model))
 }
 
-/// The search's setting on a table: within the model of the firmware's default configuration.
-fn search_setting<'t>(
-    bytes: &'t [u8],
-    table: &'t Table<'t>,
-    model: host_tests::humans::HumanModel,
-) -> host_tests::falsify::Setting<'t> {
-    host_tests::falsify::Setting::within_model(bytes, table, model, firmware::Config::default())
-}
-
 /// Refuses a count of zero, naming the argument.
 fn positive_count(name: &str, n: usize) -> Result<()> {
     anyhow::ensure!(
@@ -223,14 +219,23 @@ fn real_main() -> Result<()> {
             seed,
             out,
             table,
-        } => falsify(episodes, seconds, seed, &out, &table),
+            certificate,
+        } => falsify(episodes, seconds, seed, &out, &table, &certificate),
         Command::Replay {
             findings,
             worst,
             finding,
             out,
             table,
-        } => replay(&findings, worst.as_deref(), finding, &out, &table),
+            certificate,
+        } => replay(
+            &findings,
+            worst.as_deref(),
+            finding,
+            &out,
+            &table,
+            &certificate,
+        ),
         Command::Campaign(args) => campaign(args),
         Command::Scenarios { out, only } => scenarios(&out, only.as_deref()),
         Command::GapPolicy { out } => host_tests::gap_policy::run(&out),
@@ -243,13 +248,14 @@ fn falsify(
     seed: u64,
     out: &std::path::Path,
     table: &Option<PathBuf>,
+    certificate: &CertificateArgs,
 ) -> Result<()> {
-    use host_tests::falsify::{search, Budget};
+    use host_tests::falsify::{search, Budget, Setting};
     positive_count("episodes", episodes)?;
     positive_seconds("seconds", seconds)?;
-    let bytes = table_bytes(table)?;
+    let (bytes, config) = certificate.resolve(table_bytes(table)?)?;
     let (table, model) = split_table(bytes)?;
-    let setting = search_setting(bytes, &table, model);
+    let setting = Setting::within_model(bytes, &table, model, config);
     let budget = Budget::scaled(episodes, seconds);
     let bar = ProgressBar::new(budget.episodes() as u64);
     bar.set_style(
@@ -300,8 +306,9 @@ fn replay(
     finding: Option<usize>,
     out: &std::path::Path,
     table: &Option<PathBuf>,
+    certificate: &CertificateArgs,
 ) -> Result<()> {
-    use host_tests::falsify::Case;
+    use host_tests::falsify::{Case, Setting};
     let text = std::fs::read_to_string(findings)
         .with_context(|| format!("reading {}", findings.display()))?;
     let json: serde_json::Value = serde_json::from_str(&text)
@@ -323,9 +330,9 @@ fn replay(
     };
     let case: Case = serde_json::from_value(entry["case"].clone())
         .context("the entry's case does not decode")?;
-    let bytes = table_bytes(table)?;
+    let (bytes, config) = certificate.resolve(table_bytes(table)?)?;
     let (table, model) = split_table(bytes)?;
-    let setting = search_setting(bytes, &table, model);
+    let setting = Setting::within_model(bytes, &table, model, config);
     let mut trace = Trace::new();
     let score = setting.run(&case, Some(&mut trace));
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;

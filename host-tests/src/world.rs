@@ -391,6 +391,8 @@ pub struct World<'t> {
     /// Since when the ego's brake lights are on: its actual acceleration at or below the
     /// vehicle's declared lights' command (`None`: off).
     lights_on_since_us: Option<u64>,
+    /// The start's acceleration (the command in force at engagement).
+    start_acceleration: f32,
 }
 
 /// What started an emergency run ([`EmergencyCauses`]).
@@ -434,6 +436,7 @@ impl<'t> World<'t> {
             grade: 0.0,
             emergency_run: None,
             lights_on_since_us: None,
+            start_acceleration: start.engaged_acceleration,
         }
     }
 
@@ -531,17 +534,17 @@ impl<'t> World<'t> {
         self.controller.request(request)
     }
 
-    /// An engagement as a driver makes it: the controller disengaged, one period in standby
-    /// (the humans holding `a_leader` and `a_follower`, the ego's actuator told nothing new),
-    /// then resumed, which the controller refuses unless the state it measured in standby is
-    /// certified ([`firmware::DriverError::NotCertified`]).
+    /// An engagement as a driver makes it, at the start: the controller disengaged, one period
+    /// in standby (the humans holding `a_leader` and `a_follower`, the driver holding the ego's
+    /// actuator at the start's acceleration), then resumed, which the controller refuses unless
+    /// the state it measured in standby is certified ([`firmware::DriverError::NotCertified`]).
     pub fn engage_from_standby(
         &mut self,
         a_leader: f32,
         a_follower: f32,
     ) -> Result<(), firmware::DriverError> {
         self.controller.request(firmware::DriverRequest::Cancel)?;
-        self.step(a_leader, a_follower, None);
+        self.step_with(a_leader, a_follower, Some(self.start_acceleration), None);
         self.controller.request(firmware::DriverRequest::Resume)
     }
 

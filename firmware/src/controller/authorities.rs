@@ -102,7 +102,13 @@ impl Controller<'_> {
 
     /// When the lights are on for sure (microseconds) for `command` held a period from `now`,
     /// then a braking ramp at `jerk` from it (what is pending held before it).
-    fn ramp_lights_on(&self, model: &Model, now: u64, command: f32, jerk: f32) -> Option<u64> {
+    pub(super) fn ramp_lights_on(
+        &self,
+        model: &Model,
+        now: u64,
+        command: f32,
+        jerk: f32,
+    ) -> Option<u64> {
         let h_us = u64::from(self.config.period_us);
         let held = math::max(self.pending(now, model), command);
         self.lights_on_after(now.saturating_add(h_us), held, command, jerk)
@@ -175,9 +181,21 @@ impl Controller<'_> {
         if !math::is_finite(rear.track.gap) {
             return f32::INFINITY;
         }
-        let Some(on) = self.lights_on_in_force(model, now, braking) else {
+        match self.lights_on_in_force(model, now, braking) {
+            Some(on) => self.rear_slack_at(model, braking, on),
+            None => f32::NEG_INFINITY,
+        }
+    }
+
+    /// The rear half of `braking` (m, less `rear_margin`), the lights on for sure from `on`
+    /// (microseconds): [`Controller::rear_gap`] with the follower's reaction counted from there.
+    pub(super) fn rear_slack_at(&self, model: &Model, braking: Braking, on: u64) -> f32 {
+        let Some(rear) = self.rear else {
             return f32::NEG_INFINITY;
         };
+        if !math::is_finite(rear.track.gap) {
+            return f32::INFINITY;
+        }
         let t_f = rear.at_us;
         let (clock, dark) = if t_f >= on {
             (seconds(t_f - on), 0.0)

@@ -557,11 +557,14 @@ impl<'t> Controller<'t> {
         let on = match lights_on_since_us {
             Some(since) if last <= lights => since,
             _ => {
+                // The actuator's acceleration and what is in its dead time are at most what is
+                // pending and the last command (the ramp's reference is the front model's).
+                let held = math::max(pending, last);
                 let within = table_format::rear::lights_on_within(
                     seconds(dead_time_us),
                     lag,
-                    hold,
-                    hold,
+                    held,
+                    held,
                     last,
                     jerk,
                     -lights,

@@ -804,22 +804,26 @@ impl<'t> Controller<'t> {
             return command;
         };
         let pending = self.pending(leader.at_us.min(t_e), &model);
-        // With two authorities, the braking an engagement starts with: the look-ahead's (the
-        // hardest the follower allows).
+        // With two authorities, the braking an engagement starts with: the look-ahead's from what
+        // the actuator is doing (the hardest the follower allows), its lights argued from the
+        // period after this one, where the first engaged step's ramp starts.
         if self.two_authorities() {
             let doing = self.last_command_or_unknown(&model);
             self.in_force = self.look_ahead_braking(&model, now, doing);
+            self.lights_expected_us = self
+                .in_force
+                .and_then(|b| self.ramp_lights_on(&model, now, doing, b.jerk));
         }
         let braking = self.braking_in_force(&model);
         let front = self.measured_front(&model, &leader, v, t_e, now, pending, braking);
         let certificate = if self.two_authorities() {
-            match self.in_force {
-                Some(b) => Ok(Certificate {
+            match (self.in_force, self.lights_expected_us) {
+                (Some(b), Some(on)) => Ok(Certificate {
                     front: front.value - self.config.certificate.front_margin,
-                    rear: self.rear_slack(&model, now, b),
+                    rear: self.rear_slack_at(&model, b, on),
                     speed: front.headroom,
                 }),
-                None => Err(DriverError::NotCertified),
+                _ => Err(DriverError::NotCertified),
             }
         } else {
             match (&self.certifier, self.rear_value_now(&rear)) {
