@@ -204,7 +204,11 @@ const CUT_IN: u32 = 3_000;
 
 #[entry]
 fn main() -> ! {
-    let config = Config::default();
+    let mut config = Config::default();
+    // The certificate argued with two authorities, for that mode's figures.
+    if cfg!(feature = "qemu-two-authorities") {
+        config.certificate.authorities = firmware::Authorities::Two;
+    }
     let mut controller = Controller::new(DEFAULT_TABLE, config);
     let h = config.period_us as f32 * 1e-6;
     let s = config.sensors;
