@@ -275,7 +275,7 @@ pub fn run_episode(
             start,
             sensors,
             episode.actuator,
-            Tolerances::default(),
+            Tolerances::for_config(&config),
             rng.random(),
         );
         if !two || world.engage_from_standby(0.0, 0.0).is_ok() {
@@ -600,7 +600,10 @@ pub fn run_group(
     let summary = GroupSummary {
         leader: template.leader,
         follower: template.follower,
-        in_model: template.follower.in_model() && template.cut_in.is_none(),
+        in_model: template
+            .follower
+            .in_model_for(template.config.certificate.authorities)
+            && template.cut_in.is_none(),
         episodes: outcomes.len(),
         collisions: count(&|o| o.collided),
         collisions_unavoidable: count(&|o| o.collided && o.unavoidable_from.is_some()),

@@ -201,7 +201,7 @@ impl<'t> Setting<'t> {
             table,
             model,
             config,
-            tolerances: Tolerances::default(),
+            tolerances: Tolerances::for_config(&config),
             plant: ActuatorModel {
                 dead_time: config.plant.actuator_dead_time_us as f32 * 1e-6,
                 lag: config.plant.actuator_lag_us as f32 * 1e-6,

@@ -64,6 +64,17 @@ impl Follower {
     pub fn in_model(self) -> bool {
         !matches!(self, Follower::Unbounded | Follower::IdmReacting)
     }
+
+    /// Whether the follower keeps to the model the certificate argues with: the table's in the
+    /// comfort band; with two authorities the follower that reacts to the brake lights after
+    /// its reaction time, at most at its IDM's top before and no harder than its clip after,
+    /// which every IDM follower and [`Follower::IdmReacting`] keep to.
+    pub fn in_model_for(self, authorities: firmware::Authorities) -> bool {
+        match authorities {
+            firmware::Authorities::ComfortBand => self.in_model(),
+            firmware::Authorities::Two => !matches!(self, Follower::Unbounded),
+        }
+    }
 }
 
 /// The table's model of the humans.

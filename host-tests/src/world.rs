@@ -87,6 +87,21 @@ pub struct Tolerances {
     pub speed_m_per_s: f32,
 }
 
+impl Tolerances {
+    /// The tolerances of `config`'s certificate: the default's in the comfort band; with two
+    /// authorities the rear half is a closed form, held to the front's rounding tolerance
+    /// ([`firmware::CERTIFICATE_TOLERANCE`]), not to the rear table's sampling bound.
+    pub fn for_config(config: &Config) -> Self {
+        match config.certificate.authorities {
+            firmware::Authorities::ComfortBand => Tolerances::default(),
+            firmware::Authorities::Two => Tolerances {
+                rear_m: firmware::CERTIFICATE_TOLERANCE,
+                ..Tolerances::default()
+            },
+        }
+    }
+}
+
 impl Default for Tolerances {
     fn default() -> Self {
         Tolerances {
