@@ -131,10 +131,8 @@ impl Controller<'_> {
             let jerk = self.config.certificate.brake_jerk;
             let (dark, on) = self.dark_after(model, now, up_to, jerk)?;
             let rear = self.rear?;
-            let clears = !math::is_finite(rear.track.gap)
-                || self.rear_gap(model, &rear, -model.ego.min, 0.0, dark)
-                    > self.config.certificate.rear_margin;
-            clears.then_some(on)
+            self.rear_check(model, &rear, -model.ego.min, 0.0, dark)
+                .then_some(on)
         };
         let look = |up_to: f32| {
             let braking = self.look_ahead_braking(model, now, up_to)?;
@@ -225,7 +223,13 @@ impl Controller<'_> {
             self.last_command_or_unknown(model),
             braking.jerk,
         );
-        match (ramp, self.lights_expected_us) {
+        self.lights_no_later_than_argued(ramp)
+    }
+
+    /// The earlier of `bound` and the on-time the certificate last argued with
+    /// (`lights_expected_us`): both hold while the commands stay under that argument's ramp.
+    pub(super) fn lights_no_later_than_argued(&self, bound: Option<u64>) -> Option<u64> {
+        match (bound, self.lights_expected_us) {
             (Some(a), Some(b)) => Some(a.min(b)),
             (a, b) => a.or(b),
         }

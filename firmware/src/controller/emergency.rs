@@ -61,10 +61,7 @@ impl Controller<'_> {
         let run = self.lights_on_after(now, pending, self.lights_command(), f32::INFINITY);
         // The on-time the certificate argued with holds too: the run's commands are under its
         // ramp (they are at or below the lights' command, where that ramp ends).
-        match (run, self.lights_expected_us) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        self.lights_no_later_than_argued(run)
     }
 
     /// When the brake lights are on for sure (microseconds) if, from `now`, the actuator's
@@ -311,7 +308,7 @@ impl Controller<'_> {
     }
 
     /// The rear check: [`Controller::rear_gap`] above `rear_margin`.
-    fn rear_check(
+    pub(super) fn rear_check(
         &self,
         model: &Model,
         rear: &RearMemo,
