@@ -3,8 +3,10 @@
 # toolchain, proves no panic is reachable from the control step (the no-panic binary only links
 # if none is), runs the closed-loop scenario on QEMU's emulated Cortex-M4F (failing on a
 # non-zero exit), and prints sizes, stack and instructions per control step; counts the
-# instructions of the two-authority rule's decision (qemu-authority); then runs the scenario once
-# more with the firmware's defmt log on (feature qemu-defmt) and decodes the log with defmt-print.
+# instructions of the two-authority rule's decision (qemu-authority); runs and counts the scenario
+# with the certificate argued with two authorities (qemu-two-authorities); then runs the scenario
+# once more with the firmware's defmt log on (feature qemu-defmt) and decodes the log with
+# defmt-print.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -56,6 +58,13 @@ authority=$dir/qemu-authority
 timeout 300 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
   -semihosting-config enable=on,target=native -kernel "$authority"
 count_instructions "$authority"
+
+echo "--- the scenario with the certificate argued with two authorities (feature qemu-two-authorities)"
+build -p firmware --features qemu-two-authorities --bin qemu-scenario
+timeout 300 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
+  -semihosting-config enable=on,target=native -kernel "$elf"
+echo "--- instructions per control step with two authorities (budget 50,000: docs/board.md)"
+count_instructions "$elf"
 
 echo "--- the same scenario with the firmware's defmt log (feature qemu-defmt), decoded by defmt-print"
 DEFMT_LOG=info build -p firmware --features qemu-defmt --bin qemu-scenario

@@ -26,6 +26,7 @@ use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use table_format::rear::ReactingFollower;
 use table_format::Table;
 
 use crate::humans::{follower_speed_gradient, HumanModel};
@@ -107,6 +108,10 @@ pub enum FollowerRule {
     },
 }
 
+/// How long a leader of [`Case::leader_brakes_at_authority_change`] brakes at its hardest
+/// after the firmware's braking in force changes, s.
+pub const AT_AUTHORITY_CHANGE: f32 = 2.0;
+
 /// The humans' inputs, piecewise constant over segments: the leader's in `[-1, 1]` (-1 its
 /// hardest braking, 1 its largest acceleration), the follower's time gap in `[0, 1]` of its
 /// range. Past the last segment the last one holds.
@@ -159,6 +164,15 @@ pub struct Case {
     pub schedule: Schedule,
     /// The follower's time-gap rule.
     pub follower_rule: FollowerRule,
+    /// The follower sees the ego's brake lights only after its reaction time
+    /// ([`Setting::reacting`]): until then it accelerates at its largest acceleration.
+    #[serde(default)]
+    pub follower_reacts: bool,
+    /// The leader brakes at its hardest for [`AT_AUTHORITY_CHANGE`] seconds from every
+    /// change of the braking the firmware argues with (with two authorities), whatever the
+    /// schedule says.
+    #[serde(default)]
+    pub leader_brakes_at_authority_change: bool,
     /// Sensors.
     pub sensors: SensorModel,
     /// The ego's actuator.
@@ -185,6 +199,11 @@ pub struct Setting<'t> {
     /// The slowest actuator the search draws: the configuration's declared dead time and lag
     /// for a search within the model ([`Setting::within_model`]); slower for a planted hole.
     pub plant: ActuatorModel,
+    /// The follower that reacts to the brake lights late, as the two-authority certificate
+    /// has it ([`firmware::Certifier::reacting_follower`]), for the cases that draw it
+    /// ([`Case::follower_reacts`]); `None`: every follower sees the ego at once (the table's
+    /// IDM, which the comfort band's rear half argues with).
+    pub reacting: Option<ReactingFollower>,
 }
 
 impl<'t> Setting<'t> {
@@ -206,7 +225,20 @@ impl<'t> Setting<'t> {
                 dead_time: config.plant.actuator_dead_time_us as f32 * 1e-6,
                 lag: config.plant.actuator_lag_us as f32 * 1e-6,
             },
+            reacting: None,
         }
+    }
+
+    /// The same search with followers that react to the brake lights after the configured
+    /// reaction time (the two-authority certificate's follower): the model its rear half
+    /// argues with, searched at the edge (the largest acceleration until the reaction, the
+    /// table's IDM from then on). `None` if the table is not accepted.
+    pub fn with_reacting_follower(self) -> Option<Self> {
+        let certifier = firmware::Certifier::new(self.table.clone(), &self.config).ok()?;
+        Some(Setting {
+            reacting: Some(certifier.reacting_follower()),
+            ..self
+        })
     }
 
     fn world(&self, case: &Case) -> World<'t> {
@@ -224,13 +256,31 @@ impl<'t> Setting<'t> {
 
     /// The humans' accelerations for the next period of `world` under `case` (within the
     /// model: the leader's bounds, the IDM with a time gap in range, speeds in `[0, v_max]`).
-    fn humans(&self, world: &World<'_>, schedule: &Schedule, rule: FollowerRule) -> (f32, f32) {
+    ///
+    /// A follower that reacts late (`reacts`, with [`Setting::reacting`]) accelerates at its
+    /// largest acceleration from when the ego's brake lights come on until its reaction time
+    /// has passed (the certificate's worst case before the reaction), then drives by the IDM.
+    fn humans(
+        &self,
+        world: &World<'_>,
+        schedule: &Schedule,
+        rule: FollowerRule,
+        reacts: bool,
+        at_authority_change: bool,
+    ) -> (f32, f32) {
         let m = &self.model;
         let t = world.time();
         let h = world.period_seconds();
         let [leader, ego, follower] = world.cars();
         let (u, tau) = schedule.at(t);
-        let u = u.clamp(-1.0, 1.0);
+        let changed = world
+            .braking_in_force_changed_at()
+            .is_some_and(|at| t - at < AT_AUTHORITY_CHANGE);
+        let u = if at_authority_change && changed {
+            -1.0
+        } else {
+            u.clamp(-1.0, 1.0)
+        };
         let a_leader = if u < 0.0 {
             -u * m.leader.0
         } else {
@@ -258,7 +308,10 @@ impl<'t> Setting<'t> {
                 }
             }
         };
-        let a_follower = m.follower_acceleration(follower.v, ego.v, ego.x - follower.x, time_gap);
+        let a_follower = match (self.reacting.filter(|_| reacts), world.lights_on_since()) {
+            (Some(r), Some(on)) if t - on < r.reaction_time => r.reaction_acceleration,
+            _ => m.follower_acceleration(follower.v, ego.v, ego.x - follower.x, time_gap),
+        };
         let limit = |a: f32, v: f32| {
             if a > 0.0 {
                 a.min(((m.max_speed - v) / h).max(0.0))
@@ -274,8 +327,17 @@ impl<'t> Setting<'t> {
     /// a resume the firmware may refuse: then nothing more happens).
     pub fn run(&self, case: &Case, trace: Option<&mut Trace>) -> Score {
         let mut world = self.world(case);
+        let humans = |world: &World<'_>| {
+            self.humans(
+                world,
+                &case.schedule,
+                case.follower_rule,
+                case.follower_reacts,
+                case.leader_brakes_at_authority_change,
+            )
+        };
         if self.config.certificate.authorities == firmware::Authorities::Two {
-            let (a, b) = self.humans(&world, &case.schedule, case.follower_rule);
+            let (a, b) = humans(&world);
             if world.engage_from_standby(a, b).is_err() {
                 return *world.score();
             }
@@ -283,7 +345,7 @@ impl<'t> Setting<'t> {
         let steps = (case.seconds / world.period_seconds()).round() as u64;
         let mut trace = trace;
         for _ in 0..steps {
-            let (a, b) = self.humans(&world, &case.schedule, case.follower_rule);
+            let (a, b) = humans(&world);
             if !world.step(a, b, trace.as_deref_mut()) {
                 break;
             }
@@ -460,6 +522,12 @@ impl<'t> Setting<'t> {
             start,
             schedule,
             follower_rule: rule,
+            follower_reacts: self.reacting.is_some(),
+            // With two authorities a third of the cases' leaders brake at every change of the
+            // braking in force.
+            leader_brakes_at_authority_change: self.config.certificate.authorities
+                == firmware::Authorities::Two
+                && rng.random_bool(1.0 / 3.0),
             sensors,
             actuator,
             seconds,
@@ -815,7 +883,13 @@ fn greedy_case(setting: &Setting<'_>, mut case: Case) -> (Case, Score) {
             let mut probe = world.clone();
             let mut least = f32::INFINITY;
             for _ in 0..ahead {
-                let (a, b) = setting.humans(&probe, &hold, FollowerRule::Schedule);
+                let (a, b) = setting.humans(
+                    &probe,
+                    &hold,
+                    FollowerRule::Schedule,
+                    case.follower_reacts,
+                    case.leader_brakes_at_authority_change,
+                );
                 let alive = probe.step(a, b, None);
                 if let Some((_, Some(c))) = probe.last() {
                     least = least.min(c.margin());
@@ -838,7 +912,13 @@ fn greedy_case(setting: &Setting<'_>, mut case: Case) -> (Case, Score) {
             time_gap: vec![tau],
         };
         for _ in 0..per_decision {
-            let (a, b) = setting.humans(&world, &hold, FollowerRule::Schedule);
+            let (a, b) = setting.humans(
+                &world,
+                &hold,
+                FollowerRule::Schedule,
+                case.follower_reacts,
+                case.leader_brakes_at_authority_change,
+            );
             if !world.step(a, b, None) {
                 break 'episode;
             }

@@ -56,6 +56,11 @@ enum Command {
         table: Option<PathBuf>,
         #[command(flatten)]
         certificate: CertificateArgs,
+        /// Followers that see the ego's brake lights only after their reaction time (the
+        /// two-authority certificate's follower, at its worst: the largest acceleration until
+        /// then); needs `--authorities two`.
+        #[arg(long)]
+        follower_reacts: bool,
     },
     /// Runs the scenario suite (openpilot's maneuvers, Euro NCAP's CCR tests, hjacc's own
     /// checks) under ISO 15622's comfort checks, with the graded override and the paper's
@@ -220,7 +225,16 @@ fn real_main() -> Result<()> {
             out,
             table,
             certificate,
-        } => falsify(episodes, seconds, seed, &out, &table, &certificate),
+            follower_reacts,
+        } => falsify(
+            episodes,
+            seconds,
+            seed,
+            &out,
+            &table,
+            &certificate,
+            follower_reacts,
+        ),
         Command::Replay {
             findings,
             worst,
@@ -249,13 +263,26 @@ fn falsify(
     out: &std::path::Path,
     table: &Option<PathBuf>,
     certificate: &CertificateArgs,
+    follower_reacts: bool,
 ) -> Result<()> {
     use host_tests::falsify::{search, Budget, Setting};
     positive_count("episodes", episodes)?;
     positive_seconds("seconds", seconds)?;
+    anyhow::ensure!(
+        !follower_reacts || certificate.authorities == AuthoritiesArg::Two,
+        "--follower-reacts needs --authorities two: the comfort band's rear half argues with \
+         the table's IDM, which sees the ego at once"
+    );
     let (bytes, config) = certificate.resolve(table_bytes(table)?)?;
     let (table, model) = split_table(bytes)?;
     let setting = Setting::within_model(bytes, &table, model, config);
+    let setting = if follower_reacts {
+        setting
+            .with_reacting_follower()
+            .ok_or_else(|| anyhow::anyhow!("the firmware does not accept the table"))?
+    } else {
+        setting
+    };
     let budget = Budget::scaled(episodes, seconds);
     let bar = ProgressBar::new(budget.episodes() as u64);
     bar.set_style(
@@ -281,8 +308,13 @@ fn falsify(
     }
     let (collisions, losses) = report.failures();
     println!(
-        "adversarial search, humans within the model, {seconds} s: {collisions} collisions and \
+        "adversarial search, humans within the model{}, {seconds} s: {collisions} collisions and \
          {losses} certificate losses in {} episodes ({:.0} s)",
+        if follower_reacts {
+            " (followers reacting to the brake lights late)"
+        } else {
+            ""
+        },
         report.episodes(),
         report.seconds
     );
@@ -333,6 +365,13 @@ fn replay(
     let (bytes, config) = certificate.resolve(table_bytes(table)?)?;
     let (table, model) = split_table(bytes)?;
     let setting = Setting::within_model(bytes, &table, model, config);
+    let setting = if case.follower_reacts {
+        setting
+            .with_reacting_follower()
+            .ok_or_else(|| anyhow::anyhow!("the firmware does not accept the table"))?
+    } else {
+        setting
+    };
     let mut trace = Trace::new();
     let score = setting.run(&case, Some(&mut trace));
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;

@@ -163,6 +163,11 @@ impl Actuator {
         c + (start - c) * self.model.lag * (1.0 - decay) / dt
     }
 
+    /// When the next command in the dead-time pipeline takes force, us (`None`: none waits).
+    pub fn next_take_force(&self) -> Option<u64> {
+        self.pipeline.front().map(|(at, _)| *at)
+    }
+
     /// The actuator's model.
     pub fn model(&self) -> ActuatorModel {
         self.model

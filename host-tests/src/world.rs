@@ -23,8 +23,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::humans::HumanModel;
 use crate::sim::{
-    humans_make_a_collision_unavoidable, lowest_gap, Actuator, ActuatorModel, Car, SensorModel,
-    Sensors,
+    humans_make_a_collision_unavoidable, lowest_gap, seconds_to_us, Actuator, ActuatorModel, Car,
+    SensorModel, Sensors,
 };
 
 /// Sub-steps per control period in the plant: the actuator's lag changes the ego's
@@ -403,9 +403,13 @@ pub struct World<'t> {
     grade: f32,
     /// The emergency run under way and its cause (`None`: the last period was not one).
     emergency_run: Option<EmergencyCause>,
-    /// Since when the ego's brake lights are on: its actual acceleration at or below the
-    /// vehicle's declared lights' command (`None`: off).
+    /// Since when the ego's brake lights are on: its actual acceleration below zero, as the
+    /// certificate's assumptions declare them (docs/certificate.md; the reacting follower
+    /// sees them so too) (`None`: off).
     lights_on_since_us: Option<u64>,
+    /// The braking the firmware argued with after the last step, and when it last changed
+    /// (us; `None`: not since the start).
+    braking_in_force: (Option<firmware::Braking>, Option<u64>),
     /// The start's acceleration (the command in force at engagement).
     start_acceleration: f32,
 }
@@ -451,6 +455,7 @@ impl<'t> World<'t> {
             grade: 0.0,
             emergency_run: None,
             lights_on_since_us: None,
+            braking_in_force: (None, None),
             start_acceleration: start.engaged_acceleration,
         }
     }
@@ -573,6 +578,19 @@ impl<'t> World<'t> {
         self.cars
     }
 
+    /// Since when the ego's brake lights are on (its actual acceleration below zero), s;
+    /// `None`: off.
+    pub fn lights_on_since(&self) -> Option<f32> {
+        self.lights_on_since_us.map(|t| t as f32 * 1e-6)
+    }
+
+    /// When the braking the firmware argues with last changed (with two authorities: between
+    /// the comfort band's and the emergency authority's, or the latter's level), s; `None`:
+    /// not since the start.
+    pub fn braking_in_force_changed_at(&self) -> Option<f32> {
+        self.braking_in_force.1.map(|t| t as f32 * 1e-6)
+    }
+
     /// The time of the next period's start, s.
     pub fn time(&self) -> f32 {
         (self.period * self.period_us) as f32 * 1e-6
@@ -613,8 +631,64 @@ impl<'t> World<'t> {
             model.dead_time_us(),
             model.lag,
             pending,
-            self.lights_on_since_us,
+            self.lights_on_for_good(now_us),
         )
+    }
+
+    /// From when the ego's brake lights are on for good (its actuator's acceleration below
+    /// zero from then on), us, if the firmware keeps to the braking it is committed to
+    /// ([`firmware::Controller::committed_braking`]): this period's command, the committed
+    /// ramp's next, then at most that ramp. Exact until the next period's command has been in
+    /// force for a period (the commands in the dead time take force when they do, and the
+    /// acceleration is monotone between two of those times, so its sign at their ends tells),
+    /// then [`table_format::rear::lights_on_within`] from the acceleration reached along the
+    /// ramp. Where the lights are on and stay on: since when they came on. Called as
+    /// [`World::certificate`] is.
+    fn lights_on_for_good(&self, now_us: u64) -> Option<u64> {
+        let (last, next, braking) = self.controller.committed_braking(now_us)?;
+        let model = self.actuator.model();
+        let h = self.period_us;
+        let exact_until = now_us + model.dead_time_us() + 2 * h;
+        let mut actuator = self.actuator.clone();
+        actuator.request(now_us, last);
+        actuator.request(now_us + h, next);
+        let mut t = now_us;
+        // The last time up to `exact_until` at which the acceleration may be at or above zero.
+        let mut lit_after = (actuator.acceleration() >= 0.0).then_some(now_us);
+        while t < exact_until {
+            // The commands due now take force first (no time passes).
+            actuator.advance(t, 0);
+            let until = actuator
+                .next_take_force()
+                .filter(|&at| at > t && at < exact_until)
+                .unwrap_or(exact_until);
+            let before = actuator.acceleration();
+            actuator.advance(t, until - t);
+            if before >= 0.0 || actuator.acceleration() >= 0.0 {
+                lit_after = Some(until);
+            }
+            t = until;
+        }
+        // From here the commands in force are at most the ramp from the next period's command
+        // (the one issued `k` periods on is at most `next - jerk (k - 1) h`).
+        let a = actuator.acceleration();
+        let within = table_format::rear::lights_on_within(
+            0.0,
+            model.lag,
+            a,
+            a,
+            next,
+            braking.jerk,
+            braking.level,
+        );
+        if within > 0.0 {
+            return Some(exact_until + seconds_to_us(within).max(1));
+        }
+        match (lit_after, self.lights_on_since_us) {
+            (Some(at), _) => Some(at),
+            (None, Some(since)) => Some(since),
+            (None, None) => Some(now_us),
+        }
     }
 
     /// One period: the firmware measures and commands, the humans hold `a_leader` and
@@ -660,9 +734,16 @@ impl<'t> World<'t> {
             .measure(now_us, self.cars, actuator_state, &mut self.rng);
         let mut command = self.controller.step(&inputs);
         // The lights as they are (the actuator's own acceleration, not the firmware's account).
-        self.lights_on_since_us = (self.actuator.acceleration()
-            <= self.controller.config().certificate.lights_command)
-            .then(|| self.lights_on_since_us.unwrap_or(now_us));
+        self.lights_on_since_us =
+            (self.actuator.acceleration() < 0.0).then(|| self.lights_on_since_us.unwrap_or(now_us));
+        let in_force = self
+            .controller
+            .committed_braking(now_us)
+            .map(|(_, _, braking)| braking);
+        if in_force != self.braking_in_force.0 {
+            let changed_at = self.braking_in_force.0.is_some().then_some(now_us);
+            self.braking_in_force = (in_force, changed_at.or(self.braking_in_force.1));
+        }
         if let Some(a) = command_override {
             command.acceleration = a;
         }

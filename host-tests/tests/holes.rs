@@ -70,6 +70,8 @@ fn case(start: Start, leader: f32, sensors: SensorModel, seconds: f32) -> Case {
             time_gap: vec![0.5],
         },
         follower_rule: FollowerRule::Schedule,
+        follower_reacts: false,
+        leader_brakes_at_authority_change: false,
         sensors,
         actuator: ACTUATOR,
         seconds,

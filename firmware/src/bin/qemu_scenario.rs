@@ -218,6 +218,8 @@ fn main() -> ! {
                               // At the gap policy's distance (the certificate's steady gap with the law's room).
     let mut leader = Car { x: 140.0, v: 25.0 };
     let mut last_command = 0.0f32;
+    // Since when the ego's brake lights are on (`None`: off).
+    let mut lights_on_since_us: Option<u64> = None;
     let mut ego = Car { x: 50.0, v: 25.0 };
     let mut follower = Car { x: 20.0, v: 25.0 };
     let (mut min_margin, mut misplaced_minimum_risk) = (f32::INFINITY, 0u32);
@@ -303,9 +305,37 @@ fn main() -> ! {
                 ego.v,
             ];
             // The true certificate after the step: the ramp the controller is committed to,
-            // through this plant's actuator (none: the command is the acceleration).
+            // through this plant's actuator (none: the command is the acceleration), and its
+            // brake lights (on while the acceleration is below zero): on for good from when
+            // they came on where this command and the committed ramp's next are below zero,
+            // else from the period the ramp's command falls below zero.
+            let period_us = u64::from(config.period_us);
+            let lights_on_for_good_us =
+                controller
+                    .committed_braking(now_us)
+                    .and_then(|(_, next, braking)| {
+                        if next < 0.0 {
+                            Some(if command.acceleration < 0.0 {
+                                lights_on_since_us.unwrap_or(now_us)
+                            } else {
+                                now_us + period_us
+                            })
+                        } else {
+                            // The ramp's command `k` periods on is `next - j (k - 1) h`.
+                            let periods = next / (braking.jerk * h);
+                            (periods.is_finite() && (0.0..1e6).contains(&periods))
+                                .then(|| now_us + (periods as u64 + 2) * period_us)
+                        }
+                    });
             let margin = controller
-                .certificate_with_actuator(state, now_us, 0, 0.0, command.acceleration)
+                .certificate_with_actuator_and_lights(
+                    state,
+                    now_us,
+                    0,
+                    0.0,
+                    command.acceleration,
+                    lights_on_for_good_us,
+                )
                 .map_or(f32::NEG_INFINITY, |c| c.margin());
             if margin < min_margin {
                 min_margin = margin;
@@ -317,6 +347,9 @@ fn main() -> ! {
             Mode::MinimumRisk | Mode::Uncertified | Mode::Standby => minimum_risk += 1,
         }
         last_command = command.acceleration;
+        // The lights from the next period on: this plant's acceleration is the command.
+        lights_on_since_us = (command.acceleration < 0.0)
+            .then(|| lights_on_since_us.unwrap_or(now_us + u64::from(config.period_us)));
         if -command.acceleration > max_brake {
             max_brake = -command.acceleration;
         }

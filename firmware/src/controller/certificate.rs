@@ -169,6 +169,14 @@ impl<'t> Certifier<'t> {
         })
     }
 
+    /// The follower the two-authority rear half argues against
+    /// ([`CertificateConfig::follower_reaction_time`](crate::CertificateConfig), the table's
+    /// IDM): it keeps at most its largest acceleration until its reaction, then brakes at its
+    /// clip.
+    pub fn reacting_follower(&self) -> table_format::rear::ReactingFollower {
+        self.model.follower
+    }
+
     /// The table.
     pub fn table(&self) -> &Table<'t> {
         &self.table
@@ -510,13 +518,15 @@ impl<'t> Controller<'t> {
         self.certificate_with_actuator_and_lights(state, now_us, dead_time_us, lag, pending, None)
     }
 
-    /// [`Controller::certificate_with_actuator`], with the brake lights as they are: on since
-    /// `lights_on_since_us` (the actuator's acceleration at or below the lights' command since
-    /// then), or off (`None`). With two authorities the follower's reaction is counted from
-    /// them, not from the controller's own bookkeeping: where they are on and the last command
-    /// keeps them on, from when they came on; otherwise from when the braking in force, from
-    /// the last command on, brings them on through that actuator
-    /// ([`table_format::rear::lights_on_within`]). In the comfort band they do not enter.
+    /// [`Controller::certificate_with_actuator`], with the brake lights as the caller knows
+    /// them: on for good from `lights_on_us` on (its actuator's acceleration below zero from
+    /// then on, under the braking the controller is committed to,
+    /// [`Controller::committed_braking`]: the time they came on where they are on and stay
+    /// on), or (`None`) from where the braking in force, from the last command on, brings them
+    /// on for sure through that actuator from what is pending
+    /// ([`table_format::rear::lights_on_within`]). With two authorities the follower's reaction
+    /// is counted from them, not from the controller's own bookkeeping. In the comfort band
+    /// they do not enter.
     pub fn certificate_with_actuator_and_lights(
         &self,
         state: [f32; 5],
@@ -524,7 +534,7 @@ impl<'t> Controller<'t> {
         dead_time_us: u64,
         lag: f32,
         pending: f32,
-        lights_on_since_us: Option<u64>,
+        lights_on_us: Option<u64>,
     ) -> Option<Certificate> {
         let certifier = self.certifier.as_ref().ok()?;
         let model = &certifier.model;
@@ -553,10 +563,9 @@ impl<'t> Controller<'t> {
             ego_speed,
             &model.front(response, hold, ramp_from, braking),
         );
-        let lights = self.config.certificate.lights_command;
-        let on = match lights_on_since_us {
-            Some(since) if last <= lights => since,
-            _ => {
+        let on = match lights_on_us {
+            Some(on) => on,
+            None => {
                 // The actuator's acceleration and what is in its dead time are at most what is
                 // pending and the last command (the ramp's reference is the front model's).
                 let held = math::max(pending, last);
@@ -567,7 +576,7 @@ impl<'t> Controller<'t> {
                     held,
                     last,
                     jerk,
-                    -lights,
+                    -self.config.certificate.lights_command,
                 );
                 now_us
                     .saturating_add(h)
@@ -600,6 +609,30 @@ impl<'t> Controller<'t> {
         })
     }
 
+    /// The braking the controller is committed to after this period's command, for
+    /// closed-loop judges: `(last, next, braking)`, the command just issued, the committed
+    /// ramp's command for the next period (`now_us` plus a period: the ramp under way, or the
+    /// braking in force's from the last command), and that braking; every later command is at
+    /// most the ramp from `next`, no harder than its level. `None` before the first command or
+    /// without a table.
+    pub fn committed_braking(&self, now_us: u64) -> Option<(f32, f32, Braking)> {
+        let certifier = self.certifier.as_ref().ok()?;
+        let braking = self.braking_in_force(&certifier.model);
+        let h = u64::from(self.config.period_us);
+        let last = self.last_command?;
+        let ramp = self.ramp.unwrap_or(Ramp {
+            start_us: now_us.saturating_add(h),
+            from: last,
+        });
+        let next = if math::is_finite(braking.jerk) {
+            ramp.from
+                - braking.jerk * seconds(now_us.saturating_add(h).saturating_sub(ramp.start_us))
+        } else {
+            -braking.level
+        };
+        Some((last, math::max(next, -braking.level), braking))
+    }
+
     /// What the actuator may be doing before the controller's own commands are known: the
     /// actuator's reported state plus its error where it is valid and fresh
     /// ([`crate::Inputs::ego_acceleration`]), else the band's top.
@@ -611,14 +644,28 @@ impl<'t> Controller<'t> {
     /// An upper bound of the ego's acceleration since `t_0` until the braking takes effect:
     /// the largest command issued since `t_0`, less the dead time and five lag time constants,
     /// plus what older commands can still add through the lag (at most e^-5 of the band's
-    /// width); before the first command, what the actuator may be doing
-    /// ([`Controller::unknown_acceleration`]).
+    /// width); where the commands do not reach back that far (after an engagement, a cancel
+    /// or a clock jump), also the largest reported acceleration since `t_0`
+    /// ([`Controller::reported_since`]).
     pub(super) fn pending(&self, t_0: u64, model: &Model) -> f32 {
-        self.issued.largest_since(
-            t_0,
-            self.command_span_us(),
-            self.unknown_acceleration(model),
-        ) + self.lag_tail(model)
+        self.issued
+            .largest_since(t_0, self.command_span_us(), self.reported_since(t_0, model))
+            + self.lag_tail(model)
+    }
+
+    /// An upper bound of the actuator's acceleration from `t_0` on, as far as the controller's
+    /// commands do not bound it: the largest reported acceleration plus its error kept since a
+    /// report at or before `t_0`, or the band's top where the reports do not reach back to
+    /// `t_0` or one was missing (module docs: delays). Not the latest report alone: after an
+    /// engagement the actuator brakes harder with every period, and its acceleration at an
+    /// older measurement's time was higher than it is now. Between two reports the actuator's
+    /// acceleration is taken to be at most the larger (a first-order lag moves monotonically
+    /// toward a held demand).
+    pub(super) fn reported_since(&self, t_0: u64, model: &Model) -> f32 {
+        math::min(
+            self.reported.largest_since(t_0, 0, f32::INFINITY),
+            model.ego.max,
+        )
     }
 
     /// What commands older than five lag time constants can still add through the lag, at

@@ -1,6 +1,6 @@
-//! The delays' memory: the commands the controller issued, kept as a sliding-window maximum
-//! back to the oldest time a later step can ask about, so that what the actuator may still do
-//! (`pending`) is known at any track age.
+//! The delays' memory: the commands the controller issued and the actuator's reported
+//! accelerations, each kept as a sliding-window maximum back to the oldest time a later step
+//! can ask about, so that what the actuator may still do (`pending`) is known at any track age.
 
 use heapless::Deque;
 
@@ -21,15 +21,25 @@ pub(super) struct Issued {
 /// when it is full, the two oldest entries merge into one at the later one's time with the
 /// earlier's (larger) value, which over-states the commands between them and so stays an upper
 /// bound.
+///
+/// The same window keeps the actuator's reported accelerations (`Controller::reported_since`),
+/// in fewer slots (`REPORTS`): there a merge over-states as well.
 #[derive(Clone)]
-pub(super) struct IssuedCommands {
-    pub(super) window: Deque<Issued, 272>,
+pub(super) struct IssuedCommands<const N: usize = COMMANDS> {
+    pub(super) window: Deque<Issued, N>,
     /// Every command issued at or after this time is in the window (`None` before the first
     /// command): before it, what the actuator did is unknown.
     pub(super) first_at_us: Option<u64>,
 }
 
-impl IssuedCommands {
+/// Slots of the command window: the covered track age and the command span at the period,
+/// with room to spare.
+pub(super) const COMMANDS: usize = 272;
+
+/// Slots of the reported accelerations' window (merges over-state the older entries).
+pub(super) const REPORTS: usize = 64;
+
+impl<const N: usize> IssuedCommands<N> {
     /// No command issued yet.
     pub(super) fn new() -> Self {
         IssuedCommands {
@@ -156,7 +166,7 @@ mod tests {
     /// band's top where the window no longer knows.
     #[test]
     pub(super) fn the_command_window_merges_and_forgets_without_under_stating() {
-        let mut w = IssuedCommands::new();
+        let mut w: IssuedCommands = IssuedCommands::new();
         let commands: Vec<(u64, f32)> = (0..1_000u64)
             .map(|k| (k * 10_000, 2.0 - 0.005 * k as f32))
             .collect();
@@ -174,7 +184,7 @@ mod tests {
             assert!(got >= truth, "since {t0}: {got} below {truth}");
         }
         // Dropped before a horizon: asked about, the window answers with the band's top.
-        let mut w = IssuedCommands::new();
+        let mut w: IssuedCommands = IssuedCommands::new();
         for k in 0..10u64 {
             w.push(k * 10_000, 1.0 - 0.1 * k as f32, 0);
         }

@@ -167,10 +167,16 @@
 //! The ego's acceleration is bounded through the commands the controller has issued, which it
 //! keeps (a sliding-window maximum back to the oldest kept measurement, less `D` and `5 tau`):
 //! `pending` is the largest command issued since `t_m - D - 5 tau`, plus what older commands
-//! can still pass through the lag (at most `e^-5` of the band's width). Before the
-//! controller's first command (and after a cancel or a clock jump) it is the actuator's
-//! reported state plus its error ([`Inputs::ego_acceleration`]: the engagement knows what the
-//! car is doing), or the band's top when that is not reported. A ramp `(t_b, r)` seen from a
+//! can still pass through the lag (at most `e^-5` of the band's width). Where the query reaches
+//! back before the controller's first command (an engagement, a cancel or a clock jump less
+//! than `D + 5 tau` ago) it is also the largest reported state plus its error
+//! ([`Inputs::ego_acceleration`]: the engagement knows what the car is doing) since a report at
+//! or before `t_m`, kept as the commands are, or the band's top where a report is missing or
+//! the reports do not reach back that far. Not the latest report: after an engagement the
+//! actuator brakes harder with every period, and at an older measurement's time it was
+//! accelerating more than it is now. Between two reports the actuator's acceleration is
+//! assumed to be at most the larger (a first-order lag moves monotonically toward a held
+//! demand). A ramp `(t_b, r)` seen from a
 //! time `t_0` through the delays is a hold of `max(pending, r_0)` for `max(t_b + D - t_0, 0) +
 //! tau`, then the ramp from `r_0 = r - j max(t_0 - t_b - D, 0)`: the commands form a
 //! non-increasing profile, whose speed is a concave function of time, and a first-order lag
@@ -395,7 +401,7 @@ pub const OVERRIDE_HOLD_US: u64 = 500_000;
 /// How far below the domain's top (less the ego speed's error) the law's set speed is held,
 /// m/s: room for the speed law's overshoot under the speed headroom.
 const SET_SPEED_ROOM: f32 = 0.5;
-use history::{seconds, IssuedCommands};
+use history::{seconds, IssuedCommands, REPORTS};
 use law::{Law, LawInputs};
 use tracks::EGO_HISTORY;
 
@@ -416,6 +422,10 @@ pub struct Controller<'t> {
     margin_lost: bool,
     events: Deque<Event, 32>,
     issued: IssuedCommands,
+    /// The actuator's reported accelerations plus their error, one a period (`+inf` where none
+    /// was valid and fresh), kept as the commands are: before the controller's own commands
+    /// bound the actuator, they do (`Controller::reported_since`).
+    reported: IssuedCommands<REPORTS>,
     /// The braking ramp under way (`None`: the last command passed the look-ahead): the
     /// commands follow it since its start, not only from now (module docs: the braking ramp).
     ramp: Option<Ramp>,
@@ -504,6 +514,7 @@ impl<'t> Controller<'t> {
             margin_lost: false,
             events: Deque::new(),
             issued: IssuedCommands::new(),
+            reported: IssuedCommands::new(),
             ramp: None,
             passed: false,
             in_force: None,
@@ -678,6 +689,16 @@ impl<'t> Controller<'t> {
         };
         self.last_now_us = Some(now);
         self.reported_acceleration = self.reported(&inputs.ego_acceleration, now);
+        if jump.is_some() {
+            // The reports' times belong to the old time line.
+            self.reported = IssuedCommands::new();
+        }
+        let keep_from = self.keep_commands_from(now);
+        self.reported.push(
+            now,
+            self.reported_acceleration.unwrap_or(f32::INFINITY),
+            keep_from,
+        );
         if let Some(request) = inputs.driver {
             if let Err(error) = self.request(request) {
                 self.log(Event::DriverRequestRefused { at_us: now, error });
