@@ -72,6 +72,8 @@ enum Command {
         /// Only scenarios whose name contains this.
         #[arg(long)]
         only: Option<String>,
+        #[command(flatten)]
+        certificate: CertificateArgs,
     },
     /// Plots the nominal law's gap policy beside the certificate's steady-following gap, at
     /// every time-gap setting, with and without the braking ramp.
@@ -251,7 +253,11 @@ fn real_main() -> Result<()> {
             &certificate,
         ),
         Command::Campaign(args) => campaign(args),
-        Command::Scenarios { out, only } => scenarios(&out, only.as_deref()),
+        Command::Scenarios {
+            out,
+            only,
+            certificate,
+        } => scenarios(&out, only.as_deref(), &certificate),
         Command::GapPolicy { out } => host_tests::gap_policy::run(&out),
     }
 }
@@ -684,9 +690,13 @@ const PLOTTED: [&str; 4] = [
     "steady following at 30",
 ];
 
-fn scenarios(out: &std::path::Path, only: Option<&str>) -> Result<()> {
+fn scenarios(
+    out: &std::path::Path,
+    only: Option<&str>,
+    certificate: &CertificateArgs,
+) -> Result<()> {
     use host_tests::scenarios::{run, suite};
-    let bytes = firmware::DEFAULT_TABLE;
+    let (bytes, config) = certificate.resolve(firmware::DEFAULT_TABLE)?;
     let (table, _) = split_table(bytes)?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let suite: Vec<_> = suite()
@@ -699,7 +709,17 @@ fn scenarios(out: &std::path::Path, only: Option<&str>) -> Result<()> {
         only.unwrap_or_default()
     );
     let started = std::time::Instant::now();
-    let policies = [firmware::Config::default(), firmware::Config::bang_bang()];
+    let bang_bang = firmware::Config::bang_bang();
+    let policies = [
+        config,
+        firmware::Config {
+            certificate: firmware::CertificateConfig {
+                authorities: config.certificate.authorities,
+                ..bang_bang.certificate
+            },
+            ..bang_bang
+        },
+    ];
     let mut runs = Vec::new();
     for scenario in &suite {
         for config in policies {

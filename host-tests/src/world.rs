@@ -387,6 +387,9 @@ pub struct World<'t> {
     actuator: Actuator,
     cars: [Car; 3],
     period: u64,
+    /// The first engaged period: 0, or the one after the standby period of
+    /// [`World::engage_from_standby`].
+    engaged_from: u64,
     period_us: u64,
     model: HumanModel,
     tolerances: Tolerances,
@@ -443,6 +446,7 @@ impl<'t> World<'t> {
             actuator: Actuator::engaged(actuator, start.engaged_acceleration),
             cars: start.cars,
             period: 0,
+            engaged_from: 0,
             period_us: u64::from(config.period_us),
             model,
             tolerances,
@@ -565,6 +569,7 @@ impl<'t> World<'t> {
     ) -> Result<(), firmware::DriverError> {
         self.controller.request(firmware::DriverRequest::Cancel)?;
         self.step_with(a_leader, a_follower, Some(self.start_acceleration), None);
+        self.engaged_from = self.period;
         self.controller.request(firmware::DriverRequest::Resume)
     }
 
@@ -778,7 +783,8 @@ impl<'t> World<'t> {
                 .cut_in
                 .map(|(at, _)| self.period.saturating_sub(at) as f32 * h);
             let e = &mut s.emergencies;
-            let cause = self.emergency_run.unwrap_or(if self.period == 0 {
+            let engagement = self.period == self.engaged_from;
+            let cause = self.emergency_run.unwrap_or(if engagement {
                 EmergencyCause::Engagement
             } else if since_cut_in.is_some_and(|t| t <= 5.0) {
                 EmergencyCause::CutIn
@@ -787,7 +793,7 @@ impl<'t> World<'t> {
             } else {
                 EmergencyCause::UncertifiedTruth
             });
-            s.engaged_in_emergency |= self.period == 0;
+            s.engaged_in_emergency |= engagement;
             *match cause {
                 EmergencyCause::Engagement => &mut e.engagement,
                 EmergencyCause::CutIn => &mut e.cut_in,
