@@ -583,9 +583,26 @@ impl<'t> Controller<'t> {
 
     /// The desired gap of the nominal law at `speed` with the driver's time-gap setting, m:
     /// the gap policy (the driver's `standstill_gap + time_gap v`, at least the certificate's
-    /// steady gap plus its room; [`Controller::steady_gap`]).
+    /// steady gap plus its room) over the steady gap the law uses
+    /// ([`Controller::law_steady_gap`]).
     pub fn desired_gap(&self, speed: f32) -> f32 {
-        self.desired_gap_over(speed, self.steady_gap(speed))
+        self.desired_gap_over(speed, self.law_steady_gap(speed))
+    }
+
+    /// The certificate's steady gap at `speed` that the nominal law keeps its room over, m: for
+    /// the braking the follower allowed the last look-ahead, or where none is known the braking
+    /// in force ([`Controller::steady_gap_with`]); in the comfort band that is the band's
+    /// ([`Controller::steady_gap`]). `+inf` without a table.
+    pub fn law_steady_gap(&self, speed: f32) -> f32 {
+        let Ok(certifier) = &self.certifier else {
+            return f32::INFINITY;
+        };
+        let model = certifier.model;
+        self.steady_gap_with(
+            speed,
+            model.leader_braking,
+            self.allowed.unwrap_or(self.braking_in_force(&model)),
+        )
     }
 
     /// The gap policy at `speed` with the driver's time-gap setting over a certified steady
@@ -992,11 +1009,7 @@ impl<'t> Controller<'t> {
                     time_gap: config.time_gap(self.driver.time_gap_setting),
                     // Only a vehicle ahead needs the gap policy (one front evaluation).
                     steady_gap: if math::is_finite(leader.track.gap) {
-                        self.steady_gap_with(
-                            ego_speed,
-                            model.leader_braking,
-                            self.allowed.unwrap_or(self.braking_in_force(&model)),
-                        )
+                        self.law_steady_gap(ego_speed)
                     } else {
                         f32::INFINITY
                     },
