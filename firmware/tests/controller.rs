@@ -1405,3 +1405,34 @@ fn a_follower_measured_just_below_zero_within_its_error_is_used() {
     let cmd = Controller::new(DEFAULT_TABLE, config).step(&state(-0.2));
     assert_eq!(fault_of(cmd), Fault::FollowerInvalid);
 }
+
+/// Until the controller's own commands bound the actuator (after an engagement), what it did
+/// since the leader's measurement is bounded by the reports since then, not by the latest:
+/// after two periods reporting `first_report`, the state measured once, then one period on
+/// with the leader's track not refreshed and the actuator reporting -3 m/s^2 since the
+/// measurement, certifies less when it reported the band's top before the measurement than
+/// when it reported -3 then too (with only the latest report the first would certify no less).
+#[test]
+fn the_reports_since_the_measurement_bound_the_actuator_after_an_engagement() {
+    let base = inputs((40.0, -3.0), (f32::INFINITY, 0.0), 20.0);
+    let margin_after = |first_report: f32| {
+        let mut c = Controller::new(DEFAULT_TABLE, band_only(Config::default()));
+        for now in [NOW - 40_000, NOW - 20_000] {
+            let mut earlier = at(base, now);
+            earlier.ego_acceleration.value = first_report;
+            c.step(&earlier);
+        }
+        let mut measured = base;
+        measured.ego_acceleration.value = -3.0;
+        c.step(&measured);
+        let mut next = at(base, NOW + 20_000);
+        next.leader = base.leader;
+        next.ego_acceleration.value = -3.0;
+        c.step(&next).margin.unwrap()
+    };
+    let (accelerating, braking) = (margin_after(2.0), margin_after(-3.0));
+    assert!(
+        accelerating < braking - 0.5,
+        "accelerating then {accelerating}, braking then {braking}"
+    );
+}
