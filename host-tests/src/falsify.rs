@@ -257,16 +257,16 @@ impl<'t> Setting<'t> {
     /// The humans' accelerations for the next period of `world` under `case` (within the
     /// model: the leader's bounds, the IDM with a time gap in range, speeds in `[0, v_max]`).
     ///
-    /// A follower that reacts late (`reacts`, with [`Setting::reacting`]) accelerates at its
-    /// largest acceleration from when the ego's brake lights come on until its reaction time
-    /// has passed (the certificate's worst case before the reaction), then drives by the IDM.
+    /// `case` says whether the follower reacts late ([`Case::follower_reacts`], with
+    /// [`Setting::reacting`]: its largest acceleration from when the ego's brake lights come on
+    /// until its reaction time has passed, the certificate's worst case before the reaction,
+    /// then the IDM) and whether the leader brakes at authority changes.
     fn humans(
         &self,
         world: &World<'_>,
         schedule: &Schedule,
         rule: FollowerRule,
-        reacts: bool,
-        at_authority_change: bool,
+        case: &Case,
     ) -> (f32, f32) {
         let m = &self.model;
         let t = world.time();
@@ -276,7 +276,7 @@ impl<'t> Setting<'t> {
         let changed = world
             .braking_in_force_changed_at()
             .is_some_and(|at| t - at < AT_AUTHORITY_CHANGE);
-        let u = if at_authority_change && changed {
+        let u = if case.leader_brakes_at_authority_change && changed {
             -1.0
         } else {
             u.clamp(-1.0, 1.0)
@@ -308,7 +308,10 @@ impl<'t> Setting<'t> {
                 }
             }
         };
-        let a_follower = match (self.reacting.filter(|_| reacts), world.lights_on_since()) {
+        let a_follower = match (
+            self.reacting.filter(|_| case.follower_reacts),
+            world.lights_on_since(),
+        ) {
             (Some(r), Some(on)) if t - on < r.reaction_time => r.reaction_acceleration,
             _ => m.follower_acceleration(follower.v, ego.v, ego.x - follower.x, time_gap),
         };
@@ -327,15 +330,8 @@ impl<'t> Setting<'t> {
     /// a resume the firmware may refuse: then nothing more happens).
     pub fn run(&self, case: &Case, trace: Option<&mut Trace>) -> Score {
         let mut world = self.world(case);
-        let humans = |world: &World<'_>| {
-            self.humans(
-                world,
-                &case.schedule,
-                case.follower_rule,
-                case.follower_reacts,
-                case.leader_brakes_at_authority_change,
-            )
-        };
+        let humans =
+            |world: &World<'_>| self.humans(world, &case.schedule, case.follower_rule, case);
         if self.config.certificate.authorities == firmware::Authorities::Two {
             let (a, b) = humans(&world);
             if world.engage_from_standby(a, b).is_err() {
@@ -883,13 +879,7 @@ fn greedy_case(setting: &Setting<'_>, mut case: Case) -> (Case, Score) {
             let mut probe = world.clone();
             let mut least = f32::INFINITY;
             for _ in 0..ahead {
-                let (a, b) = setting.humans(
-                    &probe,
-                    &hold,
-                    FollowerRule::Schedule,
-                    case.follower_reacts,
-                    case.leader_brakes_at_authority_change,
-                );
+                let (a, b) = setting.humans(&probe, &hold, FollowerRule::Schedule, &case);
                 let alive = probe.step(a, b, None);
                 if let Some((_, Some(c))) = probe.last() {
                     least = least.min(c.margin());
@@ -912,13 +902,7 @@ fn greedy_case(setting: &Setting<'_>, mut case: Case) -> (Case, Score) {
             time_gap: vec![tau],
         };
         for _ in 0..per_decision {
-            let (a, b) = setting.humans(
-                &world,
-                &hold,
-                FollowerRule::Schedule,
-                case.follower_reacts,
-                case.leader_brakes_at_authority_change,
-            );
+            let (a, b) = setting.humans(&world, &hold, FollowerRule::Schedule, &case);
             if !world.step(a, b, None) {
                 break 'episode;
             }

@@ -185,6 +185,24 @@ impl CertificateArgs {
     }
 }
 
+/// The search's setting on a table: within the model of `config`, with followers that react to
+/// the brake lights late where `follower_reacts`.
+fn search_setting<'t>(
+    bytes: &'t [u8],
+    table: &'t Table<'t>,
+    model: host_tests::humans::HumanModel,
+    config: firmware::Config,
+    follower_reacts: bool,
+) -> Result<host_tests::falsify::Setting<'t>> {
+    let setting = host_tests::falsify::Setting::within_model(bytes, table, model, config);
+    if !follower_reacts {
+        return Ok(setting);
+    }
+    setting
+        .with_reacting_follower()
+        .ok_or_else(|| anyhow::anyhow!("the firmware does not accept the table"))
+}
+
 /// A split table and its model of the humans.
 fn split_table(bytes: &'static [u8]) -> Result<(Table<'static>, host_tests::humans::HumanModel)> {
     let table =
@@ -271,7 +289,7 @@ fn falsify(
     certificate: &CertificateArgs,
     follower_reacts: bool,
 ) -> Result<()> {
-    use host_tests::falsify::{search, Budget, Setting};
+    use host_tests::falsify::{search, Budget};
     positive_count("episodes", episodes)?;
     positive_seconds("seconds", seconds)?;
     anyhow::ensure!(
@@ -281,14 +299,7 @@ fn falsify(
     );
     let (bytes, config) = certificate.resolve(table_bytes(table)?)?;
     let (table, model) = split_table(bytes)?;
-    let setting = Setting::within_model(bytes, &table, model, config);
-    let setting = if follower_reacts {
-        setting
-            .with_reacting_follower()
-            .ok_or_else(|| anyhow::anyhow!("the firmware does not accept the table"))?
-    } else {
-        setting
-    };
+    let setting = search_setting(bytes, &table, model, config, follower_reacts)?;
     let budget = Budget::scaled(episodes, seconds);
     let bar = ProgressBar::new(budget.episodes() as u64);
     bar.set_style(
@@ -346,7 +357,7 @@ fn replay(
     table: &Option<PathBuf>,
     certificate: &CertificateArgs,
 ) -> Result<()> {
-    use host_tests::falsify::{Case, Setting};
+    use host_tests::falsify::Case;
     let text = std::fs::read_to_string(findings)
         .with_context(|| format!("reading {}", findings.display()))?;
     let json: serde_json::Value = serde_json::from_str(&text)
@@ -370,14 +381,7 @@ fn replay(
         .context("the entry's case does not decode")?;
     let (bytes, config) = certificate.resolve(table_bytes(table)?)?;
     let (table, model) = split_table(bytes)?;
-    let setting = Setting::within_model(bytes, &table, model, config);
-    let setting = if case.follower_reacts {
-        setting
-            .with_reacting_follower()
-            .ok_or_else(|| anyhow::anyhow!("the firmware does not accept the table"))?
-    } else {
-        setting
-    };
+    let setting = search_setting(bytes, &table, model, config, case.follower_reacts)?;
     let mut trace = Trace::new();
     let score = setting.run(&case, Some(&mut trace));
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;

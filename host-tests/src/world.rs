@@ -624,9 +624,10 @@ impl<'t> World<'t> {
         // The band's floor bounds what is pending where every command is in the band; with
         // two authorities the braking may go below it, and the actuator's own state is the
         // bound.
-        let floor = match self.controller.config().certificate.authorities {
-            firmware::Authorities::ComfortBand => self.model.band_min,
-            firmware::Authorities::Two => f32::NEG_INFINITY,
+        // The brake lights enter only with two authorities.
+        let (floor, lights_on_us) = match self.controller.config().certificate.authorities {
+            firmware::Authorities::ComfortBand => (self.model.band_min, None),
+            firmware::Authorities::Two => (f32::NEG_INFINITY, self.lights_on_for_good(now_us)),
         };
         let (_, pending) = self.actuator.response(now_us, floor);
         let model = self.actuator.model();
@@ -636,7 +637,7 @@ impl<'t> World<'t> {
             model.dead_time_us(),
             model.lag,
             pending,
-            self.lights_on_for_good(now_us),
+            lights_on_us,
         )
     }
 

@@ -542,10 +542,7 @@ impl<'t> Controller<'t> {
         let jerk = braking.jerk;
         let h = u64::from(self.config.period_us);
         let last = self.last_command?;
-        let ramp = self.ramp.unwrap_or(Ramp {
-            start_us: now_us.saturating_add(h),
-            from: last,
-        });
+        let ramp = self.ramp_after(now_us, last);
         let (response, ramp_from) = profile(now_us, ramp, dead_time_us, lag, jerk);
         let hold = math::max(math::max(pending, last), ramp_from);
         if !self.two_authorities() {
@@ -609,6 +606,15 @@ impl<'t> Controller<'t> {
         })
     }
 
+    /// The ramp the controller is committed to after issuing `last` at `now_us`: the one under
+    /// way, or the braking in force's from `last`, starting a period on.
+    fn ramp_after(&self, now_us: u64, last: f32) -> Ramp {
+        self.ramp.unwrap_or(Ramp {
+            start_us: now_us.saturating_add(u64::from(self.config.period_us)),
+            from: last,
+        })
+    }
+
     /// The braking the controller is committed to after this period's command, for
     /// closed-loop judges: `(last, next, braking)`, the command just issued, the committed
     /// ramp's command for the next period (`now_us` plus a period: the ramp under way, or the
@@ -620,10 +626,7 @@ impl<'t> Controller<'t> {
         let braking = self.braking_in_force(&certifier.model);
         let h = u64::from(self.config.period_us);
         let last = self.last_command?;
-        let ramp = self.ramp.unwrap_or(Ramp {
-            start_us: now_us.saturating_add(h),
-            from: last,
-        });
+        let ramp = self.ramp_after(now_us, last);
         let next = if math::is_finite(braking.jerk) {
             ramp.from
                 - braking.jerk * seconds(now_us.saturating_add(h).saturating_sub(ramp.start_us))
