@@ -3,8 +3,8 @@
 
 use crate::math;
 use crate::sensing::SensorBounds;
-use table_format::authority::{Braking, DRY_ROAD_EMERGENCY};
-use table_format::rear::CAREFUL_DRIVER_REACTION;
+use table_format::authority::DRY_ROAD_EMERGENCY;
+use table_format::EmergencyDeclaration;
 
 /// Tuning of the controller, grouped by what each part is for: the nominal law, the
 /// certificate, the plant it covers, the fallback. Units: SI.
@@ -86,22 +86,22 @@ pub struct CertificateConfig {
     pub front_margin: f32,
     /// The rear value (m, after the table's error bound) a certified state has.
     pub rear_margin: f32,
-    /// The emergency authority: the vehicle's full braking and its build-up (default
-    /// [`DRY_ROAD_EMERGENCY`], 8 m/s^2 at 12 m/s^3: a dry road). Used only where braking at
-    /// the band's floor at once cannot keep the leader's worst case off the car, and only as
-    /// far as the follower allows (the controller's module docs: emergencies). Its level is
-    /// at most the envelope's hardest braking; a level no harder than the table's band leaves
-    /// the band's floor as the hardest command.
-    pub emergency: Braking,
-    /// How long the follower behind keeps its acceleration after the ego's brake lights come
-    /// on, s (default [`CAREFUL_DRIVER_REACTION`], 1.15 s: UN R157's careful driver), at most
-    /// 5 s: what the emergency authority's rear check waits for.
-    pub follower_reaction_time: f32,
-    /// The command (m/s^2, negative) at or below which the vehicle's brake lights are on once
-    /// the actuator delivers it (default -0.5): the follower's reaction is counted only from a
-    /// run of such commands ([`lights_on_within`](table_format::rear::lights_on_within) after
-    /// it began). In `[-3.5, 0)`, and no harder than the table's band.
-    pub lights_command: f32,
+    /// The vehicle's emergency authority, the follower's reaction and the lights' command
+    /// (default [`EmergencyDeclaration::DEFAULT`]), as the table declares them: a table that
+    /// declares others is refused ([`Fault::EmergencyDeclarationDiffers`](crate::Fault)).
+    /// - `braking`: the vehicle's full braking and its build-up (8 m/s^2 at 12 m/s^3: a dry
+    ///   road). Used only where braking at the band's floor at once cannot keep the leader's
+    ///   worst case off the car, and only as far as the follower allows (the controller's
+    ///   module docs: emergencies). Its level is at most the envelope's hardest braking; a
+    ///   level no harder than the table's band leaves the band's floor as the hardest command.
+    /// - `follower_reaction_time`: how long the follower behind keeps its acceleration after
+    ///   the ego's brake lights come on, s (1.15 s: UN R157's careful driver), at most 5 s:
+    ///   what the emergency authority's rear check waits for.
+    /// - `lights_command`: the command (m/s^2, negative) at or below which the brake lights
+    ///   are on once the actuator delivers it (-0.5): the follower's reaction is counted only
+    ///   from a run of such commands ([`lights_on_within`](table_format::rear::lights_on_within)
+    ///   after it began). In `[-3.5, 0)`, and no harder than the table's band.
+    pub emergency: EmergencyDeclaration,
     /// Which brakings the certificate argues with ([`Authorities`]).
     pub authorities: Authorities,
 }
@@ -119,7 +119,7 @@ pub enum Authorities {
     /// certificate argued with the emergency authority's build-up at the hardest level the
     /// follower allows (`table_format::authority`'s rule through the delays and the error
     /// boxes); the rear half in closed form against a follower that reacts after
-    /// [`CertificateConfig::follower_reaction_time`] to the brake lights
+    /// the declared `follower_reaction_time` ([`CertificateConfig::emergency`]) to the brake lights
     /// (`table_format::rear`). The table gives the models, not the rear value.
     Two,
 }
@@ -252,15 +252,12 @@ impl Config {
             && usize::from(self.law.time_gap_setting) < TIME_GAP_SETTINGS;
         // A jerk of at least 0.5 m/s^3 (a ramp of 11 s to 3.5 m/s^2 at most), or no ramp.
         let jerk = self.certificate.brake_jerk >= 0.5;
-        let e = self.certificate.emergency;
-        let emergency = math::is_finite(e.level)
-            && e.level > 0.0
+        let declared = self.certificate.emergency;
+        let e = declared.braking;
+        let emergency = declared.is_valid()
             && e.level <= -self.plant.envelope.min_acceleration
             && e.jerk >= 0.5;
-        let reaction = self.certificate.follower_reaction_time;
-        let reaction = math::is_finite(reaction) && (0.0..=5.0).contains(&reaction);
-        let lights = self.certificate.lights_command;
-        let lights = math::is_finite(lights) && lights < 0.0 && lights >= ISO_15622_LIMITS.0;
+        let lights = declared.lights_command >= ISO_15622_LIMITS.0;
         // Two authorities argue with a ramp and grade the override in the comfort band.
         let authorities = self.certificate.authorities == Authorities::ComfortBand
             || (math::is_finite(self.certificate.brake_jerk)
@@ -271,7 +268,6 @@ impl Config {
             && time_gaps
             && jerk
             && emergency
-            && reaction
             && lights
             && self.law.stop_deceleration >= 0.3
             && (MIN_PERIOD_US..=MAX_PERIOD_US).contains(&self.period_us)
@@ -365,9 +361,7 @@ impl Default for CertificateConfig {
             override_policy: OverridePolicy::Graded,
             front_margin: table_format::front::DEFAULT_FRONT_MARGIN,
             rear_margin: 0.0,
-            emergency: DRY_ROAD_EMERGENCY,
-            follower_reaction_time: CAREFUL_DRIVER_REACTION,
-            lights_command: -0.5,
+            emergency: EmergencyDeclaration::DEFAULT,
             authorities: Authorities::ComfortBand,
         }
     }

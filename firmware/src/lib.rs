@@ -46,8 +46,9 @@ pub mod sensing;
 
 pub use controller::{
     Authorities, Braking, Certificate, CertificateConfig, Certifier, Command, Config, Controller,
-    DriverError, DriverRequest, DriverState, Event, FallbackConfig, Fault, LawConfig, Mode,
-    OverridePolicy, PlantConfig, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE, SPEED_TOLERANCE,
+    DriverError, DriverRequest, DriverState, EmergencyDeclaration, Event, FallbackConfig, Fault,
+    LawConfig, Mode, OverridePolicy, PlantConfig, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE,
+    SPEED_TOLERANCE,
 };
 pub use hardware::{Actuator, Clock, Sensors, Watchdog};
 pub use inputs::{Inputs, Measurement, Track};

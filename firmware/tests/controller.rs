@@ -2,13 +2,13 @@
 
 use firmware::table_format::{self, Game, MeasurementError, Table};
 use firmware::{
-    Braking, CertificateConfig, Command, Config, Controller, FallbackConfig, Fault, Inputs,
-    LawConfig, Measurement, Mode, PlantConfig, SensorBounds, Track, DEFAULT_TABLE,
+    Braking, CertificateConfig, Command, Config, Controller, EmergencyDeclaration, FallbackConfig,
+    Fault, Inputs, LawConfig, Measurement, Mode, PlantConfig, SensorBounds, Track, DEFAULT_TABLE,
 };
 use proptest::prelude::*;
 
 mod common;
-use common::ideal;
+use common::{ideal, table_for};
 
 const NOW: u64 = 10_000_000;
 
@@ -46,14 +46,22 @@ fn band_only(config: Config) -> Config {
     let (beta, _, _) = band_and_leader();
     Config {
         certificate: CertificateConfig {
-            emergency: Braking {
-                level: -beta,
+            emergency: EmergencyDeclaration {
+                braking: Braking {
+                    level: -beta,
+                    ..config.certificate.emergency.braking
+                },
                 ..config.certificate.emergency
             },
             ..config.certificate
         },
         ..config
     }
+}
+
+/// A controller for `config` on the default table with `config`'s emergency declaration.
+fn declared(config: Config) -> Controller<'static> {
+    Controller::new(table_for(&config), config)
 }
 
 fn fault_of(c: Command) -> Fault {
@@ -111,7 +119,7 @@ fn closing_fast_on_the_leader_brakes_at_the_certificates_level() {
     // 25 m/s, the leader 30 m ahead at 15 m/s: the nominal law's -3.5 m/s^2 at most would not
     // keep the front value above the margin for another period, so the override brakes at beta
     // without an emergency authority,
-    let mut c = Controller::new(DEFAULT_TABLE, band_only(ideal()));
+    let mut c = declared(band_only(ideal()));
     let cmd = c.step(&inputs((30.0, -10.0), (40.0, 0.0), 25.0));
     assert_eq!(cmd.mode, Mode::Override, "{cmd:?}");
     assert_eq!(cmd.acceleration, beta);
@@ -464,7 +472,7 @@ proptest! {
         prop_assert!(cmd.acceleration.is_finite());
         // Within the band, or below it down to the emergency authority's level, flagged.
         let (lo, hi, _) = band_and_leader();
-        let emergency = -ideal().certificate.emergency.level;
+        let emergency = -ideal().certificate.emergency.braking.level;
         prop_assert!((emergency..=hi).contains(&cmd.acceleration));
         prop_assert!(cmd.acceleration >= lo || (cmd.emergency && cmd.takeover), "{:?}", cmd);
         prop_assert_eq!(
@@ -569,7 +577,7 @@ fn the_measurements_age_is_inside_the_look_ahead() {
     old.leader.timestamp_us = NOW - 100_000;
     old.ego_speed.timestamp_us = NOW - 100_000;
     old.ego_acceleration.timestamp_us = NOW - 100_000;
-    let band = || Controller::new(DEFAULT_TABLE, band_only(ideal()));
+    let band = || declared(band_only(ideal()));
     let m_fresh = band().step(&fresh).margin.unwrap();
     let m_old = band().step(&old).margin.unwrap();
     assert!(m_old < m_fresh - 0.5, "{m_old} vs {m_fresh}");
@@ -667,6 +675,61 @@ fn a_clock_jump_is_a_fault_that_recovers_never_latches() {
     }
 }
 
+/// A table certifies for the vehicle and the follower it declares: one that declares another
+/// emergency authority, follower reaction or lights' command than the configuration is
+/// refused with its reason, in both modes; declared alike, it loads.
+#[test]
+fn a_table_declaring_another_emergency_authority_or_follower_is_refused() {
+    let d = ideal().certificate.emergency;
+    let others = [
+        EmergencyDeclaration {
+            braking: Braking {
+                level: 7.0,
+                ..d.braking
+            },
+            ..d
+        },
+        EmergencyDeclaration {
+            braking: Braking {
+                jerk: 10.0,
+                ..d.braking
+            },
+            ..d
+        },
+        EmergencyDeclaration {
+            follower_reaction_time: 0.0,
+            ..d
+        },
+        EmergencyDeclaration {
+            lights_command: -1.3,
+            ..d
+        },
+    ];
+    let state = inputs((100.0, 0.0), (40.0, 0.0), 25.0);
+    for authorities in [
+        firmware::Authorities::ComfortBand,
+        firmware::Authorities::Two,
+    ] {
+        let mut config = ideal();
+        config.certificate.authorities = authorities;
+        assert!(Controller::new(DEFAULT_TABLE, config).table().is_some());
+        for other in others {
+            let bytes = table_format::with_emergency(DEFAULT_TABLE, other).unwrap();
+            let mut c = Controller::new(&bytes, config);
+            assert!(c.table().is_none(), "{other:?}");
+            assert_eq!(
+                fault_of(c.step(&state)),
+                Fault::EmergencyDeclarationDiffers,
+                "{other:?}"
+            );
+            // The configuration that declares the same loads it.
+            let mut same = config;
+            same.certificate.emergency = other;
+            assert!(Controller::new(&bytes, same).table().is_some(), "{other:?}");
+        }
+    }
+}
+
 #[test]
 fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
     use firmware::controller::Envelope;
@@ -674,8 +737,11 @@ fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
     // it): the table's 3.5 does not fit, and clamping it would void the certificate, so the
     // table is refused.
     let no_emergency = CertificateConfig {
-        emergency: Braking {
-            level: 3.0,
+        emergency: EmergencyDeclaration {
+            braking: Braking {
+                level: 3.0,
+                ..ideal().certificate.emergency.braking
+            },
             ..ideal().certificate.emergency
         },
         ..ideal().certificate
@@ -744,8 +810,11 @@ fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
     // An emergency authority beyond the envelope's braking is not a configuration either.
     let beyond = Config {
         certificate: CertificateConfig {
-            emergency: Braking {
-                level: 8.5,
+            emergency: EmergencyDeclaration {
+                braking: Braking {
+                    level: 8.5,
+                    ..ideal().certificate.emergency.braking
+                },
                 ..ideal().certificate.emergency
             },
             ..ideal().certificate
@@ -757,13 +826,15 @@ fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
     // harder than the table's band is refused with the table.
     for lights in [0.0, 0.1, -3.6, f32::NAN] {
         let mut bad = ideal();
-        bad.certificate.lights_command = lights;
+        bad.certificate.emergency.lights_command = lights;
         assert!(!bad.is_valid(), "{lights}");
     }
     let mut soft_band = ideal();
-    soft_band.certificate.lights_command = -3.5;
+    soft_band.certificate.emergency.lights_command = -3.5;
     assert!(soft_band.is_valid());
-    let bytes = split_table((-3.0, 2.0));
+    let bytes =
+        table_format::with_emergency(&split_table((-3.0, 2.0)), soft_band.certificate.emergency)
+            .unwrap();
     let cmd = Controller::new(&bytes, soft_band).step(&inputs((60.0, 0.0), (40.0, 0.0), 25.0));
     assert_eq!(fault_of(cmd), Fault::InvalidConfig);
     assert!(ideal().is_valid());
@@ -796,6 +867,7 @@ fn split_table_unverified(ego: (f32, f32)) -> Vec<u8> {
         leader,
         follower,
         max_speed,
+        emergency,
         ..
     } = Table::parse(DEFAULT_TABLE).unwrap().header().game
     else {
@@ -807,6 +879,7 @@ fn split_table_unverified(ego: (f32, f32)) -> Vec<u8> {
             leader,
             follower,
             max_speed,
+            emergency,
         },
         min_gap: 0.0,
         horizon: Horizon {
@@ -1191,7 +1264,7 @@ fn an_aging_track_slows_the_car_smoothly_within_the_covered_age() {
         i.leader.timestamp_us = NOW - age_ms * 1_000;
         i.ego_speed.timestamp_us = NOW;
         i.ego_acceleration.timestamp_us = NOW;
-        let cmd = Controller::new(DEFAULT_TABLE, band_only(datasheet())).step(&i);
+        let cmd = declared(band_only(datasheet())).step(&i);
         assert_ne!(cmd.mode, Mode::MinimumRisk, "{age_ms} ms: {cmd:?}");
         assert!(
             cmd.acceleration <= previous + 1e-6,
@@ -1416,7 +1489,7 @@ fn a_follower_measured_just_below_zero_within_its_error_is_used() {
 fn the_reports_since_the_measurement_bound_the_actuator_after_an_engagement() {
     let base = inputs((40.0, -3.0), (f32::INFINITY, 0.0), 20.0);
     let margin_after = |first_report: f32| {
-        let mut c = Controller::new(DEFAULT_TABLE, band_only(Config::default()));
+        let mut c = declared(band_only(Config::default()));
         for now in [NOW - 40_000, NOW - 20_000] {
             let mut earlier = at(base, now);
             earlier.ego_acceleration.value = first_report;

@@ -4,7 +4,7 @@
 use firmware::{Controller, Fault, Inputs, Measurement, Mode, Track, DEFAULT_TABLE};
 
 mod common;
-use common::ideal;
+use common::{ideal, table_for};
 
 /// Three cars on a line: positions (m) and speeds (m/s), leader, ego, follower.
 #[derive(Debug, Clone, Copy)]
@@ -268,8 +268,8 @@ fn a_cut_in_that_needs_less_than_the_band_gets_less() {
 #[test]
 fn without_an_emergency_authority_the_band_is_the_limit() {
     let mut config = ideal();
-    config.certificate.emergency.level = 3.5;
-    let mut c = Controller::new(DEFAULT_TABLE, config);
+    config.certificate.emergency.braking.level = 3.5;
+    let mut c = Controller::new(table_for(&config), config);
     let cars = Cars {
         x: [12.0, 0.0, -150.0],
         v: [15.0, 20.0, 20.0],

@@ -131,6 +131,7 @@ impl HumanModel {
                 leader,
                 follower,
                 max_speed,
+                ..
             } => Some(HumanModel {
                 band_min: ego.min,
                 leader: (leader.min, leader.max),

@@ -45,7 +45,7 @@ struct Outcome {
     below_band: u32,
 }
 
-fn run(case: &Case, config: Config, table: &Table<'_>) -> Outcome {
+fn run(case: &Case, config: Config, bytes: &[u8], table: &Table<'_>) -> Outcome {
     let model = HumanModel::of(table).unwrap();
     let table_format::FollowerModel::Idm { idm, .. } = model.follower;
     let (band_min, follower_top, follower_braking) = (
@@ -73,7 +73,7 @@ fn run(case: &Case, config: Config, table: &Table<'_>) -> Outcome {
         engaged_acceleration: 0.0,
     };
     let mut world = World::new(
-        firmware::DEFAULT_TABLE,
+        bytes,
         config,
         model,
         start,
@@ -143,7 +143,11 @@ fn braking_below_the_band_never_causes_a_rear_collision() {
     let table = Table::parse(firmware::DEFAULT_TABLE).unwrap();
     let with = Config::default();
     let mut band_only = with;
-    band_only.certificate.emergency.level = 3.5;
+    band_only.certificate.emergency.braking.level = 3.5;
+    // The table declares the vehicle it certifies for: the band alone is another.
+    let band_only_bytes =
+        table_format::with_emergency(firmware::DEFAULT_TABLE, band_only.certificate.emergency)
+            .unwrap();
     let mut rng = StdRng::seed_from_u64(30);
     let (mut used, mut saved_ahead, mut caused_behind) = (0, 0, Vec::new());
     let (mut behind_after, mut after_band_hit_ahead) = (0, 0);
@@ -169,8 +173,8 @@ fn braking_below_the_band_never_causes_a_rear_collision() {
             ),
             seed: i,
         };
-        let emergency = run(&case, with, &table);
-        let band = run(&case, band_only, &table);
+        let emergency = run(&case, with, firmware::DEFAULT_TABLE, &table);
+        let band = run(&case, band_only, &band_only_bytes, &table);
         assert_eq!(band.below_band, 0, "{case:?}");
         used += usize::from(emergency.below_band > 0);
         saved_ahead += usize::from(band.ahead && !emergency.ahead && !emergency.behind);

@@ -160,7 +160,7 @@ fn follow(bytes: &'static [u8], config: Config, speed: f32, behind: Behind) -> F
         c.steady_gap_with(
             ego.v,
             model.leader.0.abs(),
-            allowed.unwrap_or(c.config().certificate.emergency),
+            allowed.unwrap_or(c.config().certificate.emergency.braking),
         ),
     );
     Following {

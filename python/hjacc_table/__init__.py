@@ -1,4 +1,4 @@
-"""Reads hjacc safety tables (``table.bin``, format version 5) in Python.
+"""Reads hjacc safety tables (``table.bin``, format version 6) in Python.
 
 The format is specified byte by byte in ``table-format/README.md``; this reader follows it
 and answers exactly as the Rust reader (``table_format::Table``) does, to the last bit:
@@ -22,7 +22,7 @@ import zlib
 __all__ = ["Table", "TableError", "MAGIC", "FORMAT_VERSION"]
 
 MAGIC = b"HJTB"
-FORMAT_VERSION = 5
+FORMAT_VERSION = 6
 _PREAMBLE = 8
 _CRC = 4
 
@@ -138,6 +138,12 @@ def _game(c):
             "time_gap": c.bounds(),
         }
         game["max_speed"] = c.f32()
+        # The emergency declaration (format version 6).
+        game["emergency"] = {
+            "braking": {"level": c.f32(), "jerk": c.f32()},
+            "follower_reaction_time": c.f32(),
+            "lights_command": c.f32(),
+        }
         return game
     raise TableError("unknown game variant %d" % index)
 

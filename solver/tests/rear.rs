@@ -157,9 +157,66 @@ fn bad_rear_configs_name_the_key() {
         ("max_iterations = 20000", "max_iterations = 20000\ncheck_every = 0", "solve.check_every"),
         ("max_speed = 10.0", "max_speed = 10.0\n[game.idm]\nmax_acceleration = 1.0\ncomfortable_deceleration = 1.5\ndesired_speed = 33.3\nexponent = 4\njam_distance = 0.0", "game.idm.jam_distance"),
     ];
-    for (from, to, key) in cases {
+    let emergency = |level: &str, jerk: &str, reaction: &str, lights: &str| {
+        format!(
+            "max_speed = 10.0\n[game.emergency]\nlevel = {level}\njerk = {jerk}\n\
+             follower_reaction_time = {reaction}\nlights_command = {lights}"
+        )
+    };
+    let declarations = [
+        (
+            emergency("0.0", "12.0", "1.15", "-0.5"),
+            "game.emergency.level",
+        ),
+        (
+            emergency("8.0", "0.0", "1.15", "-0.5"),
+            "game.emergency.jerk",
+        ),
+        (
+            emergency("8.0", "12.0", "5.5", "-0.5"),
+            "game.emergency.follower_reaction_time",
+        ),
+        (
+            emergency("8.0", "12.0", "1.15", "0.0"),
+            "game.emergency.lights_command",
+        ),
+        (
+            "max_speed = 10.0\n[game.emergency]\nlevel = 8.0".to_string(),
+            "jerk",
+        ),
+    ];
+    let declarations = declarations
+        .iter()
+        .map(|(to, key)| ("max_speed = 10.0", to.as_str(), *key));
+    for (from, to, key) in cases.into_iter().chain(declarations) {
         let text = SMALL.replacen(from, to, 1);
         let err = RearConfig::from_toml(&text).unwrap_err();
         assert!(err.to_string().contains(key), "{key}: {err}");
     }
+}
+
+/// A `[game.emergency]` section is the vehicle's declaration in the table's header; without
+/// one the header declares the default, the firmware's default configuration's.
+#[test]
+fn a_rear_config_declares_the_vehicles_emergency_in_the_header() {
+    let declared = |config: &RearConfig| match config.game_description() {
+        Game::ThreeCarSplit { emergency, .. } => emergency,
+        g => panic!("not a split game: {g:?}"),
+    };
+    let plain = RearConfig::from_toml(SMALL).unwrap();
+    assert_eq!(
+        declared(&plain),
+        table_format::EmergencyDeclaration::DEFAULT
+    );
+    let wet = SMALL.replacen(
+        "max_speed = 10.0",
+        "max_speed = 10.0\n[game.emergency]\nlevel = 5.0\njerk = inf\n\
+         follower_reaction_time = 1.5\nlights_command = -1.5",
+        1,
+    );
+    let wet = declared(&RearConfig::from_toml(&wet).unwrap());
+    assert_eq!(wet.braking.level, 5.0);
+    assert_eq!(wet.braking.jerk, f32::INFINITY);
+    assert_eq!(wet.follower_reaction_time, 1.5);
+    assert_eq!(wet.lights_command, -1.5);
 }

@@ -99,7 +99,7 @@ use crate::front::{front_value, least_braking, FrontModel};
 use crate::rear::{hardest_clearing, rear_gap_after, ReactingFollower};
 
 /// A braking the certificate argues with: its level and how fast it builds up.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Braking {
     /// The braking level, m/s^2 (positive).

@@ -224,8 +224,67 @@ pub enum Game {
         follower: FollowerModel,
         /// The largest speed of any vehicle, m/s.
         max_speed: f32,
+        /// The vehicle's braking beyond the band and what the follower sees of it (since
+        /// format version 6): the firmware refuses a table whose declaration differs from its
+        /// configuration's.
+        emergency: EmergencyDeclaration,
     },
 }
+
+/// The vehicle's emergency authority and how the follower behind learns of a braking: the
+/// facts the certificate's emergency answer and its two-authority rule argue with, beside the
+/// band the rear table is solved for (since format version 6).
+///
+/// None of them enters the rear table's values (its follower is the paper's IDM, reacting at
+/// once, and its ego keeps to the band), so [`crate::with_emergency`] may declare them anew on
+/// a solved table. They are declared here so that a table says which vehicle and which
+/// follower it certifies for, and a firmware configured for another refuses it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct EmergencyDeclaration {
+    /// The emergency authority: the vehicle's full braking and its build-up
+    /// ([`crate::authority::DRY_ROAD_EMERGENCY`] by default). A level no harder than the
+    /// band's `beta` declares none.
+    pub braking: crate::authority::Braking,
+    /// How long the follower keeps its acceleration after the ego's brake lights come on, s
+    /// ([`crate::rear::CAREFUL_DRIVER_REACTION`] by default).
+    pub follower_reaction_time: f32,
+    /// The command (m/s^2, negative) at or below which the brake lights are on once the
+    /// actuator delivers it: the follower's reaction is counted only from a run of such
+    /// commands ([`crate::rear::lights_on_within`]).
+    pub lights_command: f32,
+}
+
+impl EmergencyDeclaration {
+    /// The defaults: a dry road's full braking
+    /// ([`DRY_ROAD_EMERGENCY`](crate::authority::DRY_ROAD_EMERGENCY)), UN R157's careful
+    /// driver behind ([`CAREFUL_DRIVER_REACTION`](crate::rear::CAREFUL_DRIVER_REACTION)), and
+    /// the lights counted from commands at or below -0.5 m/s^2.
+    pub const DEFAULT: EmergencyDeclaration = EmergencyDeclaration {
+        braking: crate::authority::DRY_ROAD_EMERGENCY,
+        follower_reaction_time: crate::rear::CAREFUL_DRIVER_REACTION,
+        lights_command: -0.5,
+    };
+
+    /// Whether the numbers are a declaration at all: a finite positive braking level, a
+    /// positive build-up (`f32::INFINITY`: at once), a finite reaction of 0 to
+    /// [`MAX_REACTION_TIME`] s, and a finite negative lights' command. (The firmware checks
+    /// the rest against its vehicle: the envelope, the band, ISO 15622.)
+    pub fn is_valid(&self) -> bool {
+        let b = &self.braking;
+        b.level.is_finite()
+            && b.level > 0.0
+            && b.jerk > 0.0
+            && self.follower_reaction_time.is_finite()
+            && (0.0..=MAX_REACTION_TIME).contains(&self.follower_reaction_time)
+            && self.lights_command.is_finite()
+            && self.lights_command < 0.0
+    }
+}
+
+/// The longest follower reaction a declaration may name, s: beyond it the follower is not a
+/// driver the certificate argues about (a surprised driver takes about 1.5 s).
+pub const MAX_REACTION_TIME: f32 = 5.0;
 
 /// The follower behind the ego in a split table's rear game: the model the rear value is
 /// solved and proven against. A new follower model is a new variant (the files it touches are
@@ -476,6 +535,7 @@ impl Game {
                 leader,
                 follower,
                 max_speed,
+                emergency,
             } => {
                 ego.is_valid()
                     && ego.min < 0.0
@@ -484,6 +544,7 @@ impl Game {
                     && follower.validate()
                     && max_speed.is_finite()
                     && *max_speed > 0.0
+                    && emergency.is_valid()
             }
         };
         if ok {

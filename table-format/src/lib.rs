@@ -59,13 +59,16 @@ mod writer;
 
 pub use error::Error;
 pub use header::{
-    Axis, Bounds, ErrorBound, FollowerModel, FollowerSpeed, Game, GameKind, Header, Horizon,
-    HorizonStatus, IdmParameters, PolicyEncoding, Quantization, Spacing, Verification, MAX_DIMS,
+    Axis, Bounds, EmergencyDeclaration, ErrorBound, FollowerModel, FollowerSpeed, Game, GameKind,
+    Header, Horizon, HorizonStatus, IdmParameters, PolicyEncoding, Quantization, Spacing,
+    Verification, MAX_DIMS, MAX_REACTION_TIME,
 };
 pub use sensing::{MeasurementError, SensorBounds};
 pub use table::{EgoAction, Lookup, Table, BOX_INTERIOR};
 #[cfg(feature = "std")]
-pub use writer::{encode, with_leader, with_verification, TableContents, ValueBits};
+pub use writer::{
+    encode, with_emergency, with_leader, with_verification, TableContents, ValueBits,
+};
 
 /// How far below its level a split table's rear value may read at a control period between
 /// the periods `solver verify` proves it over, m: the rear half's stated tolerance at every
@@ -84,7 +87,7 @@ pub const MAGIC: [u8; 4] = *b"HJTB";
 
 /// The layout version this crate reads and writes. Bumped on any change a reader of the previous
 /// version would misread.
-pub const FORMAT_VERSION: u16 = 5;
+pub const FORMAT_VERSION: u16 = 6;
 
 /// Bytes before the header: magic (4), format version (2), header length (2).
 pub const PREAMBLE_LEN: usize = 8;

@@ -6,8 +6,8 @@
 //! solver's value.
 
 use crate::header::{
-    Axis, Bounds, ErrorBound, Game, Header, Horizon, PolicyEncoding, Quantization, Spacing,
-    Verification, MAX_DIMS,
+    Axis, Bounds, EmergencyDeclaration, ErrorBound, Game, Header, Horizon, PolicyEncoding,
+    Quantization, Spacing, Verification, MAX_DIMS,
 };
 use crate::{Error, CRC32, FORMAT_VERSION, MAGIC};
 
@@ -197,6 +197,21 @@ pub fn with_leader(bytes: &[u8], leader: Bounds) -> Result<Vec<u8>, Error> {
     rewrite_header(bytes, |header| match &mut header.game {
         Game::ThreeCarSplit { leader: l, .. } => {
             *l = leader;
+            Ok(())
+        }
+        _ => Err(Error::InvalidHeader("not a split three-car table")),
+    })
+}
+
+/// The split three-car table `bytes` with `emergency` declared: like the leader, the
+/// emergency authority, the follower's reaction and the lights' command do not enter the rear
+/// table's values, so the payload and the verification record are copied as they are. For
+/// running the deployed rear table on another vehicle, or against another follower. Refused
+/// for any other game, and for a declaration that is not one.
+pub fn with_emergency(bytes: &[u8], emergency: EmergencyDeclaration) -> Result<Vec<u8>, Error> {
+    rewrite_header(bytes, |header| match &mut header.game {
+        Game::ThreeCarSplit { emergency: e, .. } => {
+            *e = emergency;
             Ok(())
         }
         _ => Err(Error::InvalidHeader("not a split three-car table")),

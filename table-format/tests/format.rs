@@ -416,11 +416,18 @@ fn specific_corruptions_name_their_cause() {
         Table::parse(&version_four).unwrap_err(),
         Error::UnsupportedVersion { found: 4 }
     );
+    // A version-5 table (a split table without its emergency declaration) likewise.
+    let mut version_five = bytes.clone();
+    version_five[4] = 5;
+    assert_eq!(
+        Table::parse(&version_five).unwrap_err(),
+        Error::UnsupportedVersion { found: 5 }
+    );
     let mut future = bytes.clone();
-    future[4] = 6;
+    future[4] = 7;
     assert_eq!(
         Table::parse(&future).unwrap_err(),
-        Error::UnsupportedVersion { found: 6 }
+        Error::UnsupportedVersion { found: 7 }
     );
     let mut payload_flip = bytes.clone();
     let last = payload_flip.len() - 5;
@@ -589,6 +596,7 @@ fn listed_table(f: impl Fn(f32, f32, f32) -> f32, bits: ValueBits) -> (Vec<u8>, 
                 time_gap: Bounds::new(1.0, 2.0),
             },
             max_speed: 35.0,
+            emergency: table_format::EmergencyDeclaration::DEFAULT,
         },
         min_gap: 0.0,
         horizon: Horizon {
@@ -723,6 +731,91 @@ fn a_verification_record_changes_the_header_only() {
         ..record
     };
     assert!(table_format::with_verification(&plain, bad).is_err());
+}
+
+/// The emergency declaration is a split table's, declared anew without touching a value, and
+/// a declaration that is not one is refused (by `Header::validate`, which the reader runs too).
+#[test]
+fn an_emergency_declaration_changes_the_header_only() {
+    use table_format::authority::Braking;
+    use table_format::EmergencyDeclaration;
+    let (plain, _) = listed_table(|x, v, w| x - 0.1 * v + 0.05 * w, ValueBits::Sixteen);
+    let default = match Table::parse(&plain).expect("parses").header().game {
+        Game::ThreeCarSplit { emergency, .. } => emergency,
+        g => panic!("not a split table: {g:?}"),
+    };
+    assert_eq!(default, EmergencyDeclaration::DEFAULT);
+    let wet = EmergencyDeclaration {
+        braking: Braking {
+            level: 5.0,
+            jerk: f32::INFINITY,
+        },
+        follower_reaction_time: 2.0,
+        lights_command: -1.5,
+    };
+    let declared = table_format::with_emergency(&plain, wet).expect("re-encodes");
+    let (a, b) = (
+        Table::parse(&plain).expect("parses"),
+        Table::parse(&declared).expect("parses"),
+    );
+    match b.header().game {
+        Game::ThreeCarSplit { emergency, .. } => assert_eq!(emergency, wet),
+        g => panic!("not a split table: {g:?}"),
+    }
+    assert_eq!(declared.len(), plain.len());
+    for n in 0..a.node_count() {
+        assert_eq!(a.value_at_node(n), b.value_at_node(n));
+    }
+    // What is not a declaration: no braking, no build-up, a reaction that is none or beyond
+    // the bound, lights that need no braking.
+    let bad = [
+        EmergencyDeclaration {
+            braking: Braking {
+                level: 0.0,
+                ..wet.braking
+            },
+            ..wet
+        },
+        EmergencyDeclaration {
+            braking: Braking {
+                level: f32::NAN,
+                ..wet.braking
+            },
+            ..wet
+        },
+        EmergencyDeclaration {
+            braking: Braking {
+                jerk: 0.0,
+                ..wet.braking
+            },
+            ..wet
+        },
+        EmergencyDeclaration {
+            follower_reaction_time: -0.1,
+            ..wet
+        },
+        EmergencyDeclaration {
+            follower_reaction_time: table_format::MAX_REACTION_TIME + 0.01,
+            ..wet
+        },
+        EmergencyDeclaration {
+            lights_command: 0.0,
+            ..wet
+        },
+        EmergencyDeclaration {
+            lights_command: f32::NEG_INFINITY,
+            ..wet
+        },
+    ];
+    for d in bad {
+        assert_eq!(
+            table_format::with_emergency(&plain, d).unwrap_err(),
+            Error::InvalidHeader("game parameters"),
+            "{d:?}"
+        );
+    }
+    // Only a split table declares one.
+    assert!(table_format::with_emergency(&small(), wet).is_err());
 }
 
 /// A rough function of the nodes: its minimum over a box is at interior breakpoints as often as

@@ -26,7 +26,7 @@ use markers::{hjacc_step_begin, hjacc_step_end};
 use cortex_m as _;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
-use table_format::authority::{Braking, Decision, State, TwoAuthorities, DRY_ROAD_EMERGENCY};
+use table_format::authority::{Braking, Decision, State, TwoAuthorities};
 use table_format::rear::{lights_on_within, ReactingFollower};
 use table_format::{Game, Table};
 
@@ -70,13 +70,20 @@ const PROPOSAL: f32 = 0.5;
 
 #[entry]
 fn main() -> ! {
-    // The deployed comfort authority (the table's band, the configured ramp) and the table's
-    // follower braking at its clip once it reacts.
+    // The deployed comfort authority (the table's band, the configured ramp), the table's
+    // declared emergency authority and follower reaction, and its follower braking at its
+    // clip once it reacts.
     let config = Config::default();
     let Ok(table) = Table::parse(DEFAULT_TABLE) else {
         fail()
     };
-    let Game::ThreeCarSplit { ego, follower, .. } = table.header().game else {
+    let Game::ThreeCarSplit {
+        ego,
+        follower,
+        emergency: declared,
+        ..
+    } = table.header().game
+    else {
         fail()
     };
     let model = TwoAuthorities {
@@ -86,8 +93,9 @@ fn main() -> ! {
             level: -ego.min,
             jerk: config.certificate.brake_jerk,
         },
-        emergency: DRY_ROAD_EMERGENCY,
+        emergency: declared.braking,
         follower: ReactingFollower {
+            reaction_time: declared.follower_reaction_time,
             braking: -follower.clip().min,
             jerk: f32::INFINITY,
             ..ReactingFollower::careful_driver(35.0)
@@ -113,7 +121,7 @@ fn main() -> ! {
                             let in_force = model.emergency;
                             let lights = if a < 0.0 { lights } else { 0.0 };
                             hjacc_step_begin();
-                            let e = DRY_ROAD_EMERGENCY;
+                            let e = declared.braking;
                             let on = lights_on_within(0.1, 0.3, a, a, a, e.jerk, e.level);
                             let d = model.decide(
                                 black_box(&s),

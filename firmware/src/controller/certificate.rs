@@ -165,14 +165,14 @@ impl<'t> Certifier<'t> {
             front_margin: config.certificate.front_margin,
             rear_margin: config.certificate.rear_margin,
             brake_jerk: config.certificate.brake_jerk,
-            lights_command: config.certificate.lights_command,
+            lights_command: config.certificate.emergency.lights_command,
         })
     }
 
-    /// The follower the two-authority rear half argues against
-    /// ([`CertificateConfig::follower_reaction_time`](crate::CertificateConfig), the table's
-    /// IDM): it keeps at most its largest acceleration until its reaction, then brakes at its
-    /// clip.
+    /// The follower the two-authority rear half argues against (the declared
+    /// `follower_reaction_time` of [`CertificateConfig::emergency`](crate::CertificateConfig),
+    /// the table's IDM): it keeps at most its largest acceleration until its reaction, then
+    /// brakes at its clip.
     pub fn reacting_follower(&self) -> table_format::rear::ReactingFollower {
         self.model.follower
     }
@@ -351,6 +351,7 @@ fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
         leader,
         max_speed,
         follower: FollowerModel::Idm { clip, idm, .. },
+        emergency: declared,
     } = header.game
     else {
         return Err(Fault::WrongGame);
@@ -365,14 +366,19 @@ fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
     if ego.min < envelope.min_acceleration || ego.max > envelope.max_acceleration {
         return Err(Fault::TableOutsideEnvelope);
     }
+    // The table certifies for the vehicle and the follower it declares.
+    if declared != config.certificate.emergency {
+        return Err(Fault::EmergencyDeclarationDiffers);
+    }
+    let emergency = declared.braking;
     // Two authorities need an emergency authority harder than the band.
     if config.certificate.authorities == crate::config::Authorities::Two
-        && config.certificate.emergency.level <= -ego.min
+        && emergency.level <= -ego.min
     {
         return Err(Fault::InvalidConfig);
     }
     // A lights' command the band cannot give would leave the follower's reaction uncounted.
-    if config.certificate.lights_command < ego.min {
+    if declared.lights_command < ego.min {
         return Err(Fault::InvalidConfig);
     }
     match header.verification {
@@ -413,10 +419,9 @@ fn model_of(table: &Table<'_>, config: &Config) -> Result<Model, Fault> {
         gap_max: gaps.max,
         beyond_grid,
         error_bound: header.error_bound.total(),
-        emergency: (config.certificate.emergency.level > -ego.min)
-            .then_some(config.certificate.emergency),
+        emergency: (emergency.level > -ego.min).then_some(emergency),
         follower: ReactingFollower {
-            reaction_time: config.certificate.follower_reaction_time,
+            reaction_time: declared.follower_reaction_time,
             // The IDM's output never exceeds its largest acceleration.
             reaction_acceleration: math::min(clip.max, idm.max_acceleration),
             braking: -clip.min,
@@ -573,7 +578,7 @@ impl<'t> Controller<'t> {
                     held,
                     last,
                     jerk,
-                    -self.config.certificate.lights_command,
+                    -self.config.certificate.emergency.lights_command,
                 );
                 now_us
                     .saturating_add(h)

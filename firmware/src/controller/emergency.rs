@@ -25,14 +25,14 @@ pub(super) struct EmergencyMemo {
 }
 
 impl Controller<'_> {
-    /// The vehicle's declared lights' command ([`CertificateConfig::lights_command`]): one at
+    /// The vehicle's declared lights' command ([`EmergencyDeclaration::lights_command`]): one at
     /// or below it keeps a run of braking commands going, and so the brake lights on once
     /// [`lights_on_within`] of the run's start has passed; one above it ends the run (the
     /// follower's reaction starts again at the next one).
     ///
-    /// [`CertificateConfig::lights_command`]: crate::CertificateConfig::lights_command
+    /// [`EmergencyDeclaration::lights_command`]: crate::EmergencyDeclaration::lights_command
     pub(super) fn lights_command(&self) -> f32 {
-        self.config.certificate.lights_command
+        self.config.certificate.emergency.lights_command
     }
 
     /// Until when (microseconds) the last command below the band may still pull the

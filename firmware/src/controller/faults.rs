@@ -48,6 +48,11 @@ pub enum Fault {
     InvalidConfig,
     /// The table's band of ego accelerations does not fit inside the vehicle's envelope.
     TableOutsideEnvelope,
+    /// The table declares another emergency authority, follower reaction or lights' command
+    /// ([`table_format::EmergencyDeclaration`]) than the configuration
+    /// ([`CertificateConfig::emergency`](crate::CertificateConfig)): it certifies for another
+    /// vehicle or another follower.
+    EmergencyDeclarationDiffers,
     /// The clock jumped forward by more than [`MAX_STEP_GAP_PERIODS`](super::MAX_STEP_GAP_PERIODS) periods since the last
     /// step. Recovers after [`CLOCK_RECOVERY_PERIODS`](super::CLOCK_RECOVERY_PERIODS) good periods.
     ClockJumped,

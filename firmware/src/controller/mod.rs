@@ -81,11 +81,11 @@
 //! keeps [`table_format::rear::rear_gap_after`] above `rear_margin` at the worst corner of the
 //! follower's measurement box at its time `t_f`, for a follower that keeps accelerating (at
 //! most at its IDM's largest acceleration) until its reaction time
-//! ([`CertificateConfig::follower_reaction_time`], 1.15 s: UN R157's careful driver) after the
+//! ([`EmergencyDeclaration::follower_reaction_time`], 1.15 s: UN R157's careful driver) after the
 //! ego's brake lights are on for sure, then brakes at its clip's hardest (6 m/s^2 on the
 //! deployed table), the ego braking at most at that level (or the hardest since `t_f`). The
 //! lights are on from [`table_format::rear::lights_on_within`] after a run of commands at or
-//! below the vehicle's declared lights' command began ([`CertificateConfig::lights_command`],
+//! below the vehicle's declared lights' command began ([`EmergencyDeclaration::lights_command`],
 //! -0.5 m/s^2 by default), while it lasts (the dead time and lag from what is pending); the
 //! reaction counts from there, so a follower close behind allows more as the braking goes on.
 //! Where it allows nothing beyond `beta` the answer is `beta`: the car ahead is not bought with
@@ -381,6 +381,7 @@ pub use certificate::{
 pub use command::{Command, Event, Mode};
 pub use faults::Fault;
 pub use table_format::authority::Braking;
+pub use table_format::EmergencyDeclaration;
 
 use heapless::Deque;
 use table_format::Table;

@@ -15,3 +15,12 @@ pub fn ideal() -> Config {
         ..Config::default()
     }
 }
+
+/// The default table with `config`'s emergency declaration (its emergency authority, follower
+/// reaction and lights' command): the firmware refuses the default table for a configuration
+/// that declares others ([`firmware::Fault::EmergencyDeclarationDiffers`]).
+pub fn table_for(config: &Config) -> &'static [u8] {
+    firmware::table_format::with_emergency(firmware::DEFAULT_TABLE, config.certificate.emergency)
+        .expect("the default table takes any valid declaration")
+        .leak()
+}

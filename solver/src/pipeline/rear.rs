@@ -15,8 +15,10 @@ use std::path::Path;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
+use table_format::authority::Braking;
 use table_format::{
-    Axis, Bounds, FollowerModel, Game, Horizon, HorizonStatus, Spacing, TableContents, ValueBits,
+    Axis, Bounds, EmergencyDeclaration, FollowerModel, Game, Horizon, HorizonStatus, Spacing,
+    TableContents, ValueBits, MAX_REACTION_TIME,
 };
 
 use crate::engine::semi_lagrangian::{Breakpoints, Iteration};
@@ -68,6 +70,79 @@ pub struct RearGameConfig {
     /// `verify` can close its proof at the level set (`solver::verify`).
     #[serde(default)]
     pub follower_robustness: f64,
+    /// The vehicle's emergency authority, the follower's reaction and the lights' command the
+    /// table declares (`[game.emergency]`; default
+    /// [`EmergencyDeclaration::DEFAULT`](table_format::EmergencyDeclaration::DEFAULT)). The
+    /// rear iteration does not use them; the firmware refuses a table that declares others
+    /// than its configuration.
+    #[serde(default)]
+    pub emergency: EmergencyConfig,
+}
+
+/// The `[game.emergency]` section: [`table_format::EmergencyDeclaration`] in the config's
+/// units.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EmergencyConfig {
+    /// The vehicle's full braking, m/s^2 (positive).
+    pub level: f64,
+    /// Its build-up, m/s^3 (positive; `inf`: at once).
+    pub jerk: f64,
+    /// The follower's reaction to the brake lights, s.
+    pub follower_reaction_time: f64,
+    /// The command at or below which the brake lights are on once delivered, m/s^2
+    /// (negative).
+    pub lights_command: f64,
+}
+
+impl Default for EmergencyConfig {
+    fn default() -> Self {
+        let d = EmergencyDeclaration::DEFAULT;
+        EmergencyConfig {
+            level: f64::from(d.braking.level),
+            jerk: f64::from(d.braking.jerk),
+            follower_reaction_time: f64::from(d.follower_reaction_time),
+            lights_command: f64::from(d.lights_command),
+        }
+    }
+}
+
+impl EmergencyConfig {
+    /// The declaration the table's header carries.
+    pub fn declaration(&self) -> EmergencyDeclaration {
+        EmergencyDeclaration {
+            braking: Braking {
+                level: self.level as f32,
+                jerk: self.jerk as f32,
+            },
+            follower_reaction_time: self.follower_reaction_time as f32,
+            lights_command: self.lights_command as f32,
+        }
+    }
+
+    fn validate(&self) -> Result<(), ConfigError> {
+        check(
+            self.level.is_finite() && self.level > 0.0,
+            "game.emergency.level",
+            "must be a finite braking > 0 m/s^2",
+        )?;
+        check(
+            self.jerk > 0.0,
+            "game.emergency.jerk",
+            "must be > 0 m/s^3 (inf: at once)",
+        )?;
+        check(
+            self.follower_reaction_time.is_finite()
+                && (0.0..=f64::from(MAX_REACTION_TIME)).contains(&self.follower_reaction_time),
+            "game.emergency.follower_reaction_time",
+            &format!("must be in [0, {MAX_REACTION_TIME}] s"),
+        )?;
+        check(
+            self.lights_command.is_finite() && self.lights_command < 0.0,
+            "game.emergency.lights_command",
+            "must be a finite command < 0 m/s^2",
+        )
+    }
 }
 
 /// The grid: three breakpoint axes in state order.
@@ -241,6 +316,7 @@ impl RearConfig {
             "game.idm.jam_distance",
             "must be > 0: with s0 = 0 a follower creeps into a stopped ego and nothing is safe for ever",
         )?;
+        g.emergency.validate()?;
         self.grid.gap_follower.validate("grid.gap_follower")?;
         for (field, axis) in [
             ("grid.follower_speed", &self.grid.follower_speed),
@@ -318,6 +394,7 @@ impl RearConfig {
             leader: b(g.leader),
             follower: self.follower_model(),
             max_speed: g.max_speed as f32,
+            emergency: g.emergency.declaration(),
         }
     }
 

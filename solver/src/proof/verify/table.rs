@@ -468,6 +468,7 @@ mod tests {
                     time_gap: table_format::Bounds::new(1.0, 2.0),
                 },
                 max_speed: 35.0,
+                emergency: table_format::EmergencyDeclaration::DEFAULT,
             },
             0.0,
         )
