@@ -101,7 +101,7 @@ class TableAgainstPurePython(unittest.TestCase):
         self.assertEqual(repr(native), repr(python))
         parts = native.error_bound_parts
         self.assertEqual(bits(native.error_bound), bits(f32(parts["quantization"] + parts["interpolation"])))
-        self.assertEqual(hjacc.FORMAT_VERSION, 6)
+        self.assertEqual(hjacc.FORMAT_VERSION, 7)
         for node in (0, 1234, native.nodes - 1):
             self.assertEqual(bits(native.node_value(node)), bits(python.node_value(node)))
         self.assertTrue(native.contains([10.0, 0.0, 0.0]) and python.contains([10.0, 0.0, 0.0]))

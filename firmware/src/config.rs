@@ -97,10 +97,13 @@ pub struct CertificateConfig {
     /// - `follower_reaction_time`: how long the follower behind keeps its acceleration after
     ///   the ego's brake lights come on, s (1.15 s: UN R157's careful driver), at most 5 s:
     ///   what the emergency authority's rear check waits for.
-    /// - `lights_command`: the command (m/s^2, negative) at or below which the brake lights
-    ///   are on once the actuator delivers it (-0.5): the follower's reaction is counted only
-    ///   from a run of such commands ([`lights_on_within`](table_format::rear::lights_on_within)
-    ///   after it began). In `[-3.5, 0)`, and no harder than the table's band.
+    /// - `lights_deceleration`: the deceleration beyond which the brake lights are on for
+    ///   sure, m/s^2 (1.3: UN R13-H's threshold for braking that is not the driver's pedal).
+    /// - `lights_command`: the command (m/s^2) at or below which the brake lights are on once
+    ///   the actuator delivers it (-1.5, below `-lights_deceleration`): the follower's
+    ///   reaction is counted only from a run of such commands
+    ///   ([`lights_on_within`](table_format::EmergencyDeclaration::lights_on_within) after it
+    ///   began). At least -3.5, and no harder than the table's band.
     pub emergency: EmergencyDeclaration,
     /// Which brakings the certificate argues with ([`Authorities`]).
     pub authorities: Authorities,
@@ -216,7 +219,7 @@ impl Config {
     /// of 10 to 100 ms, a stale limit of 1 to [`MAX_STALE_PERIODS`] periods, a dead time and a
     /// lag within their limits, finite non-negative margins and gains, an emergency level
     /// within the envelope built up at 0.5 m/s^3 or faster, a follower reaction of 0 to 5 s, a
-    /// lights' command in `[-3.5, 0)`.
+    /// lights' deceleration of at least zero and a lights' command in `[-3.5, -theta)`.
     pub fn is_valid(&self) -> bool {
         let finite_non_negative = [
             self.law.set_speed,

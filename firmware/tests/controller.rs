@@ -701,7 +701,11 @@ fn a_table_declaring_another_emergency_authority_or_follower_is_refused() {
             ..d
         },
         EmergencyDeclaration {
-            lights_command: -1.3,
+            lights_command: -2.0,
+            ..d
+        },
+        EmergencyDeclaration {
+            lights_deceleration: 0.7,
             ..d
         },
     ];
@@ -822,9 +826,9 @@ fn the_envelope_bounds_every_command_and_refuses_a_table_that_does_not_fit() {
         ..ideal()
     };
     assert!(!beyond.is_valid());
-    // A lights' command of zero or harder than ISO 15622's braking is not one either, and one
-    // harder than the table's band is refused with the table.
-    for lights in [0.0, 0.1, -3.6, f32::NAN] {
+    // A lights' command short of the lights' deceleration or harder than ISO 15622's braking
+    // is not one either, and one harder than the table's band is refused with the table.
+    for lights in [0.0, 0.1, -1.3, -3.6, f32::NAN] {
         let mut bad = ideal();
         bad.certificate.emergency.lights_command = lights;
         assert!(!bad.is_valid(), "{lights}");

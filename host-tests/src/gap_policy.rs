@@ -7,10 +7,8 @@ use table_format::rear::{allowed_braking, ReactingFollower};
 
 use crate::humans::HumanModel;
 
-/// The emergency authority: a car's full braking on a dry road.
-pub const EMERGENCY: firmware::Braking = table_format::authority::DRY_ROAD_EMERGENCY;
-
-/// The hardest braking, up to [`EMERGENCY`], that a `follower` `time_gap` seconds behind
+/// The hardest braking, up to the declared emergency authority's
+/// ([`firmware::EmergencyDeclaration::braking`]), that a `follower` `time_gap` seconds behind
 /// (plus the IDM's jam distance, at the ego's speed `v`) allows an ego whose firmware argues
 /// with `config`: judged at the worst corner of the error box around the worst measurement of
 /// the true state (the gap read short and then taken shorter, the follower fastest, the ego
@@ -54,7 +52,7 @@ pub fn braking_a_follower_allows(
         follower_high,
         &later,
         config.certificate.rear_margin,
-        EMERGENCY.level,
+        config.certificate.emergency.braking.level,
     )
 }
 
@@ -240,7 +238,7 @@ fn braking_at_exact_states(bytes: &[u8]) -> Result<serde_json::Value> {
 }
 
 /// What the certified steady gap and the gap policy would be with two braking authorities:
-/// the comfort band as today and the emergency braking ([`EMERGENCY`]), as hard as a follower
+/// the comfort band as today and the declared emergency braking, as hard as a follower
 /// that reacts like a person allows (`table_format::rear`), against leaders braking at 6 and at
 /// 9.8 m/s^2. Everything else is the deployed firmware's argument: its delays, sensor errors
 /// and margins ([`firmware::Controller::steady_gap_with`]). The follower sits at the IDM's
@@ -254,6 +252,8 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     let model = crate::humans::HumanModel::of(&table)
         .ok_or_else(|| anyhow::anyhow!("the default table is not a split table"))?;
     let config = firmware::Config::default();
+    let declared = config.certificate.emergency;
+    let full = declared.braking;
     let table_format::FollowerModel::Idm { idm, .. } = model.follower;
     let jam = idm.jam_distance;
     let clip = -model.follower_clip().0;
@@ -291,14 +291,14 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     // Before the ego's braking shows: the rear track's age, a period, and until the actuator
     // lights the brakes (`table_format::rear::lights_on_within`: from steady following, its
     // acceleration and commands at zero, braking along the emergency ramp).
-    let lights = table_format::rear::lights_on_within(
+    let lights = declared.lights_on_within(
         config.plant.actuator_dead_time_us as f32 * 1e-6,
         config.plant.actuator_lag_us as f32 * 1e-6,
         0.0,
         0.0,
         0.0,
-        EMERGENCY.jerk,
-        EMERGENCY.level,
+        full.jerk,
+        full.level,
     );
     let delay = (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6 + lights;
     let allows = |f: &ReactingFollower, time_gap: f32, v: f32| {
@@ -326,7 +326,7 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
         }
     };
     println!();
-    println!("Two braking authorities: comfort (the band, {:.1} m/s^2 at {:.1} m/s^3) and emergency ({:.1} m/s^2 at {:.1} m/s^3) as far as the follower allows; the certified steady gap and the gap policy at the settings {} s [m] (-: no braking certified):", comfort_braking.level, comfort_braking.jerk, EMERGENCY.level, EMERGENCY.jerk, settings.iter().map(|t| format!("{t}")).collect::<Vec<_>>().join(" / "));
+    println!("Two braking authorities: comfort (the band, {:.1} m/s^2 at {:.1} m/s^3) and emergency ({:.1} m/s^2 at {:.1} m/s^3) as far as the follower allows; the certified steady gap and the gap policy at the settings {} s [m] (-: no braking certified):", comfort_braking.level, comfort_braking.jerk, full.level, full.jerk, settings.iter().map(|t| format!("{t}")).collect::<Vec<_>>().join(" / "));
     println!("| leader [m/s^2] | speed [m/s] | follower | behind [s] | allowed braking [m/s^2] | certified steady gap [m] | gap policy [m] |");
     println!("|---|---|---|---|---|---|---|");
     let mut rows = Vec::new();
@@ -375,11 +375,10 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
                 None,
                 Some(comfort_braking),
             );
-            report("none", None, Some(EMERGENCY));
+            report("none", None, Some(full));
             for (name, f) in &followers {
                 for &t in &follower_gaps {
-                    let braking =
-                        allows(f, t, v).map(|level| firmware::Braking { level, ..EMERGENCY });
+                    let braking = allows(f, t, v).map(|level| firmware::Braking { level, ..full });
                     report(name, Some(t), braking);
                 }
             }
@@ -395,7 +394,7 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
         v,
         &idm_follower,
         config.certificate.rear_margin,
-        EMERGENCY.level,
+        full.level,
     );
     let declared_rear = allows(&idm_follower, 1.0, v);
     let mut faster = config;
@@ -407,7 +406,7 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     let small_room = firmware::Controller::new(bytes, small_room);
     let at = |c: &firmware::Controller<'_>, b: Option<f32>| {
         b.map_or(f32::INFINITY, |level| {
-            c.steady_gap_with(v, 9.8, firmware::Braking { level, ..EMERGENCY })
+            c.steady_gap_with(v, 9.8, firmware::Braking { level, ..full })
         })
     };
     let levers = [
@@ -441,7 +440,7 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
             cell(g)
         );
     }
-    let alone = at(&comfort, Some(EMERGENCY.level));
+    let alone = at(&comfort, Some(full.level));
     println!(
         "With no follower: certified {}; the gap policy at 1.0 s {} with the room 0.3 s v + 1 m, {} with 0.1 s v + 1 m.",
         cell(alone),
@@ -465,9 +464,10 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
         let columns = [None, Some(0.6f32), Some(1.0), Some(2.0)];
         for behind in columns {
             let braking_at = |v: f32| match behind {
-                None => Some(EMERGENCY),
-                Some(t) => allows(&idm_reacting, t, v)
-                    .map(|level| firmware::Braking { level, ..EMERGENCY }),
+                None => Some(full),
+                Some(t) => {
+                    allows(&idm_reacting, t, v).map(|level| firmware::Braking { level, ..full })
+                }
             };
             let certified: Vec<(f32, f32)> = speeds
                 .iter()

@@ -406,9 +406,10 @@ pub struct World<'t> {
     grade: f32,
     /// The emergency run under way and its cause (`None`: the last period was not one).
     emergency_run: Option<EmergencyCause>,
-    /// Since when the ego's brake lights are on: its actual acceleration below zero, as the
-    /// certificate's assumptions declare them (docs/certificate.md; the reacting follower
-    /// sees them so too) (`None`: off).
+    /// Since when the ego's brake lights are on: its actual acceleration below the declared
+    /// lights' deceleration's negative, as the certificate's assumptions declare them
+    /// (docs/certificate.md; the reacting follower sees them so too: lights that a vehicle
+    /// may show earlier are not credited) (`None`: off).
     lights_on_since_us: Option<u64>,
     /// The braking the firmware argued with after the last step, and when it last changed
     /// (us; `None`: not since the start).
@@ -583,8 +584,18 @@ impl<'t> World<'t> {
         self.cars
     }
 
-    /// Since when the ego's brake lights are on (its actual acceleration below zero), s;
-    /// `None`: off.
+    /// The deceleration beyond which the ego's brake lights are on (the configuration's
+    /// declaration, which the table's matches), m/s^2.
+    fn lights_deceleration(&self) -> f32 {
+        self.controller
+            .config()
+            .certificate
+            .emergency
+            .lights_deceleration
+    }
+
+    /// Since when the ego's brake lights are on (its actual acceleration below the declared
+    /// lights' deceleration's negative), s; `None`: off.
     pub fn lights_on_since(&self) -> Option<f32> {
         self.lights_on_since_us.map(|t| t as f32 * 1e-6)
     }
@@ -642,11 +653,12 @@ impl<'t> World<'t> {
     }
 
     /// From when the ego's brake lights are on for good (its actuator's acceleration below
-    /// zero from then on), us, if the firmware keeps to the braking it is committed to
+    /// `-theta`, the declared lights' deceleration, from then on), us, if the firmware keeps to the braking it is committed to
     /// ([`firmware::Controller::committed_braking`]): this period's command, the committed
     /// ramp's next, then at most that ramp. Exact until the next period's command has been in
     /// force for a period (the commands in the dead time take force when they do, and the
-    /// acceleration is monotone between two of those times, so its sign at their ends tells),
+    /// acceleration is monotone between two of those times, so its side of `-theta` at their
+    /// ends tells),
     /// then [`table_format::rear::lights_on_within`] from the acceleration reached along the
     /// ramp. Where the lights are on and stay on: since when they came on. Called as
     /// [`World::certificate`] is.
@@ -659,8 +671,10 @@ impl<'t> World<'t> {
         actuator.request(now_us, last);
         actuator.request(now_us + h, next);
         let mut t = now_us;
-        // The last time up to `exact_until` at which the acceleration may be at or above zero.
-        let mut lit_after = (actuator.acceleration() >= 0.0).then_some(now_us);
+        let theta = self.lights_deceleration();
+        // The last time up to `exact_until` at which the acceleration may be at or above
+        // `-theta`.
+        let mut lit_after = (actuator.acceleration() >= -theta).then_some(now_us);
         while t < exact_until {
             // The commands due now take force first (no time passes).
             actuator.advance(t, 0);
@@ -670,7 +684,7 @@ impl<'t> World<'t> {
                 .unwrap_or(exact_until);
             let before = actuator.acceleration();
             actuator.advance(t, until - t);
-            if before >= 0.0 || actuator.acceleration() >= 0.0 {
+            if before >= -theta || actuator.acceleration() >= -theta {
                 lit_after = Some(until);
             }
             t = until;
@@ -686,6 +700,7 @@ impl<'t> World<'t> {
             next,
             braking.jerk,
             braking.level,
+            theta,
         );
         if within > 0.0 {
             return Some(exact_until + seconds_to_us(within).max(1));
@@ -740,8 +755,8 @@ impl<'t> World<'t> {
             .measure(now_us, self.cars, actuator_state, &mut self.rng);
         let mut command = self.controller.step(&inputs);
         // The lights as they are (the actuator's own acceleration, not the firmware's account).
-        self.lights_on_since_us =
-            (self.actuator.acceleration() < 0.0).then(|| self.lights_on_since_us.unwrap_or(now_us));
+        self.lights_on_since_us = (self.actuator.acceleration() < -self.lights_deceleration())
+            .then(|| self.lights_on_since_us.unwrap_or(now_us));
         let in_force = self
             .controller
             .committed_braking(now_us)

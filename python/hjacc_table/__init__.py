@@ -1,4 +1,4 @@
-"""Reads hjacc safety tables (``table.bin``, format version 6) in Python.
+"""Reads hjacc safety tables (``table.bin``, format version 7) in Python.
 
 The format is specified byte by byte in ``table-format/README.md``; this reader follows it
 and answers exactly as the Rust reader (``table_format::Table``) does, to the last bit:
@@ -22,7 +22,7 @@ import zlib
 __all__ = ["Table", "TableError", "MAGIC", "FORMAT_VERSION"]
 
 MAGIC = b"HJTB"
-FORMAT_VERSION = 6
+FORMAT_VERSION = 7
 _PREAMBLE = 8
 _CRC = 4
 
@@ -138,10 +138,11 @@ def _game(c):
             "time_gap": c.bounds(),
         }
         game["max_speed"] = c.f32()
-        # The emergency declaration (format version 6).
+        # The emergency declaration (format version 6; the lights' deceleration since 7).
         game["emergency"] = {
             "braking": {"level": c.f32(), "jerk": c.f32()},
             "follower_reaction_time": c.f32(),
+            "lights_deceleration": c.f32(),
             "lights_command": c.f32(),
         }
         return game

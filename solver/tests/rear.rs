@@ -157,27 +157,32 @@ fn bad_rear_configs_name_the_key() {
         ("max_iterations = 20000", "max_iterations = 20000\ncheck_every = 0", "solve.check_every"),
         ("max_speed = 10.0", "max_speed = 10.0\n[game.idm]\nmax_acceleration = 1.0\ncomfortable_deceleration = 1.5\ndesired_speed = 33.3\nexponent = 4\njam_distance = 0.0", "game.idm.jam_distance"),
     ];
-    let emergency = |level: &str, jerk: &str, reaction: &str, lights: &str| {
+    let emergency = |level: &str, jerk: &str, reaction: &str, theta: &str, lights: &str| {
         format!(
             "max_speed = 10.0\n[game.emergency]\nlevel = {level}\njerk = {jerk}\n\
-             follower_reaction_time = {reaction}\nlights_command = {lights}"
+             follower_reaction_time = {reaction}\nlights_deceleration = {theta}\n\
+             lights_command = {lights}"
         )
     };
     let declarations = [
         (
-            emergency("0.0", "12.0", "1.15", "-0.5"),
+            emergency("0.0", "12.0", "1.15", "1.3", "-1.5"),
             "game.emergency.level",
         ),
         (
-            emergency("8.0", "0.0", "1.15", "-0.5"),
+            emergency("8.0", "0.0", "1.15", "1.3", "-1.5"),
             "game.emergency.jerk",
         ),
         (
-            emergency("8.0", "12.0", "5.5", "-0.5"),
+            emergency("8.0", "12.0", "5.5", "1.3", "-1.5"),
             "game.emergency.follower_reaction_time",
         ),
         (
-            emergency("8.0", "12.0", "1.15", "0.0"),
+            emergency("8.0", "12.0", "1.15", "-0.1", "-1.5"),
+            "game.emergency.lights_deceleration",
+        ),
+        (
+            emergency("8.0", "12.0", "1.15", "1.3", "-1.3"),
             "game.emergency.lights_command",
         ),
         (
@@ -211,12 +216,13 @@ fn a_rear_config_declares_the_vehicles_emergency_in_the_header() {
     let wet = SMALL.replacen(
         "max_speed = 10.0",
         "max_speed = 10.0\n[game.emergency]\nlevel = 5.0\njerk = inf\n\
-         follower_reaction_time = 1.5\nlights_command = -1.5",
+         follower_reaction_time = 1.5\nlights_deceleration = 0.7\nlights_command = -1.0",
         1,
     );
     let wet = declared(&RearConfig::from_toml(&wet).unwrap());
     assert_eq!(wet.braking.level, 5.0);
     assert_eq!(wet.braking.jerk, f32::INFINITY);
     assert_eq!(wet.follower_reaction_time, 1.5);
-    assert_eq!(wet.lights_command, -1.5);
+    assert_eq!(wet.lights_deceleration, 0.7);
+    assert_eq!(wet.lights_command, -1.0);
 }

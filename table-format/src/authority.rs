@@ -15,9 +15,10 @@
 //! - The follower is a [`ReactingFollower`]: while the ego's brake lights are off, and for
 //!   `reaction_time` after they come on, its acceleration is at most `reaction_acceleration`;
 //!   from then on, while the lights stay on, at most its build-up towards `-braking`. The
-//!   lights are on while the ego's acceleration is below zero, and at standstill after a
-//!   braking; an ego that starts a braking ramp while still accelerating lights them only
-//!   where the ramp crosses zero.
+//!   lights are on for sure while the ego's acceleration is below `-lights_deceleration` (UN
+//!   R13-H's 1.3 m/s^2 by default: [`crate::EmergencyDeclaration::lights_deceleration`]), and
+//!   at standstill after a braking; an ego that starts a braking ramp from above it lights
+//!   them only where the ramp crosses it. Below, "crosses `-theta`" is that crossing.
 //! - The ego's acceleration is what it is commanded (an ideal actuator: the caller argues a
 //!   real one, as the firmware does for the front, through a hold, and for the lights through
 //!   [`crate::rear::lights_on_within`]).
@@ -28,18 +29,18 @@
 //! are off), `C(A, clock)`, when both halves clear their margins with the ego braking from `a`
 //! along `A`'s ramp: the front value ([`front_value`]: the ramp from `a` at `A`'s jerk to `A`'s
 //! level) and the rear value ([`rear_gap_after`] at `A`'s level with the follower's reaction
-//! `clock` under way, or, with the lights still off, starting where the ramp crosses zero,
-//! `max(a, 0) / jerk` from now). The brakings are the comfort authority and the emergency
+//! `clock` under way, or, with the lights still off, starting where the ramp crosses `-theta`,
+//! `max(a + theta, 0) / jerk` from now). The brakings are the comfort authority and the emergency
 //! authority's build-up at any level from [`LEAST_LEVEL`] to its own: the front value grows
 //! with the level and the rear value falls, so the level that certifies most is the hardest
 //! the follower allows ([`TwoAuthorities::allowed_level`]). A close follower leaves a lower
 //! level, and the front then needs more room: the authority the follower leaves.
 //!
 //! A command `u` **passes the look-ahead** at a level `b` when the rear value at `b` keeps the
-//! rear above its margin (with the follower's reaction `clock` under way for a braking command,
-//! which keeps the lights on or turns them on, `b` at least `-u`; with it starting
-//! `h + u / jerk` from now for any other: the lights go off, and come on only where the ramp
-//! from `u` crosses zero), and `u` held for a period `h`, then the emergency authority's ramp
+//! rear above its margin (with the follower's reaction `clock` under way for a braking command
+//! `u < -theta`, which keeps the lights on or turns them on, `b` at least `-u`; with it
+//! starting `h + (u + theta) / jerk` from now for any other: the lights may go off, and come
+//! on for sure only where the ramp from `u` crosses `-theta`), and `u` held for a period `h`, then the emergency authority's ramp
 //! from `u` to `b`, keeps the front above its margin. The level is the hardest the follower
 //! allows so ([`TwoAuthorities::look_ahead`]), and a passed look-ahead names it: the braking
 //! the next state is certified with. [`TwoAuthorities::decide`] takes, in this order:
@@ -65,8 +66,8 @@
 //!   `u` there, is one of the behaviours it took the minimum over. The rear: the ego brakes at
 //!   most at `b` from now on (a held `u` at or above `-b` covers more distance); with the
 //!   lights on, the clock's invariance (`table_format::rear`'s module docs) carries the value a
-//!   period on; with them off, a follower that sees them only where the ramp crosses zero has
-//!   not reacted for `h + u / jerk` plus its reaction from now, and the value a period on with
+//!   period on; with them off, a follower that sees them only where the ramp crosses `-theta`
+//!   has not reacted for `h + (u + theta) / jerk` plus its reaction from now, and the value a period on with
 //!   the lights off is that same extremal seen from later, no lower. The level is fixed between
 //!   the look-ahead and the next period: what the follower allows a period on may be less
 //!   (it drew closer), but `b` is still certified there, and braking under it is what comes
@@ -147,6 +148,9 @@ pub struct TwoAuthorities {
     pub emergency: Braking,
     /// The follower.
     pub follower: ReactingFollower,
+    /// The deceleration beyond which the ego's brake lights are on for sure, m/s^2 (at least
+    /// zero; `theta` in the module docs).
+    pub lights_deceleration: f32,
     /// The front value a certified state keeps, m.
     pub front_margin: f32,
     /// The rear value a certified state keeps, m.
@@ -180,6 +184,23 @@ pub enum Decision {
 }
 
 impl TwoAuthorities {
+    /// How long a braking ramp at `jerk` from the acceleration `a` takes to light the brakes
+    /// for sure (s): where it crosses `-lights_deceleration`, zero if it is below already.
+    fn dark(&self, a: f32, jerk: f32) -> f32 {
+        let above = a + self.lights_deceleration;
+        if above > 0.0 {
+            above / jerk
+        } else {
+            0.0
+        }
+    }
+
+    /// Whether a command keeps the brake lights on for sure (or turns them on): one below
+    /// `-lights_deceleration`.
+    fn lights(&self, u: f32) -> bool {
+        u < -self.lights_deceleration
+    }
+
     /// The emergency authority's build-up at `level`.
     fn at_level(&self, level: f32) -> Braking {
         Braking {
@@ -225,7 +246,8 @@ impl TwoAuthorities {
         )
     }
 
-    /// The hardest level in `[least, emergency.level]` at which the rear value (the lights on
+    /// The hardest level in `[least, emergency.level]` (`least` at least a resolution above
+    /// the lights' deceleration, which a gentler braking need not cross) at which the rear value (the lights on
     /// for `clock` seconds, the follower's reaction taken `dark` longer) clears the rear
     /// margin, m/s^2, to within [`LEVEL_RESOLUTION`]: the braking the follower allows
     /// ([`crate::rear::hardest_clearing`]). The emergency level if it clears; `None` where not
@@ -233,17 +255,20 @@ impl TwoAuthorities {
     pub fn allowed_level(&self, s: &State, clock: f32, dark: f32, least: f32) -> Option<f32> {
         let margin = self.rear_margin;
         let slack = |level: f32| self.rear(s, level, clock, dark) - margin;
+        // A braking no harder than the lights' deceleration need not light the brakes, and
+        // the rear value counts the follower's reaction from the lights.
+        let least = least.max(self.lights_deceleration + LEVEL_RESOLUTION);
         hardest_clearing(slack, least, self.emergency.level, LEVEL_RESOLUTION)
     }
 
     /// The certificate's two halves (m, each less its margin) for braking along `braking`'s
     /// ramp from the ego's acceleration, the lights on for `clock` seconds (module docs). An
-    /// ego still accelerating lights its brakes only where its ramp crosses zero, `a / jerk`
-    /// from now: the follower's reaction starts there.
+    /// ego above `-lights_deceleration` lights its brakes for sure only where its ramp crosses
+    /// it, `(a + lights_deceleration) / jerk` from now: the follower's reaction starts there.
     pub fn margins(&self, s: &State, braking: Braking, clock: f32) -> (f32, f32) {
         let a = s.ego_acceleration;
         let front = self.front(s, braking, 0.0, a, a);
-        let dark = if a > 0.0 { a / braking.jerk } else { 0.0 };
+        let dark = self.dark(a, braking.jerk);
         let rear = self.rear(s, braking.level, clock, dark);
         (front - self.front_margin, rear - self.rear_margin)
     }
@@ -263,11 +288,7 @@ impl TwoAuthorities {
             return Some(self.comfort);
         }
         let a = s.ego_acceleration;
-        let dark = if a > 0.0 {
-            a / self.emergency.jerk
-        } else {
-            0.0
-        };
+        let dark = self.dark(a, self.emergency.jerk);
         let level = self.allowed_level(s, clock, dark, LEAST_LEVEL.max(-a))?;
         let braking = self.at_level(level);
         self.certifies(s, braking, clock).then_some(braking)
@@ -276,13 +297,14 @@ impl TwoAuthorities {
     /// The look-ahead of the command `u` held for `h` seconds (module docs), the lights on for
     /// `lights` seconds (zero: off): its margin (m, the front value less its margin, at the
     /// hardest level the follower allows with the rear margin kept) and the braking it
-    /// certifies the next state with. A braking command keeps the lights on (or turns them
-    /// on), so the follower's reaction goes on, and the level is at least the command's;
-    /// otherwise they come on at the latest where the ramp from `u` crosses zero after the
-    /// hold. `-inf` for a command below the emergency level, where the follower allows no
+    /// certifies the next state with. A braking command below `-lights_deceleration` keeps the
+    /// lights on (or turns them on), so the follower's reaction goes on, and the level is at
+    /// least the command's; otherwise they come on for sure at the latest where the ramp from
+    /// `u` crosses `-lights_deceleration` after the hold. `-inf` for a command below the emergency level, where the follower allows no
     /// level, or NaN (outside the model).
     pub fn look_ahead(&self, s: &State, u: f32, h: f32, lights: f32) -> (f32, Braking) {
-        let braking_level = (u < 0.0)
+        let braking_level = self
+            .lights(u)
             .then(|| self.allowed_level(s, lights, 0.0, LEAST_LEVEL))
             .flatten();
         self.look_ahead_with(s, u, h, braking_level)
@@ -306,10 +328,10 @@ impl TwoAuthorities {
         if !in_model {
             return refused;
         }
-        let allowed = if u < 0.0 {
+        let allowed = if self.lights(u) {
             braking_level.filter(|level| *level >= -u)
         } else {
-            self.allowed_level(s, 0.0, h + u / e.jerk, LEAST_LEVEL)
+            self.allowed_level(s, 0.0, h + self.dark(u, e.jerk), LEAST_LEVEL)
         };
         let Some(level) = allowed else {
             return refused;
@@ -342,7 +364,8 @@ impl TwoAuthorities {
         // braking looked at.
         let braking_level = OnceCell::new();
         let look = |u: f32| {
-            let level = (u < 0.0)
+            let level = self
+                .lights(u)
                 .then(|| {
                     *braking_level.get_or_init(|| self.allowed_level(s, lights, 0.0, LEAST_LEVEL))
                 })
@@ -415,6 +438,7 @@ mod tests {
                 jerk,
                 max_speed: 35.0,
             },
+            lights_deceleration: crate::R13H_LIGHTS_DECELERATION,
             front_margin: 0.5,
             rear_margin: 0.5,
         }
@@ -541,7 +565,8 @@ mod tests {
                     }
                 };
                 let stopped = s.ego_speed <= 0.0;
-                let lights = ae < 0.0 || (stopped && ae <= 0.0 && braking.is_some());
+                let lights =
+                    ae < -m.lights_deceleration || (stopped && ae <= 0.0 && braking.is_some());
                 lights_for = if lights {
                     Some(lights_for.unwrap_or(0.0) + dt)
                 } else {
@@ -757,7 +782,8 @@ mod tests {
     }
 
     /// The least rear gap by brute force (f64, 0.1 ms steps) for an ego ramping from its
-    /// acceleration along `braking`, its lights on once its acceleration is below zero, and a
+    /// acceleration along `braking`, its lights on once its acceleration is below
+    /// `-lights_deceleration`, and a
     /// follower at its model's bound: `reaction_acceleration` until `reaction_time` after the
     /// lights, then its braking.
     fn rear_by_integration(m: &TwoAuthorities, s: &State, braking: Braking) -> f64 {
@@ -772,7 +798,7 @@ mod tests {
         let mut least = g;
         while t < 60.0 {
             a = (a - f64::from(braking.jerk) * dt).max(-f64::from(braking.level));
-            if a < 0.0 && lights.is_none() {
+            if a < -f64::from(m.lights_deceleration) && lights.is_none() {
                 lights = Some(t);
             }
             let af = match lights {
@@ -877,12 +903,12 @@ mod tests {
             holds(&m, s, in_force.unwrap(), [&leader, &follower, &law], (brake_on_switch, flicker))?;
         }
 
-        /// An ego still accelerating lights its brakes only where its ramp crosses zero: the
-        /// rear half is a lower bound of the brute-force rear gap with the follower's reaction
-        /// starting there.
+        /// An ego above the lights' deceleration lights its brakes only where its ramp crosses
+        /// it: the rear half is a lower bound of the brute-force rear gap with the follower's
+        /// reaction starting there.
         #[test]
         fn the_rear_waits_for_the_lights_of_a_ramp_from_an_acceleration(
-            gap in 0.0f32..80.0, ve in 0.0f32..35.0, vf in 0.0f32..35.0, a in 0.0f32..2.0,
+            gap in 0.0f32..80.0, ve in 0.0f32..35.0, vf in 0.0f32..35.0, a in -2.5f32..2.0,
             emergency in proptest::bool::ANY,
         ) {
             let m = with_follower(6.0, 1.15, 0.0, false);

@@ -249,27 +249,44 @@ pub struct EmergencyDeclaration {
     /// How long the follower keeps its acceleration after the ego's brake lights come on, s
     /// ([`crate::rear::CAREFUL_DRIVER_REACTION`] by default).
     pub follower_reaction_time: f32,
-    /// The command (m/s^2, negative) at or below which the brake lights are on once the
-    /// actuator delivers it: the follower's reaction is counted only from a run of such
-    /// commands ([`crate::rear::lights_on_within`]).
+    /// The deceleration beyond which the brake lights are on for sure, m/s^2 (at least zero;
+    /// since format version 7): they are on while the ego's actual acceleration is below its
+    /// negative ([`crate::rear::lights_on_within`]), and the follower's reaction counts from
+    /// there. Default [`R13H_LIGHTS_DECELERATION`].
+    pub lights_deceleration: f32,
+    /// The command (m/s^2, below `-lights_deceleration`) at or below which the brake lights
+    /// are on once the actuator delivers it: the follower's reaction is counted only from a
+    /// run of such commands ([`crate::rear::lights_on_within`]).
     pub lights_command: f32,
 }
+
+/// The deceleration above which UN Regulation No. 13-H requires the braking signal where the
+/// service brake's pedal is not what brakes, m/s^2: its paragraph 5.2.22.4 lets such braking
+/// (regenerative braking; the thresholds were clarified for automatically commanded braking
+/// by the 2022 supplement from GRVA/2022/10) stay dark up to 0.7 m/s^2, light the lamps or not
+/// from 0.7 to 1.3 m/s^2, and requires them above 1.3 m/s^2. A car's ACC or AEB braking may
+/// be such braking, so the lights are on for sure only beyond it.
+pub const R13H_LIGHTS_DECELERATION: f32 = 1.3;
 
 impl EmergencyDeclaration {
     /// The defaults: a dry road's full braking
     /// ([`DRY_ROAD_EMERGENCY`](crate::authority::DRY_ROAD_EMERGENCY)), UN R157's careful
-    /// driver behind ([`CAREFUL_DRIVER_REACTION`](crate::rear::CAREFUL_DRIVER_REACTION)), and
-    /// the lights counted from commands at or below -0.5 m/s^2.
+    /// driver behind ([`CAREFUL_DRIVER_REACTION`](crate::rear::CAREFUL_DRIVER_REACTION)), the
+    /// lights on for sure beyond UN R13-H's 1.3 m/s^2 ([`R13H_LIGHTS_DECELERATION`]), and
+    /// counted from commands at or below -1.5 m/s^2 (through the declared 0.3 s lag a step to
+    /// it reaches -1.3 in `0.3 ln(1.5 / 0.2)` = 0.6 s).
     pub const DEFAULT: EmergencyDeclaration = EmergencyDeclaration {
         braking: crate::authority::DRY_ROAD_EMERGENCY,
         follower_reaction_time: crate::rear::CAREFUL_DRIVER_REACTION,
-        lights_command: -0.5,
+        lights_deceleration: R13H_LIGHTS_DECELERATION,
+        lights_command: -1.5,
     };
 
     /// Whether the numbers are a declaration at all: a finite positive braking level, a
     /// positive build-up (`f32::INFINITY`: at once), a finite reaction of 0 to
-    /// [`MAX_REACTION_TIME`] s, and a finite negative lights' command. (The firmware checks
-    /// the rest against its vehicle: the envelope, the band, ISO 15622.)
+    /// [`MAX_REACTION_TIME`] s, a finite lights' deceleration of at least zero, and a finite
+    /// lights' command below its negative. (The firmware checks the rest against its vehicle:
+    /// the envelope, the band, ISO 15622.)
     pub fn is_valid(&self) -> bool {
         let b = &self.braking;
         b.level.is_finite()
@@ -277,8 +294,36 @@ impl EmergencyDeclaration {
             && b.jerk > 0.0
             && self.follower_reaction_time.is_finite()
             && (0.0..=MAX_REACTION_TIME).contains(&self.follower_reaction_time)
+            && self.lights_deceleration.is_finite()
+            && self.lights_deceleration >= 0.0
             && self.lights_command.is_finite()
-            && self.lights_command < 0.0
+            && self.lights_command < -self.lights_deceleration
+    }
+
+    /// [`crate::rear::lights_on_within`] for these lights: until the actual acceleration is
+    /// below `-lights_deceleration` for good, the commands from now on at most the ramp from
+    /// `ramp_from` at `jerk` down to `-level`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn lights_on_within(
+        &self,
+        dead_time: f32,
+        lag: f32,
+        acceleration: f32,
+        pipeline: f32,
+        ramp_from: f32,
+        jerk: f32,
+        level: f32,
+    ) -> f32 {
+        crate::rear::lights_on_within(
+            dead_time,
+            lag,
+            acceleration,
+            pipeline,
+            ramp_from,
+            jerk,
+            level,
+            self.lights_deceleration,
+        )
     }
 }
 

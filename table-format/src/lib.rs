@@ -61,7 +61,7 @@ pub use error::Error;
 pub use header::{
     Axis, Bounds, EmergencyDeclaration, ErrorBound, FollowerModel, FollowerSpeed, Game, GameKind,
     Header, Horizon, HorizonStatus, IdmParameters, PolicyEncoding, Quantization, Spacing,
-    Verification, MAX_DIMS, MAX_REACTION_TIME,
+    Verification, MAX_DIMS, MAX_REACTION_TIME, R13H_LIGHTS_DECELERATION,
 };
 pub use sensing::{MeasurementError, SensorBounds};
 pub use table::{EgoAction, Lookup, Table, BOX_INTERIOR};
@@ -87,7 +87,7 @@ pub const MAGIC: [u8; 4] = *b"HJTB";
 
 /// The layout version this crate reads and writes. Bumped on any change a reader of the previous
 /// version would misread.
-pub const FORMAT_VERSION: u16 = 6;
+pub const FORMAT_VERSION: u16 = 7;
 
 /// Bytes before the header: magic (4), format version (2), header length (2).
 pub const PREAMBLE_LEN: usize = 8;

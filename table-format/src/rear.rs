@@ -52,9 +52,11 @@
 //! certifies at the braking it will need next: an authority is kept until a lower one
 //! certifies.
 //!
-//! **When the lights come on.** The follower reacts to the lights, which are on while the
-//! ego's actual acceleration is below zero; through a dead time and a lag that is later than
-//! the command. [`lights_on_within`] bounds it from what the controller knows (the actuator's
+//! **When the lights come on.** The follower reacts to the lights, which are on for sure
+//! while the ego's actual acceleration is below `-threshold` (the declared lights' deceleration,
+//! [`crate::EmergencyDeclaration::lights_deceleration`]: UN R13-H requires the signal only
+//! above 1.3 m/s^2 of deceleration where the service brake's pedal is not used); through a dead
+//! time and a lag that is later than the command. [`lights_on_within`] bounds it from what the controller knows (the actuator's
 //! acceleration, the commands in its dead time, the braking ramp from now), in closed form
 //! along the lag's response to a ramp, checked against a brute-force actuator; the follower's
 //! reaction is then taken that much longer. The property test `a_release_restarts_the_clock` checks that the restarted
@@ -155,17 +157,22 @@ pub fn rear_gap_after(
     front_value(gap, ego_speed, follower_speed, &car_behind)
 }
 
-/// How long until an ego's brake lights are on for good, at most (s): they are on while its
-/// actual acceleration is below zero, and the follower's reaction starts there (module docs).
+/// How long until an ego's brake lights are on for good, at most (s): they are on for sure
+/// while its actual acceleration is below `-threshold` (m/s^2, at least zero: the declared
+/// lights' deceleration), and the follower's reaction starts there (module docs).
 ///
 /// The actuator is a dead time `dead_time` (s) then a first-order lag `lag` (s, zero: none).
 /// Its acceleration now is at most `acceleration`, the commands already in its dead time are
 /// at most `pipeline`, and the commands from now on at most the braking ramp
 /// `max(ramp_from - jerk t, -level)` (`jerk` positive, `f32::INFINITY`: at once; `level`
 /// positive). Every profile below these bounds lights the brakes no later (the lag is monotone
-/// in its input and its start), so the bound is the last zero of the actual acceleration `A`
-/// with every bound taken with equality. Derivation, `s` seconds after the dead time, `tau` the
-/// lag, `r = ramp_from`, `j = jerk`:
+/// in its input and its start), so the bound is the last time the actual acceleration `A`
+/// is at `-threshold`, with every bound taken with equality. The lag and the ramp are linear
+/// and the dead time a shift, so `A + threshold` is the same actuator's answer to the bounds
+/// each raised by `threshold` (the level lowered by it): the bound is that profile's last
+/// zero, and none where the level is no harder than the threshold (`+inf`: the commands
+/// need not light the brakes). Derivation of the last zero, `s` seconds after the dead time,
+/// `tau` the lag, `r = ramp_from`, `j = jerk`, every acceleration so raised:
 /// - in the dead time, `A` moves from `acceleration` towards `pipeline`:
 ///   `A(t) = P + (A_0 - P) e^(-t/tau)`, monotone;
 /// - along the ramp (`s < s_b = (r + level) / j`), the lag of a linear input trails it by
@@ -176,8 +183,9 @@ pub fn rear_gap_after(
 ///
 /// So the last zero is in the last phase where `A` reaches zero: in closed form at the level,
 /// by bisection (40 halvings) on the falling side of the ramp's phase, in closed form in the
-/// dead time. `A` is below zero from the returned time on; zero when it already is and stays so.
-/// NaN in any argument gives `+inf` (no credit).
+/// dead time. `A` is below `-threshold` from the returned time on; zero when it already is and
+/// stays so. NaN in any argument, or a negative threshold, gives `+inf` (no credit).
+#[allow(clippy::too_many_arguments)]
 pub fn lights_on_within(
     dead_time: f32,
     lag: f32,
@@ -186,7 +194,17 @@ pub fn lights_on_within(
     ramp_from: f32,
     jerk: f32,
     level: f32,
+    threshold: f32,
 ) -> f32 {
+    if threshold.is_nan() || threshold < 0.0 {
+        return f32::INFINITY;
+    }
+    let (acceleration, pipeline, ramp_from, level) = (
+        acceleration + threshold,
+        pipeline + threshold,
+        ramp_from + threshold,
+        level - threshold,
+    );
     let finite = [dead_time, lag, acceleration, pipeline, ramp_from, level]
         .iter()
         .all(|x| x.is_finite());
@@ -786,12 +804,15 @@ mod tests {
             p in -6.0f32..3.0,
             r in -8.0f32..3.0, j in 1.0f32..30.0, at_once in proptest::bool::ANY,
             level in 2.0f32..9.0,
+            threshold in prop_oneof![Just(0.0f32), 0.0f32..1.8],
             below in proptest::collection::vec(0.0f64..1.0, 100),
         ) {
             let a0 = a0.max(-level);
             let p = p.max(-level);
             let jerk = if at_once { f32::INFINITY } else { j };
-            let bound = lights_on_within(d, tau, a0, p, r, jerk, level);
+            let bound = lights_on_within(d, tau, a0, p, r, jerk, level, threshold);
+            // Compared with `-threshold` below: `A + threshold` against zero.
+            let th = f64::from(threshold);
             prop_assert!(bound.is_finite() && bound >= 0.0, "{}", bound);
             let ramp = |s: f64| {
                 let c = if at_once { -f64::from(level) } else { f64::from(r) - f64::from(j) * s };
@@ -811,7 +832,7 @@ mod tests {
             let t_bound = f64::from(bound);
             for &(t, a) in &exact {
                 if t >= t_bound + 2e-4 {
-                    prop_assert!(a < 1e-5, "A({}) = {} after the bound {}", t, a, bound);
+                    prop_assert!(a + th < 1e-5, "A({}) = {} after the bound {}", t, a, bound);
                 }
             }
             // Tight: within the 2 ms up to the bound, `A` reaches zero (less the sampling's
@@ -821,7 +842,7 @@ mod tests {
                 let near = exact
                     .iter()
                     .filter(|x| x.0 >= t_bound - 2e-3 && x.0 <= t_bound + 2e-4)
-                    .map(|x| x.1)
+                    .map(|x| x.1 + th)
                     .fold(f64::NEG_INFINITY, f64::max);
                 prop_assert!(near > -0.05, "A before the bound {} is at most {}", bound, near);
             }
@@ -844,7 +865,13 @@ mod tests {
             );
             for &(t, a) in &lower {
                 if t >= t_bound + 2e-4 {
-                    prop_assert!(a < 1e-5, "A({}) = {} after the bound {} (below)", t, a, bound);
+                    prop_assert!(
+                        a + th < 1e-5,
+                        "A({}) = {} after the bound {} (below)",
+                        t,
+                        a,
+                        bound
+                    );
                 }
             }
         }
@@ -855,8 +882,36 @@ mod tests {
     /// bound is that instant.
     #[test]
     fn a_ramp_from_zero_after_a_braking_dead_time_touches_zero_at_its_start() {
-        let bound = lights_on_within(0.068_203_33, 0.0, 0.0, -5.287_426_5, 0.0, 1.0, 2.0);
+        let bound = lights_on_within(0.068_203_33, 0.0, 0.0, -5.287_426_5, 0.0, 1.0, 2.0, 0.0);
         assert!((bound - 0.068_203_33).abs() < 1e-6, "{bound}");
+    }
+
+    /// Lights that need a deceleration beyond the commands' level never come on for sure, and
+    /// a threshold that is not one gives no credit; at the threshold's level less a little,
+    /// the time is the lag's to cover all but that little: `tau ln(level / (level - threshold))`.
+    #[test]
+    fn the_lights_threshold_shifts_the_crossing() {
+        assert_eq!(
+            lights_on_within(0.1, 0.3, 0.0, 0.0, 0.0, 12.0, 1.3, 1.3),
+            f32::INFINITY
+        );
+        assert_eq!(
+            lights_on_within(0.1, 0.3, 0.0, 0.0, 0.0, 12.0, 1.0, 1.3),
+            f32::INFINITY
+        );
+        assert_eq!(
+            lights_on_within(0.1, 0.3, 0.0, 0.0, 0.0, 12.0, 8.0, -0.1),
+            f32::INFINITY
+        );
+        assert_eq!(
+            lights_on_within(0.1, 0.3, 0.0, 0.0, 0.0, 12.0, 8.0, f32::NAN),
+            f32::INFINITY
+        );
+        // A step to -1.5 from rest, no dead time: `0.3 ln(1.5 / 0.2)` = 0.6045 s to -1.3,
+        // against an instant to zero.
+        let at = lights_on_within(0.0, 0.3, 0.0, 0.0, -1.5, f32::INFINITY, 1.5, 1.3);
+        assert!((at - 0.3 * (1.5f32 / 0.2).ln()).abs() < 1e-4, "{at}");
+        assert!(lights_on_within(0.0, 0.3, 0.0, 0.0, -1.5, f32::INFINITY, 1.5, 0.0) < 1e-6);
     }
 
     /// A follower at the IDM's closest time gap (1 s: 30 m + 2 m at 30 m/s), both at 30 m/s.

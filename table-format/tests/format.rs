@@ -423,11 +423,18 @@ fn specific_corruptions_name_their_cause() {
         Table::parse(&version_five).unwrap_err(),
         Error::UnsupportedVersion { found: 5 }
     );
+    // A version-6 table (no lights' deceleration in the declaration) likewise.
+    let mut version_six = bytes.clone();
+    version_six[4] = 6;
+    assert_eq!(
+        Table::parse(&version_six).unwrap_err(),
+        Error::UnsupportedVersion { found: 6 }
+    );
     let mut future = bytes.clone();
-    future[4] = 7;
+    future[4] = 8;
     assert_eq!(
         Table::parse(&future).unwrap_err(),
-        Error::UnsupportedVersion { found: 7 }
+        Error::UnsupportedVersion { found: 8 }
     );
     let mut payload_flip = bytes.clone();
     let last = payload_flip.len() - 5;
@@ -751,7 +758,8 @@ fn an_emergency_declaration_changes_the_header_only() {
             jerk: f32::INFINITY,
         },
         follower_reaction_time: 2.0,
-        lights_command: -1.5,
+        lights_deceleration: 0.7,
+        lights_command: -1.0,
     };
     let declared = table_format::with_emergency(&plain, wet).expect("re-encodes");
     let (a, b) = (
@@ -767,7 +775,7 @@ fn an_emergency_declaration_changes_the_header_only() {
         assert_eq!(a.value_at_node(n), b.value_at_node(n));
     }
     // What is not a declaration: no braking, no build-up, a reaction that is none or beyond
-    // the bound, lights that need no braking.
+    // the bound, a lights' deceleration below zero, lights commanded short of it.
     let bad = [
         EmergencyDeclaration {
             braking: Braking {
@@ -796,6 +804,18 @@ fn an_emergency_declaration_changes_the_header_only() {
         },
         EmergencyDeclaration {
             follower_reaction_time: table_format::MAX_REACTION_TIME + 0.01,
+            ..wet
+        },
+        EmergencyDeclaration {
+            lights_deceleration: -0.1,
+            ..wet
+        },
+        EmergencyDeclaration {
+            lights_deceleration: f32::NAN,
+            ..wet
+        },
+        EmergencyDeclaration {
+            lights_command: -0.7,
             ..wet
         },
         EmergencyDeclaration {

@@ -27,7 +27,7 @@ use cortex_m as _;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use table_format::authority::{Braking, Decision, State, TwoAuthorities};
-use table_format::rear::{lights_on_within, ReactingFollower};
+use table_format::rear::ReactingFollower;
 use table_format::{Game, Table};
 
 use firmware::{Config, DEFAULT_TABLE};
@@ -100,6 +100,7 @@ fn main() -> ! {
             jerk: f32::INFINITY,
             ..ReactingFollower::careful_driver(35.0)
         },
+        lights_deceleration: declared.lights_deceleration,
         front_margin: config.certificate.front_margin,
         rear_margin: config.certificate.rear_margin,
     };
@@ -122,7 +123,7 @@ fn main() -> ! {
                             let lights = if a < 0.0 { lights } else { 0.0 };
                             hjacc_step_begin();
                             let e = declared.braking;
-                            let on = lights_on_within(0.1, 0.3, a, a, a, e.jerk, e.level);
+                            let on = declared.lights_on_within(0.1, 0.3, a, a, a, e.jerk, e.level);
                             let d = model.decide(
                                 black_box(&s),
                                 in_force,

@@ -306,23 +306,25 @@ fn main() -> ! {
             ];
             // The true certificate after the step: the ramp the controller is committed to,
             // through this plant's actuator (none: the command is the acceleration), and its
-            // brake lights (on while the acceleration is below zero): on for good from when
-            // they came on where this command and the committed ramp's next are below zero,
-            // else from the period the ramp's command falls below zero.
+            // brake lights (on while the acceleration is below the declared lights'
+            // deceleration, `-theta`): on for good from when they came on where this command
+            // and the committed ramp's next are below it, else from the period the ramp's
+            // command falls below it.
             let period_us = u64::from(config.period_us);
+            let theta = config.certificate.emergency.lights_deceleration;
             let lights_on_for_good_us =
                 controller
                     .committed_braking(now_us)
                     .and_then(|(_, next, braking)| {
-                        if next < 0.0 {
-                            Some(if command.acceleration < 0.0 {
+                        if next < -theta {
+                            Some(if command.acceleration < -theta {
                                 lights_on_since_us.unwrap_or(now_us)
                             } else {
                                 now_us + period_us
                             })
                         } else {
                             // The ramp's command `k` periods on is `next - j (k - 1) h`.
-                            let periods = next / (braking.jerk * h);
+                            let periods = (next + theta) / (braking.jerk * h);
                             (periods.is_finite() && (0.0..1e6).contains(&periods))
                                 .then(|| now_us + (periods as u64 + 2) * period_us)
                         }
@@ -348,7 +350,8 @@ fn main() -> ! {
         }
         last_command = command.acceleration;
         // The lights from the next period on: this plant's acceleration is the command.
-        lights_on_since_us = (command.acceleration < 0.0)
+        lights_on_since_us = (command.acceleration
+            < -config.certificate.emergency.lights_deceleration)
             .then(|| lights_on_since_us.unwrap_or(now_us + u64::from(config.period_us)));
         if -command.acceleration > max_brake {
             max_brake = -command.acceleration;

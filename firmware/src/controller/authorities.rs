@@ -75,7 +75,7 @@ impl Controller<'_> {
         if !math::is_finite(rear.track.gap) {
             return Some(e);
         }
-        let (dark, _) = self.dark_after(model, now, command, e.jerk)?;
+        let (dark, _) = self.dark_after(model, now, command, e.jerk, -model.ego.min)?;
         let margin = self.config.certificate.rear_margin;
         let level = hardest_clearing(
             |level| self.rear_gap(model, &rear, level, 0.0, dark) - margin,
@@ -90,28 +90,37 @@ impl Controller<'_> {
     }
 
     /// How long after the kept follower measurement the brake lights are on for sure (s), for
-    /// `command` held a period from `now` and then a braking ramp at `jerk` from it (what is
-    /// pending held before it), or the lights' run under way where that is later; and when
-    /// that ramp brings them on (microseconds).
-    fn dark_after(&self, model: &Model, now: u64, command: f32, jerk: f32) -> Option<(f32, u64)> {
+    /// `command` held a period from `now` and then a braking ramp at `jerk` from it down to
+    /// `-level` (what is pending held before it), or the lights' run under way where that is
+    /// later; and when that ramp brings them on (microseconds).
+    fn dark_after(
+        &self,
+        model: &Model,
+        now: u64,
+        command: f32,
+        jerk: f32,
+        level: f32,
+    ) -> Option<(f32, u64)> {
         let rear = self.rear?;
-        let off = self.ramp_lights_on(model, now, command, jerk)?;
+        let off = self.ramp_lights_on(model, now, command, jerk, level)?;
         let on = self.lights_on_us.map_or(off, |run| run.max(off));
         Some((seconds(on.saturating_sub(rear.at_us)), off))
     }
 
     /// When the lights are on for sure (microseconds) for `command` held a period from `now`,
-    /// then a braking ramp at `jerk` from it (what is pending held before it).
+    /// then a braking ramp at `jerk` from it down to `-level` (what is pending held before
+    /// it).
     pub(super) fn ramp_lights_on(
         &self,
         model: &Model,
         now: u64,
         command: f32,
         jerk: f32,
+        level: f32,
     ) -> Option<u64> {
         let h_us = u64::from(self.config.period_us);
         let held = math::max(self.pending(now, model), command);
-        self.lights_on_after(now.saturating_add(h_us), held, command, jerk)
+        self.lights_on_after(now.saturating_add(h_us), held, command, jerk, level)
     }
 
     /// The look-ahead for a `proposal`: the braking [`Controller::look_ahead_braking`] finds
@@ -129,7 +138,7 @@ impl Controller<'_> {
     ) -> Option<Look> {
         let comfort_lights_on = |up_to: f32| {
             let jerk = self.config.certificate.brake_jerk;
-            let (dark, on) = self.dark_after(model, now, up_to, jerk)?;
+            let (dark, on) = self.dark_after(model, now, up_to, jerk, -model.ego.min)?;
             let rear = self.rear?;
             self.rear_check(model, &rear, -model.ego.min, 0.0, dark)
                 .then_some(on)
@@ -140,7 +149,7 @@ impl Controller<'_> {
                 braking,
                 up_to,
                 lights_on_us: self
-                    .ramp_lights_on(model, now, up_to, braking.jerk)
+                    .ramp_lights_on(model, now, up_to, braking.jerk, braking.level)
                     .unwrap_or(u64::MAX),
                 comfort_lights_on_us: if self.two_authorities() {
                     comfort_lights_on(up_to)
@@ -222,6 +231,7 @@ impl Controller<'_> {
             self.pending(now, model),
             self.last_command_or_unknown(model),
             braking.jerk,
+            braking.level,
         );
         self.lights_no_later_than_argued(ramp)
     }

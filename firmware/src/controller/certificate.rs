@@ -148,7 +148,7 @@ pub struct Certifier<'t> {
     front_margin: f32,
     rear_margin: f32,
     brake_jerk: f32,
-    lights_command: f32,
+    lights: table_format::EmergencyDeclaration,
 }
 
 impl<'t> Certifier<'t> {
@@ -165,7 +165,7 @@ impl<'t> Certifier<'t> {
             front_margin: config.certificate.front_margin,
             rear_margin: config.certificate.rear_margin,
             brake_jerk: config.certificate.brake_jerk,
-            lights_command: config.certificate.emergency.lights_command,
+            lights: config.certificate.emergency,
         })
     }
 
@@ -227,15 +227,11 @@ impl<'t> Certifier<'t> {
         let model = &self.model;
         let e = model.emergency?;
         let [gap_leader, leader_speed, gap_follower, follower_speed, ego_speed] = state;
-        let on = table_format::rear::lights_on_within(
-            dead_time,
-            lag,
-            0.0,
-            0.0,
-            0.0,
-            e.jerk,
-            -self.lights_command,
-        );
+        // Braking at least at the band's floor from now.
+        let beta = -model.ego.min;
+        let on = self
+            .lights
+            .lights_on_within(dead_time, lag, 0.0, 0.0, 0.0, e.jerk, beta);
         let follower = ReactingFollower {
             reaction_time: model.follower.reaction_time + on,
             ..model.follower
@@ -250,7 +246,6 @@ impl<'t> Certifier<'t> {
                 &follower,
             ) - self.rear_margin
         };
-        let beta = -model.ego.min;
         let level = table_format::rear::hardest_clearing(
             rear,
             beta,
@@ -524,8 +519,9 @@ impl<'t> Controller<'t> {
     }
 
     /// [`Controller::certificate_with_actuator`], with the brake lights as the caller knows
-    /// them: on for good from `lights_on_us` on (its actuator's acceleration below zero from
-    /// then on, under the braking the controller is committed to,
+    /// them: on for good from `lights_on_us` on (its actuator's acceleration below the
+    /// declared lights' deceleration from then on, under the braking the controller is
+    /// committed to,
     /// [`Controller::committed_braking`]: the time they came on where they are on and stay
     /// on), or (`None`) from where the braking in force, from the last command on, brings them
     /// on for sure through that actuator from what is pending
@@ -571,14 +567,14 @@ impl<'t> Controller<'t> {
                 // The actuator's acceleration and what is in its dead time are at most what is
                 // pending and the last command (the ramp's reference is the front model's).
                 let held = math::max(pending, last);
-                let within = table_format::rear::lights_on_within(
+                let within = self.config.certificate.emergency.lights_on_within(
                     seconds(dead_time_us),
                     lag,
                     held,
                     held,
                     last,
                     jerk,
-                    -self.config.certificate.emergency.lights_command,
+                    braking.level,
                 );
                 now_us
                     .saturating_add(h)

@@ -3,7 +3,7 @@
 //! band's floor at once cannot keep the leader's worst case off the car, no harder than the
 //! follower allows (the controller's module docs: emergencies).
 
-use table_format::rear::{lights_on_within, rear_gap_after, ReactingFollower};
+use table_format::rear::{rear_gap_after, ReactingFollower};
 
 use super::certificate::{profile, LeaderMemo, Model, Ramp, RearMemo, WorstCorner};
 use super::history::seconds;
@@ -27,7 +27,7 @@ pub(super) struct EmergencyMemo {
 impl Controller<'_> {
     /// The vehicle's declared lights' command ([`EmergencyDeclaration::lights_command`]): one at
     /// or below it keeps a run of braking commands going, and so the brake lights on once
-    /// [`lights_on_within`] of the run's start has passed; one above it ends the run (the
+    /// [`lights_on_within`](table_format::EmergencyDeclaration::lights_on_within) of the run's start has passed; one above it ends the run (the
     /// follower's reaction starts again at the next one).
     ///
     /// [`EmergencyDeclaration::lights_command`]: crate::EmergencyDeclaration::lights_command
@@ -51,14 +51,20 @@ impl Controller<'_> {
 
     /// From when the brake lights are on for sure if this period's command is at or below
     /// the lights' command (microseconds): the run's, if one is under way, else a run's that
-    /// starts now, from what the actuator may be doing ([`lights_on_within`], every command of
+    /// starts now, from what the actuator may be doing ([`lights_on_within`](table_format::EmergencyDeclaration::lights_on_within), every command of
     /// the run at or below the lights' command). `None` if the bound is not finite.
     pub(super) fn lights_on_from(&self, now: u64, model: &Model) -> Option<u64> {
         if let Some(on) = self.lights_on_us {
             return Some(on);
         }
         let pending = self.pending(now, model);
-        let run = self.lights_on_after(now, pending, self.lights_command(), f32::INFINITY);
+        let run = self.lights_on_after(
+            now,
+            pending,
+            self.lights_command(),
+            f32::INFINITY,
+            -self.lights_command(),
+        );
         // The on-time the certificate argued with holds too: the run's commands are under its
         // ramp (they are at or below the lights' command, where that ramp ends).
         self.lights_no_later_than_argued(run)
@@ -66,19 +72,27 @@ impl Controller<'_> {
 
     /// When the brake lights are on for sure (microseconds) if, from `now`, the actuator's
     /// acceleration and the commands in its dead time are at most `held` and every command is
-    /// at most the ramp from `from` at `jerk` down to the lights' command
-    /// ([`lights_on_within`] through the declared dead time and lag). `None` if the bound is
-    /// not finite.
-    pub(super) fn lights_on_after(&self, now: u64, held: f32, from: f32, jerk: f32) -> Option<u64> {
+    /// at most the ramp from `from` at `jerk` down to `-level` (the lights' command for a
+    /// lights' run, the braking argued with for its ramp;
+    /// [`lights_on_within`](table_format::EmergencyDeclaration::lights_on_within) through the
+    /// declared dead time and lag). `None` if the bound is not finite.
+    pub(super) fn lights_on_after(
+        &self,
+        now: u64,
+        held: f32,
+        from: f32,
+        jerk: f32,
+        level: f32,
+    ) -> Option<u64> {
         let c = &self.config;
-        let within = lights_on_within(
+        let within = c.certificate.emergency.lights_on_within(
             seconds(u64::from(c.plant.actuator_dead_time_us)),
             seconds(u64::from(c.plant.actuator_lag_us)),
             held,
             held,
             from,
             jerk,
-            -self.lights_command(),
+            level,
         );
         now.checked_add(math::micros(within)?)
     }
@@ -112,7 +126,9 @@ impl Controller<'_> {
         } else {
             (self.lights_command(), u64::from(c.period_us))
         };
-        let Some(on) = self.lights_on_after(now.saturating_add(held_for), held, from, jerk) else {
+        let level = -self.lights_command();
+        let Some(on) = self.lights_on_after(now.saturating_add(held_for), held, from, jerk, level)
+        else {
             return false;
         };
         let dark = seconds(on.saturating_sub(rear.at_us));
@@ -242,7 +258,7 @@ impl Controller<'_> {
     /// evaluations. The rear is [`rear_gap_after`] at the worst corner of the follower's
     /// measurement box at its time `t_f`: the ego braking at most at the level (or the hardest
     /// since `t_f`) from then on, the follower accelerating at most at its model's top until
-    /// its reaction time after the lights come on ([`lights_on_within`] from the run's first
+    /// its reaction time after the lights come on ([`lights_on_within`](table_format::EmergencyDeclaration::lights_on_within) from the run's first
     /// command, every later command of the run at or below the lights' command), then braking
     /// at its model's hardest.
     fn below_band(

@@ -86,7 +86,9 @@
 //! deployed table), the ego braking at most at that level (or the hardest since `t_f`). The
 //! lights are on from [`table_format::rear::lights_on_within`] after a run of commands at or
 //! below the vehicle's declared lights' command began ([`EmergencyDeclaration::lights_command`],
-//! -0.5 m/s^2 by default), while it lasts (the dead time and lag from what is pending); the
+//! -1.5 m/s^2 by default; the lights are on for sure once the acceleration is below
+//! [`EmergencyDeclaration::lights_deceleration`]'s negative, -1.3 m/s^2), while it lasts (the
+//! dead time and lag from what is pending); the
 //! reaction counts from there, so a follower close behind allows more as the braking goes on.
 //! Where it allows nothing beyond `beta` the answer is `beta`: the car ahead is not bought with
 //! the car behind. The lights go off again (a command above the lights' command at the end of
@@ -851,7 +853,7 @@ impl<'t> Controller<'t> {
             self.in_force = self.look_ahead_braking(&model, now, doing);
             self.lights_expected_us = self
                 .in_force
-                .and_then(|b| self.ramp_lights_on(&model, now, doing, b.jerk));
+                .and_then(|b| self.ramp_lights_on(&model, now, doing, b.jerk, b.level));
         }
         let braking = self.braking_in_force(&model);
         let front = self.measured_front(&model, &leader, v, t_e, now, pending, braking);

@@ -90,8 +90,10 @@ pub struct EmergencyConfig {
     pub jerk: f64,
     /// The follower's reaction to the brake lights, s.
     pub follower_reaction_time: f64,
-    /// The command at or below which the brake lights are on once delivered, m/s^2
-    /// (negative).
+    /// The deceleration beyond which the brake lights are on for sure, m/s^2 (at least 0).
+    pub lights_deceleration: f64,
+    /// The command at or below which the brake lights are on once delivered, m/s^2 (below
+    /// `-lights_deceleration`).
     pub lights_command: f64,
 }
 
@@ -102,6 +104,7 @@ impl Default for EmergencyConfig {
             level: f64::from(d.braking.level),
             jerk: f64::from(d.braking.jerk),
             follower_reaction_time: f64::from(d.follower_reaction_time),
+            lights_deceleration: f64::from(d.lights_deceleration),
             lights_command: f64::from(d.lights_command),
         }
     }
@@ -116,6 +119,7 @@ impl EmergencyConfig {
                 jerk: self.jerk as f32,
             },
             follower_reaction_time: self.follower_reaction_time as f32,
+            lights_deceleration: self.lights_deceleration as f32,
             lights_command: self.lights_command as f32,
         }
     }
@@ -138,9 +142,14 @@ impl EmergencyConfig {
             &format!("must be in [0, {MAX_REACTION_TIME}] s"),
         )?;
         check(
-            self.lights_command.is_finite() && self.lights_command < 0.0,
+            self.lights_deceleration.is_finite() && self.lights_deceleration >= 0.0,
+            "game.emergency.lights_deceleration",
+            "must be a finite deceleration >= 0 m/s^2",
+        )?;
+        check(
+            self.lights_command.is_finite() && self.lights_command < -self.lights_deceleration,
             "game.emergency.lights_command",
-            "must be a finite command < 0 m/s^2",
+            "must be a finite command below -lights_deceleration",
         )
     }
 }
