@@ -272,8 +272,8 @@ fn certified_starts_stay_certified_with_two_authorities() {
     assert_eq!(total, 320);
 }
 
-/// The two certificate losses of the 1,700-episode campaign (`host-tests campaign
-/// --authorities two --episodes 1700`, both at 6 and at 9.8 m/s^2) stay fixed:
+/// The certificate losses of the 1,700-episode campaigns (`host-tests campaign --authorities
+/// two --episodes 1700`, at 6 and at 9.8 m/s^2) stay fixed:
 /// - seed 8,001,493 (stop and go, an IDM follower switching its time gap): engaged at 29 m/s
 ///   with the leader stopped 98 m ahead, the first second's look-ahead bounded the actuator's
 ///   acceleration since the leader's measurement by the one reported now, which after the
@@ -281,16 +281,23 @@ fn certified_starts_stay_certified_with_two_authorities() {
 ///   0.5 s later; `Controller::reported_since` keeps the reports since then);
 /// - seed 23,000,517 (a comfortable leader, a follower that reacts 1.15 s late): the loop
 ///   judged the brake lights off while the ego decelerated at less than the lights' 0.5 m/s^2,
-///   where the certificate's assumptions (and the reacting follower) have them on while the
-///   acceleration is below zero (rear -3.6 cm).
+///   where the certificate's assumptions (and the reacting follower) had them on while the
+///   acceleration was below zero (rear -3.6 cm; the lights' deceleration since is 1.3 m/s^2);
+/// - seeds 6,000,252 (stop and go, the IDM at a fixed time gap) and 5,000,345 (a hard-braking
+///   leader, a follower that reacts late), with the lights on for sure only beyond 1.3 m/s^2:
+///   the look-ahead bounded when the lights come on by the continuous ramp from its command,
+///   where the firmware issues the ramp's commands once a period and holds them, a period
+///   above it (rear -20 and -26 cm a period after an engagement).
 #[test]
-fn the_campaigns_two_losses_stay_fixed() {
+fn the_campaigns_losses_stay_fixed() {
     for leader_braking in [6.0, 9.8] {
         let bytes = table_bytes(leader_braking);
         let table = Table::parse(bytes).unwrap();
         for (leader, follower, seed) in [
             (Leader::StopAndGo, Follower::IdmSwitching, 8_001_493),
             (Leader::Comfortable, Follower::IdmReacting, 23_000_517),
+            (Leader::StopAndGo, Follower::IdmFixed, 6_000_252),
+            (Leader::HardBrake, Follower::IdmReacting, 5_000_345),
         ] {
             let outcome =
                 run_episode(&table, bytes, &episode(leader, follower, seed), None).unwrap();

@@ -110,6 +110,13 @@ impl Controller<'_> {
     /// When the lights are on for sure (microseconds) for `command` held a period from `now`,
     /// then a braking ramp at `jerk` from it down to `-level` (what is pending held before
     /// it).
+    ///
+    /// The ramp's commands are issued once a period and held: the committed ramp from
+    /// `command` starts a period on, so it issues `command` again then, and `command - j k h`
+    /// `k` periods later. Each is held above the continuous ramp through its period, so the
+    /// bound is the continuous ramp from `command` starting a period later still, `now + 2 h`,
+    /// with `command` (at most `held`) in force until then: a staircase lights the brakes no
+    /// later than the ramp it stays under.
     pub(super) fn ramp_lights_on(
         &self,
         model: &Model,
@@ -120,7 +127,7 @@ impl Controller<'_> {
     ) -> Option<u64> {
         let h_us = u64::from(self.config.period_us);
         let held = math::max(self.pending(now, model), command);
-        self.lights_on_after(now.saturating_add(h_us), held, command, jerk, level)
+        self.lights_on_after(now.saturating_add(2 * h_us), held, command, jerk, level)
     }
 
     /// The look-ahead for a `proposal`: the braking [`Controller::look_ahead_braking`] finds
@@ -214,7 +221,8 @@ impl Controller<'_> {
     }
 
     /// When the lights are on for sure along `braking` in force (microseconds): the lights'
-    /// run under way, or where its ramp from the last command, starting now, brings them on,
+    /// run under way, or where its ramp from the last command, starting now (its commands
+    /// held a period each), brings them on,
     /// or the earlier on-time the certificate argued with while its commands stay under that
     /// argument's ramp (`lights_expected_us`).
     pub(super) fn lights_on_in_force(
@@ -226,10 +234,13 @@ impl Controller<'_> {
         if let Some(on) = self.lights_on_us {
             return Some(on);
         }
+        // The ramp from the last command, its commands held a period each: under the
+        // continuous ramp from it starting a period on (`ramp_lights_on`).
+        let last = self.last_command_or_unknown(model);
         let ramp = self.lights_on_after(
-            now,
-            self.pending(now, model),
-            self.last_command_or_unknown(model),
+            now.saturating_add(u64::from(self.config.period_us)),
+            math::max(self.pending(now, model), last),
+            last,
             braking.jerk,
             braking.level,
         );
