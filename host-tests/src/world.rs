@@ -653,13 +653,15 @@ impl<'t> World<'t> {
     }
 
     /// From when the ego's brake lights are on for good (its actuator's acceleration below
-    /// `-theta`, the declared lights' deceleration, from then on), us, if the firmware keeps to the braking it is committed to
-    /// ([`firmware::Controller::committed_braking`]): this period's command, the committed
+    /// `-theta`, the declared lights' deceleration, from then on), us, if the firmware keeps
+    /// to the braking it is committed to ([`firmware::Controller::committed_braking`]): this
+    /// period's command, the committed
     /// ramp's next, then at most that ramp. Exact until the next period's command has been in
     /// force for a period (the commands in the dead time take force when they do, and the
     /// acceleration is monotone between two of those times, so its side of `-theta` at their
     /// ends tells),
-    /// then [`table_format::rear::lights_on_within`] from the acceleration reached along the
+    /// then the declared lights' bound ([`firmware::EmergencyDeclaration::lights_on_within`])
+    /// from the acceleration reached along the
     /// ramp. Where the lights are on and stay on: since when they came on. Called as
     /// [`World::certificate`] is.
     fn lights_on_for_good(&self, now_us: u64) -> Option<u64> {
@@ -692,16 +694,9 @@ impl<'t> World<'t> {
         // From here the commands in force are at most the ramp from the next period's command
         // (the one issued `k` periods on is at most `next - jerk (k - 1) h`).
         let a = actuator.acceleration();
-        let within = table_format::rear::lights_on_within(
-            0.0,
-            model.lag,
-            a,
-            a,
-            next,
-            braking.jerk,
-            braking.level,
-            theta,
-        );
+        let declared = self.controller.config().certificate.emergency;
+        let within =
+            declared.lights_on_within(0.0, model.lag, a, a, next, braking.jerk, braking.level);
         if within > 0.0 {
             return Some(exact_until + seconds_to_us(within).max(1));
         }
