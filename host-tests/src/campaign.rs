@@ -18,8 +18,8 @@ use table_format::Table;
 
 use crate::humans::{within_speed_limit, Follower, HumanModel, Humans, Leader};
 use crate::sim::{ActuatorModel, Car, SensorModel};
+use crate::world::{r157_least_gap, EmergencyCauses, Start, Tolerances, World};
 pub use crate::world::{state_of, CutInKind, CutInScore, Half, ModeName, Trace, TracePoint};
-use crate::world::{EmergencyCauses, Start, Tolerances, World};
 
 /// The sensors of an episode.
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -43,9 +43,13 @@ pub struct Episode {
     pub seconds: f32,
     /// Sensors.
     pub sensors: Sensing,
-    /// A vehicle that cuts in during the episode (outside the model): a new leader 8-30 m
-    /// ahead at -5..0 m/s relative, or a new follower 3-10 m behind closing at 0..5 m/s, at a
-    /// random time in the first 30 s.
+    /// A vehicle that cuts in during the episode (outside the model), at a random time in the
+    /// first 30 s: a new leader 8-30 m ahead at -5..0 m/s relative that drives by the leader's
+    /// model; a new leader that keeps its speed, seen 0.72 s before it enters the lane
+    /// ([`World::cut_in_seen`]), closing at up to 15 m/s (no faster than the ego drives), that
+    /// enters from UN R157's least gap for avoiding it ([`r157_least_gap`], at least 2 m) to
+    /// 10 m past it if the ego keeps its speed; or a new follower 3-10 m behind closing at
+    /// 0..5 m/s.
     pub cut_in: Option<CutInKind>,
     /// The ego's actuator.
     pub actuator: ActuatorModel,
@@ -117,24 +121,41 @@ pub struct Outcome {
     /// know; the same commands before it, the same actuator, the same humans) collides too, so
     /// that the humans alone had made it unavoidable.
     pub cut_in_unavoidable: Option<bool>,
-    /// The same at [`EMERGENCY_BRAKING`]: whether a car braking as hard as it can from the first
-    /// track (through the same actuator) hits the car ahead too.
+    /// The same at the emergency authority the episode's configuration declares
+    /// ([`firmware::EmergencyDeclaration::braking`]): whether a car that brakes from the first
+    /// track at the band's floor at once and then builds up to the authority's level at its
+    /// declared jerk (through the same actuator) hits the car ahead too.
     pub cut_in_unavoidable_at_emergency: Option<bool>,
     /// Whether that braking, clear of the car ahead, was hit from behind: the follower driving
     /// as it did in the episode (its recorded accelerations), which did not answer the harder
     /// braking. What the emergency authority must buy from the follower.
     pub cut_in_hit_from_behind_at_emergency: Option<bool>,
-    /// The same with a follower that answers the harder braking: the IDM at its closest time
-    /// gap, at once, and after [`crate::humans::REACTION_TIME`]
-    /// ([`Follower::IdmReacting`]).
+    /// The same with a follower in the certificate's model that answers the harder braking:
+    /// the IDM at its closest time gap, at once; and the follower the two-authority certificate
+    /// argues with ([`firmware::Certifier::reacting_follower`]), at its largest acceleration
+    /// from when the ego's brake lights come on until its reaction time has passed, then the
+    /// IDM at its closest time gap.
     pub cut_in_hit_from_behind_at_emergency_answered: Option<[bool; 2]>,
 }
 
-/// A car's full braking, m/s^2: the emergency authority the cut-in counterfactual is judged at
-/// ([`table_format::authority::DRY_ROAD_EMERGENCY`]).
-pub const EMERGENCY_BRAKING: f32 = table_format::authority::DRY_ROAD_EMERGENCY.level;
-
 impl Outcome {
+    /// Whether the episode ended in a collision that was preventable and was not prevented
+    /// (after `cut_in`): one that braking at the emergency authority from the first track
+    /// would not have turned into a collision from behind (by the follower as it drove, or by
+    /// either follower of the certificate's model answering the braking), and that was with
+    /// the car ahead after a cut-in UN R157 requires avoiding, or that braking avoids ahead.
+    /// A collision with the car ahead that braking harder only moves behind the ego is not
+    /// preventable by the ego's braking, whatever the rule asks.
+    pub fn preventable_not_prevented(&self, cut_in: &CutInScore) -> bool {
+        let ahead = self.collided && self.min_gap_follower > 0.0;
+        // Braking at the emergency authority is not hit from behind, by the follower as it
+        // drove or by the certificate's followers answering it.
+        let clear_behind = self.cut_in_hit_from_behind_at_emergency == Some(false)
+            && self.cut_in_hit_from_behind_at_emergency_answered == Some([false, false]);
+        let at_emergency = self.cut_in_unavoidable_at_emergency == Some(false);
+        clear_behind && ((ahead && cut_in.r157_requires_avoiding()) || at_emergency)
+    }
+
     /// The outcome of an episode from its score.
     pub fn of(world: &World<'_>, initial: [f32; 5], initial_margin: f32) -> Self {
         let s = world.score();
@@ -299,6 +320,13 @@ pub fn run_episode(
             if k >= at && snapshot.is_none() {
                 let [leader, ego, follower] = world.cars();
                 let (gap, rel) = match kind {
+                    // At R157's edge: closing at up to 15 m/s (no faster than the ego
+                    // drives), from the rule's least gap (at least 2 m) to 10 m past it.
+                    CutInKind::SteadyLeader => {
+                        let closing = rng.random_range(0.0..=ego.v.min(R157_CLOSING_SPEED));
+                        let least = r157_least_gap(closing).max(2.0);
+                        (rng.random_range(least..least + 10.0), -closing)
+                    }
                     CutInKind::Leader => (
                         rng.random_range(8.0..30.0f32),
                         rng.random_range(-5.0..0.0f32),
@@ -309,17 +337,31 @@ pub fn run_episode(
                     ),
                 };
                 // Only between the ego and the vehicle it replaces, with room to spare.
-                let room = match kind {
-                    CutInKind::Leader => leader.x - ego.x,
-                    CutInKind::Follower => ego.x - follower.x,
+                let room = if kind.ahead() {
+                    leader.x - ego.x
+                } else {
+                    ego.x - follower.x
                 };
-                if gap + 3.0 < room {
-                    world.cut_in(kind, gap, rel);
+                let lateral = if kind == CutInKind::SteadyLeader {
+                    R157_LATERAL_VISIBILITY
+                } else {
+                    0.0
+                };
+                if gap - rel * lateral + 3.0 < room {
+                    if kind == CutInKind::SteadyLeader {
+                        world.cut_in_seen(gap, rel, lateral);
+                    } else {
+                        world.cut_in(kind, gap, rel);
+                    }
                     snapshot = Some((world.clone(), Vec::new()));
                 }
             }
         }
-        let (a_leader, a_follower) = humans.accelerations(world.time(), h, world.cars(), &mut rng);
+        let (mut a_leader, a_follower) =
+            humans.accelerations(world.time(), h, world.cars(), &mut rng);
+        if snapshot.is_some() && episode.cut_in == Some(CutInKind::SteadyLeader) {
+            a_leader = 0.0;
+        }
         let running = world.step(a_leader, a_follower, trace.as_deref_mut());
         if let (Some((_, record)), Some((command, _))) = (snapshot.as_mut(), world.last()) {
             record.push((a_leader, a_follower, command.acceleration));
@@ -335,17 +377,12 @@ pub fn run_episode(
             .and_then(|c| c.delivered_after)
             .map_or(0, |s| (s / h).round() as usize);
         // The same world from the cut-in, the same commands until the first track, then
-        // `braking`: whether it collides too, and with the car ahead or behind.
+        // `braking` (a command for each period from the first track on): whether it collides
+        // too, and with the car ahead or behind.
         let tmin = model.parameter_range().0;
-        let collides_braking_at = |braking: f32, behind: Behind| {
+        let reacting = certifier.reacting_follower();
+        let collides_braking_with = |braking: &dyn Fn(usize) -> f32, behind: Behind| {
             let mut world = counterfactual.clone();
-            let mut rng = StdRng::seed_from_u64(0);
-            let mut reacting = match behind {
-                Behind::Reacting => {
-                    Humans::new(table, Leader::Comfortable, Follower::IdmReacting, &mut rng)
-                }
-                Behind::Replayed | Behind::AtOnce => None,
-            };
             // The record ends where the episode did (at its collision): past it, the humans
             // keep their last accelerations (a braking leader brakes on to a stop) for
             // `AFTER_RECORD` more, so that a braking that only delays the collision past the
@@ -359,36 +396,63 @@ pub fn run_episode(
                 .chain(extra.into_iter().flatten())
                 .enumerate()
                 .any(|(k, (a_leader, recorded, command))| {
-                    let command = if k < delivered { command } else { braking };
-                    let a_follower = match (behind, reacting.as_mut()) {
-                        (Behind::Reacting, Some(humans)) => {
-                            humans
-                                .accelerations(world.time(), h, world.cars(), &mut rng)
-                                .1
+                    let command = if k < delivered {
+                        command
+                    } else {
+                        braking(k - delivered)
+                    };
+                    let [_, e, f] = world.cars();
+                    let idm = || {
+                        let a = model.follower_acceleration(f.v, e.v, e.x - f.x, tmin);
+                        within_speed_limit(a, f.v, model.max_speed, h)
+                    };
+                    let a_follower = match (behind, world.lights_on_since()) {
+                        (Behind::Replayed, _) => recorded,
+                        (Behind::Reacting, Some(on))
+                            if world.time() - on < reacting.reaction_time =>
+                        {
+                            within_speed_limit(
+                                reacting.reaction_acceleration,
+                                f.v,
+                                model.max_speed,
+                                h,
+                            )
                         }
-                        (Behind::AtOnce, _) => {
-                            let [_, e, f] = world.cars();
-                            let a = model.follower_acceleration(f.v, e.v, e.x - f.x, tmin);
-                            within_speed_limit(a, f.v, model.max_speed, h)
-                        }
-                        _ => recorded,
+                        (Behind::AtOnce | Behind::Reacting, _) => idm(),
                     };
                     !world.step_with(a_leader, a_follower, Some(command), None)
                 });
             let hit_behind = collided && world.score().min_gap_follower <= 0.0;
             (collided, collided && !hit_behind, hit_behind)
         };
-        outcome.cut_in_unavoidable = Some(collides_braking_at(model.band_min, Behind::Replayed).0);
-        let (_, ahead, behind) = collides_braking_at(-EMERGENCY_BRAKING, Behind::Replayed);
+        outcome.cut_in_unavoidable =
+            Some(collides_braking_with(&|_| model.band_min, Behind::Replayed).0);
+        // The emergency authority as declared: the band's floor at once (the comfort
+        // authority's step), then the build-up at its jerk to its level.
+        let emergency = config.certificate.emergency.braking;
+        let before = delivered
+            .checked_sub(1)
+            .and_then(|k| record.get(k))
+            .map_or(model.band_min, |r| r.2);
+        let start = before.min(model.band_min);
+        let at_emergency = |k: usize| (start - emergency.jerk * h * k as f32).max(-emergency.level);
+        let (_, ahead, behind) = collides_braking_with(&at_emergency, Behind::Replayed);
         outcome.cut_in_unavoidable_at_emergency = Some(ahead);
         outcome.cut_in_hit_from_behind_at_emergency = Some(behind);
         outcome.cut_in_hit_from_behind_at_emergency_answered = Some([
-            collides_braking_at(-EMERGENCY_BRAKING, Behind::AtOnce).2,
-            collides_braking_at(-EMERGENCY_BRAKING, Behind::Reacting).2,
+            collides_braking_with(&at_emergency, Behind::AtOnce).2,
+            collides_braking_with(&at_emergency, Behind::Reacting).2,
         ]);
     }
     Some(outcome)
 }
+
+/// The fastest a steady leader's cut-in closes on the ego, m/s.
+const R157_CLOSING_SPEED: f32 = 15.0;
+
+/// How long a steady leader's lateral motion is visible before it enters the ego's lane, s:
+/// UN R157's cut-in rule asks for 0.72 s ([`World::cut_in_seen`]).
+const R157_LATERAL_VISIBILITY: f32 = 0.72;
 
 /// How long a cut-in counterfactual runs past the end of the episode's record, s.
 const AFTER_RECORD: f32 = 10.0;
@@ -400,8 +464,9 @@ enum Behind {
     Replayed,
     /// The IDM at the range's closest time gap, answering the ego at once.
     AtOnce,
-    /// [`Follower::IdmReacting`]: the same IDM, answering the ego's lights after a person's
-    /// reaction time.
+    /// The follower the two-authority certificate argues with: its largest acceleration from
+    /// when the ego's brake lights come on until its reaction time has passed, the same IDM
+    /// otherwise.
     Reacting,
 }
 
@@ -530,19 +595,21 @@ pub struct CutInSummary {
     /// Of those, the ones that braking at beta from the cut-in on would not have avoided
     /// either: the humans alone had made them unavoidable.
     pub unavoidable: usize,
-    /// Leader cut-ins UN R157 requires avoiding ([`crate::world::r157_requires_avoiding`]).
-    pub r157_preventable: usize,
-    /// Collisions that braking at [`EMERGENCY_BRAKING`] from the first track would not have
-    /// avoided either: the car ahead hit all the same.
+    /// Leader cut-ins UN R157 requires avoiding ([`CutInScore::r157_requires_avoiding`]: the
+    /// rule's conditions met at the intrusion, the new car keeping its speed afterwards).
+    pub r157_requires_avoiding: usize,
+    /// Collisions that the emergency authority from the first track would not have avoided
+    /// either ([`Outcome::cut_in_unavoidable_at_emergency`]): the car ahead hit all the same.
     pub unavoidable_at_emergency: usize,
-    /// Collisions that braking at [`EMERGENCY_BRAKING`] would have avoided ahead, but would
-    /// have been hit from behind by the follower driving as it did.
+    /// Collisions that the emergency authority would have avoided ahead, but would have been
+    /// hit from behind by the follower driving as it did.
     pub hit_from_behind_at_emergency: usize,
-    /// The same with a follower that answers the braking: the IDM at its closest time gap at
-    /// once, and after a person's reaction time.
+    /// The same with a follower in the certificate's model that answers the braking: the IDM
+    /// at its closest time gap at once, and the certificate's reacting follower
+    /// ([`Outcome::cut_in_hit_from_behind_at_emergency_answered`]).
     pub hit_from_behind_at_emergency_answered: [usize; 2],
-    /// Collisions that were preventable, by R157's rule or at the emergency authority, and
-    /// were not prevented. The aim is none.
+    /// Collisions that were preventable and were not prevented
+    /// ([`Outcome::preventable_not_prevented`]). The aim is none.
     pub preventable_not_prevented: usize,
 }
 
@@ -698,9 +765,9 @@ fn cut_in_summary(outcomes: &[(u64, Outcome)]) -> CutInSummary {
             .iter()
             .filter(|(o, _)| o.cut_in_unavoidable == Some(true))
             .count(),
-        r157_preventable: cuts
+        r157_requires_avoiding: cuts
             .iter()
-            .filter(|(_, c)| c.r157_preventable == Some(true))
+            .filter(|(_, c)| c.r157_requires_avoiding())
             .count(),
         unavoidable_at_emergency: cuts
             .iter()
@@ -721,11 +788,7 @@ fn cut_in_summary(outcomes: &[(u64, Outcome)]) -> CutInSummary {
         }),
         preventable_not_prevented: cuts
             .iter()
-            .filter(|(o, c)| {
-                o.collided
-                    && (c.r157_preventable == Some(true)
-                        || o.cut_in_unavoidable_at_emergency == Some(false))
-            })
+            .filter(|(o, c)| o.preventable_not_prevented(c))
             .count(),
     }
 }
@@ -875,16 +938,18 @@ pub struct CampaignTotals {
     pub cut_in_collisions_avoidable: usize,
     /// Collisions after a cut-in with the follower (the ego hit from behind).
     pub cut_in_collisions_behind: usize,
-    /// Collisions after a cut-in that braking at [`EMERGENCY_BRAKING`] would not have avoided.
+    /// Collisions after a cut-in that the emergency authority would not have avoided.
     pub cut_in_collisions_unavoidable_at_emergency: usize,
-    /// Collisions after a cut-in that braking at [`EMERGENCY_BRAKING`] would have turned into
-    /// a collision from behind (the follower driving as it did).
+    /// Collisions after a cut-in that the emergency authority would have turned into a
+    /// collision from behind (the follower driving as it did).
     pub cut_in_collisions_hit_from_behind_at_emergency: usize,
-    /// The same with a follower that answers the braking at once, and after a person's
-    /// reaction time.
+    /// The same with the certificate's followers answering the braking: at once, and after
+    /// its reaction time.
     pub cut_in_collisions_hit_from_behind_at_emergency_answered: [usize; 2],
-    /// Collisions after a cut-in that were preventable (R157's rule, or at the emergency
-    /// authority) and were not prevented.
+    /// Leader cut-ins UN R157 requires avoiding ([`CutInSummary::r157_requires_avoiding`]).
+    pub cut_ins_r157: usize,
+    /// Collisions after a cut-in that were preventable and were not prevented
+    /// ([`Outcome::preventable_not_prevented`]).
     pub cut_in_collisions_preventable: usize,
 }
 
@@ -1004,6 +1069,7 @@ pub fn run_campaign(
             totals.cut_in_collisions_hit_from_behind_at_emergency_answered[i] +=
                 c.hit_from_behind_at_emergency_answered[i];
         }
+        totals.cut_ins_r157 += c.r157_requires_avoiding;
         totals.cut_in_collisions_preventable += c.preventable_not_prevented;
     }
     CampaignReport {

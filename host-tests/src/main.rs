@@ -431,6 +431,9 @@ enum CutInArg {
     None,
     /// A new leader 8-30 m ahead, -5..0 m/s relative.
     Leader,
+    /// A new leader keeping its speed from then on, at UN R157's edge: closing at up to 15 m/s,
+    /// from the rule's least gap for avoiding it (at least 2 m) to 10 m past it.
+    SteadyLeader,
     /// A new follower 3-10 m behind, closing at 0..5 m/s.
     Follower,
 }
@@ -505,6 +508,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
         cut_in: match cut_in {
             CutInArg::None => None,
             CutInArg::Leader => Some(CutInKind::Leader),
+            CutInArg::SteadyLeader => Some(CutInKind::SteadyLeader),
             CutInArg::Follower => Some(CutInKind::Follower),
         },
         actuator: ActuatorModel {
@@ -621,7 +625,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
                     c.collisions,
                     c.collisions_behind,
                     c.unavoidable,
-                    c.r157_preventable,
+                    c.r157_requires_avoiding,
                     c.unavoidable_at_emergency,
                     c.hit_from_behind_at_emergency,
                     c.preventable_not_prevented
@@ -659,23 +663,28 @@ fn campaign(args: CampaignArgs) -> Result<()> {
         t.below_band_episodes
     );
     if settings.cut_in.is_some() {
+        let emergency = settings.config.certificate.emergency;
         println!(
             "cut-ins: {}; {} not answered within one period of the new track \
              while the front was uncertified; {} collisions the humans had not made \
-             unavoidable, {} with the follower; at the emergency authority ({} m/s^2) {} unavoidable ahead, {} hit from \
-             behind instead by the follower as it drove ({} by the IDM at its closest time gap \
-             answering at once, {} answering after {} s), and {} preventable (by it or R157's \
-             rule) but not prevented",
+             unavoidable, {} with the follower; at the emergency authority ({} m/s^2 built up \
+             at {} m/s^3 from the band's floor) {} unavoidable ahead, {} hit from behind \
+             instead by the follower as it drove ({} by the IDM at its closest time gap \
+             answering at once, {} by the certificate's follower reacting after {} s); {} \
+             cut-ins R157 requires avoiding (the new car keeping its speed); {} collisions \
+             preventable (by R157's rule or at the emergency authority) but not prevented",
             t.cut_ins,
             t.cut_ins_answered_late,
             t.cut_in_collisions_avoidable,
             t.cut_in_collisions_behind,
-            host_tests::campaign::EMERGENCY_BRAKING,
+            emergency.braking.level,
+            emergency.braking.jerk,
             t.cut_in_collisions_unavoidable_at_emergency,
             t.cut_in_collisions_hit_from_behind_at_emergency,
             t.cut_in_collisions_hit_from_behind_at_emergency_answered[0],
             t.cut_in_collisions_hit_from_behind_at_emergency_answered[1],
-            host_tests::humans::REACTION_TIME,
+            emergency.follower_reaction_time,
+            t.cut_ins_r157,
             t.cut_in_collisions_preventable
         );
     }

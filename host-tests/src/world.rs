@@ -239,10 +239,20 @@ impl EmergencyCauses {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum CutInKind {
-    /// A new leader between the ego and its leader.
+    /// A new leader between the ego and its leader, driving by the leader's model.
     Leader,
+    /// A new leader between the ego and its leader that keeps its speed from then on: UN
+    /// R157's cut-in, which its rule asks an automated car to avoid.
+    SteadyLeader,
     /// A new follower between the ego and its follower.
     Follower,
+}
+
+impl CutInKind {
+    /// Whether the new vehicle is ahead of the ego (a new leader).
+    pub fn ahead(self) -> bool {
+        !matches!(self, CutInKind::Follower)
+    }
 }
 
 /// How the firmware answered a cut-in.
@@ -272,11 +282,64 @@ pub struct CutInScore {
     pub front_certified_at_delivery: Option<bool>,
     /// The hardest command in the 5 s after the cut-in, m/s^2.
     pub hardest_command: f32,
-    /// A leader cut-in that UN R157 requires an automated car to avoid
-    /// ([`r157_requires_avoiding`]), judged at the intrusion; `None` for a follower. The rule
-    /// has the new car keep its speed; the closed loop's new leaders drive by the leader's
-    /// model afterwards, braking too.
-    pub r157_preventable: Option<bool>,
+    /// Whether a leader cut-in met UN R157's conditions for avoiding it at the intrusion
+    /// ([`r157_requires_avoiding`]); `None` for a follower. The rule asks it only of a new car
+    /// that keeps its speed ([`CutInScore::kept_its_speed`]); the closed loop's new leaders
+    /// drive by the leader's model afterwards, braking too.
+    pub r157_conditions_met: Option<bool>,
+    /// The new vehicle's speed at the cut-in, m/s.
+    pub speed: f32,
+    /// Its least speed from the cut-in on (to the episode's end or its collision), m/s.
+    pub slowest: f32,
+    /// How long before it entered the ego's lane its lateral motion was visible and its track
+    /// delivered as the leader's, s (0: it appeared in the lane; [`World::cut_in_seen`]). `at`,
+    /// `gap` and `rel_speed` are at the start of that.
+    pub lateral_warning: f32,
+}
+
+impl CutInScore {
+    /// A cut-in that starts at `at` (s) with the new vehicle's `(gap, rel_speed)` then, its
+    /// `speed` and its `lateral_warning`; nothing answered yet.
+    fn started(
+        kind: CutInKind,
+        at: f32,
+        (gap, rel_speed): (f32, f32),
+        speed: f32,
+        lateral_warning: f32,
+    ) -> Self {
+        CutInScore {
+            kind,
+            at,
+            gap,
+            rel_speed,
+            delivered_after: None,
+            recognised_periods: None,
+            answered_periods: None,
+            first_answer: None,
+            front_certified_at_delivery: None,
+            hardest_command: f32::INFINITY,
+            r157_conditions_met: None,
+            speed,
+            slowest: speed,
+            lateral_warning,
+        }
+    }
+
+    /// How far (m/s) below its speed at the cut-in the new vehicle may drive and still count
+    /// as keeping it: the leader's speed holds to `f32` rounding.
+    const KEPT_SPEED_TOLERANCE: f32 = 1e-3;
+
+    /// Whether the new vehicle kept its speed from the cut-in on, as UN R157's cut-in rule
+    /// has it.
+    pub fn kept_its_speed(&self) -> bool {
+        self.slowest >= self.speed - Self::KEPT_SPEED_TOLERANCE
+    }
+
+    /// Whether UN R157 requires an automated car to avoid this cut-in: a new leader that met
+    /// the rule's conditions at the intrusion and kept its speed afterwards.
+    pub fn r157_requires_avoiding(&self) -> bool {
+        self.r157_conditions_met == Some(true) && self.kept_its_speed()
+    }
 }
 
 /// The deceleration R157's cut-in rule assumes, m/s^2.
@@ -290,6 +353,13 @@ const R157_CUT_IN_DECELERATION: f32 = 6.0;
 pub fn r157_requires_avoiding(gap: f32, closing_speed: f32) -> bool {
     closing_speed <= 0.0
         || gap / closing_speed > closing_speed / (2.0 * R157_CUT_IN_DECELERATION) + 0.35
+}
+
+/// The least gap (m) at which UN R157's cut-in rule asks an automated car to avoid a car
+/// cutting in with the ego closing on it at `closing_speed` (m/s, positive):
+/// `closing_speed (closing_speed / (2 * 6 m/s^2) + 0.35 s)` ([`r157_requires_avoiding`] past it).
+pub fn r157_least_gap(closing_speed: f32) -> f32 {
+    closing_speed * (closing_speed / (2.0 * R157_CUT_IN_DECELERATION) + 0.35)
 }
 
 impl Score {
@@ -416,6 +486,9 @@ pub struct World<'t> {
     braking_in_force: (Option<firmware::Braking>, Option<u64>),
     /// The start's acceleration (the command in force at engagement).
     start_acceleration: f32,
+    /// A car cutting in from the next lane, its lateral motion visible ([`World::cut_in_seen`]):
+    /// where it is, and the period it enters the ego's lane.
+    adjacent: Option<(Car, u64)>,
 }
 
 /// What started an emergency run ([`EmergencyCauses`]).
@@ -462,7 +535,42 @@ impl<'t> World<'t> {
             lights_on_since_us: None,
             braking_in_force: (None, None),
             start_acceleration: start.engaged_acceleration,
+            adjacent: None,
         }
+    }
+
+    /// A car in the next lane starts cutting in ahead of the ego now, at its speed plus
+    /// `rel_speed` (m/s, at most zero: it is being caught up), which it keeps; its lateral
+    /// motion is visible from now and it enters the ego's lane `lateral` seconds later, `gap`
+    /// metres ahead if the ego keeps its speed until then. The radar's target selection takes
+    /// it as the leader from now (a car in the next lane closing in on the ego's lane), so the
+    /// firmware sees it `lateral` seconds before it can be hit; it replaces the leader when it
+    /// enters the lane. UN R157's cut-in ([`CutInKind::SteadyLeader`]): the rule asks for
+    /// 0.72 s of visible lateral motion, and judges its time to collision at the intrusion.
+    pub fn cut_in_seen(&mut self, gap: f32, rel_speed: f32, lateral: f32) {
+        let ego = self.cars[1];
+        let new = Car {
+            x: ego.x + gap - rel_speed * lateral,
+            v: (ego.v + rel_speed).clamp(0.0, self.model.max_speed),
+        };
+        let h = self.period_us as f32 * 1e-6;
+        let enters = self.period + (lateral / h).round() as u64;
+        self.adjacent = Some((new, enters));
+        self.cut_in = Some((self.period, None));
+        self.score.cut_in = Some(CutInScore::started(
+            CutInKind::SteadyLeader,
+            self.time(),
+            (new.x - ego.x, rel_speed),
+            new.v,
+            lateral,
+        ));
+    }
+
+    /// The cars as the sensors see them: the leader is a car cutting in from the next lane
+    /// while there is one ([`World::cut_in_seen`]).
+    fn sensed_cars(&self) -> [Car; 3] {
+        let [leader, ego, follower] = self.cars;
+        [self.adjacent.map_or(leader, |(c, _)| c), ego, follower]
     }
 
     /// A vehicle cuts in now, `gap` metres ahead of (or behind) the ego with relative speed
@@ -471,35 +579,28 @@ impl<'t> World<'t> {
     /// drive it.
     pub fn cut_in(&mut self, kind: CutInKind, gap: f32, rel_speed: f32) {
         let ego = self.cars[1];
-        match kind {
-            CutInKind::Leader => {
+        let new = match kind {
+            CutInKind::Leader | CutInKind::SteadyLeader => {
                 self.cars[0] = Car {
                     x: ego.x + gap,
                     v: (ego.v + rel_speed).clamp(0.0, self.model.max_speed),
-                }
+                };
+                self.cars[0]
             }
             CutInKind::Follower => {
                 self.cars[2] = Car {
                     x: ego.x - gap,
                     v: (ego.v - rel_speed).clamp(0.0, self.model.max_speed),
-                }
+                };
+                self.cars[2]
             }
-        }
+        };
         self.cut_in = Some((self.period, None));
-        self.score.cut_in = Some(CutInScore {
-            kind,
-            at: self.time(),
-            gap,
-            rel_speed,
-            delivered_after: None,
-            recognised_periods: None,
-            answered_periods: None,
-            first_answer: None,
-            front_certified_at_delivery: None,
-            hardest_command: f32::INFINITY,
-            r157_preventable: (kind == CutInKind::Leader)
-                .then(|| r157_requires_avoiding(gap, -rel_speed)),
-        });
+        let mut score = CutInScore::started(kind, self.time(), (gap, rel_speed), new.v, 0.0);
+        score.r157_conditions_met = kind
+            .ahead()
+            .then(|| r157_requires_avoiding(gap, -rel_speed));
+        self.score.cut_in = Some(score);
     }
 
     /// The cut-in's bookkeeping for this period's inputs and command.
@@ -508,14 +609,21 @@ impl<'t> World<'t> {
         else {
             return;
         };
+        let new = match (score.kind.ahead(), self.adjacent) {
+            (true, Some((adjacent, _))) => adjacent,
+            (true, None) => self.cars[0],
+            (false, _) => self.cars[2],
+        };
+        score.slowest = score.slowest.min(new.v);
         let cut_at_us = at_period * self.period_us;
         let h = self.period_us as f32 * 1e-6;
         if self.period <= at_period + (5.0 / h) as u64 {
             score.hardest_command = score.hardest_command.min(command.acceleration);
         }
-        let (track, state) = match score.kind {
-            CutInKind::Leader => (&inputs.leader, command.leader),
-            CutInKind::Follower => (&inputs.follower, command.follower),
+        let (track, state) = if score.kind.ahead() {
+            (&inputs.leader, command.leader)
+        } else {
+            (&inputs.follower, command.follower)
         };
         let delivered = match delivered {
             Some(d) => d,
@@ -523,8 +631,7 @@ impl<'t> World<'t> {
                 score.delivered_after = Some((self.period - at_period) as f32 * h);
                 // The front's answer is the leader's business; a new follower changes the rear
                 // value only, which the band keeps whatever the command.
-                score.front_certified_at_delivery =
-                    (score.kind == CutInKind::Leader).then_some(!command.takeover);
+                score.front_certified_at_delivery = score.kind.ahead().then_some(!command.takeover);
                 self.cut_in = Some((at_period, Some(self.period)));
                 self.period
             }
@@ -745,9 +852,9 @@ impl<'t> World<'t> {
             self.score.leader_hardest_braking = self.score.leader_hardest_braking.max(-a_leader);
         }
         let actuator_state = self.actuator.response(now_us, self.model.band_min).1;
-        let inputs = self
-            .sensors
-            .measure(now_us, self.cars, actuator_state, &mut self.rng);
+        let inputs =
+            self.sensors
+                .measure(now_us, self.sensed_cars(), actuator_state, &mut self.rng);
         let mut command = self.controller.step(&inputs);
         // The lights as they are (the actuator's own acceleration, not the firmware's account).
         self.lights_on_since_us = (self.actuator.acceleration() < -self.lights_deceleration())
@@ -867,6 +974,21 @@ impl<'t> World<'t> {
         }
         s.max_ego_speed = s.max_ego_speed.max(ego.v);
         self.cars = [leader, ego, follower];
+        if let Some((mut adjacent, enters)) = self.adjacent {
+            // In the next lane, it keeps its speed.
+            adjacent.advance(0.0, h);
+            self.adjacent = Some((adjacent, enters));
+            if self.period + 1 >= enters && !collided {
+                self.cars[0] = adjacent;
+                self.adjacent = None;
+                if let Some(c) = s.cut_in.as_mut() {
+                    c.r157_conditions_met = Some(r157_requires_avoiding(
+                        adjacent.x - ego.x,
+                        ego.v - adjacent.v,
+                    ));
+                }
+            }
+        }
         if let Some(tr) = trace {
             let [l, e, f] = before;
             let parts = certificate.map_or([f32::NAN; 3], |c| [c.front, c.rear, c.speed]);

@@ -204,6 +204,13 @@ fn r157s_cut_in_rule() {
     assert!(r157_requires_avoiding(5.0, -1.0));
     // The boundary: 0.767 s at 5 m/s is 3.83 m.
     assert!(r157_requires_avoiding(3.84, 5.0) && !r157_requires_avoiding(3.82, 5.0));
+    let least = host_tests::world::r157_least_gap(5.0);
+    assert!((least - 3.8333).abs() < 1e-3, "{least}");
+    for closing in [0.5, 5.0, 10.0, 15.0] {
+        let least = host_tests::world::r157_least_gap(closing);
+        assert!(r157_requires_avoiding(least * 1.001, closing), "{closing}");
+        assert!(!r157_requires_avoiding(least * 0.999, closing), "{closing}");
+    }
 }
 
 /// Leader cut-ins are scored three ways: against braking at beta from the first track (the
@@ -237,7 +244,7 @@ fn cut_in_collisions_are_scored_at_the_emergency_authority_and_by_r157() {
             !(o.cut_in_unavoidable_at_emergency == Some(true)
                 && o.cut_in_hit_from_behind_at_emergency == Some(true))
         );
-        assert!(cut.r157_preventable.is_some());
+        assert!(cut.r157_conditions_met.is_some());
     }
     // Behind a follower that ignores the model (full acceleration), braking at 8 m/s^2 is hit
     // from behind when the follower replays what it did; the IDM in its place, answering the
@@ -260,6 +267,55 @@ fn cut_in_collisions_are_scored_at_the_emergency_authority_and_by_r157() {
     }
     // Braking at 8 m/s^2 avoids some of what 3.5 could not.
     assert!(c.unavoidable_at_emergency < c.collisions, "{c:?}");
-    assert!(c.preventable_not_prevented >= c.collisions - c.unavoidable_at_emergency);
-    assert!(c.preventable_not_prevented <= c.collisions);
+    // None is preventable that braking harder only moves behind the ego.
+    assert!(
+        c.preventable_not_prevented <= c.collisions - c.hit_from_behind_at_emergency,
+        "{c:?}"
+    );
+}
+
+/// UN R157's cut-in, seen as the rule has it: a car in the next lane that keeps its speed,
+/// its lateral motion visible (and taken as the leader by the radar's target selection)
+/// 0.72 s before it enters the lane at or past the rule's least gap, closing at up to
+/// 15 m/s. Behind followers within the model, with two authorities and the declared sensors
+/// and actuator at their limits, every one the rule asks to avoid is avoided: no collision
+/// is preventable and not prevented. The cut-ins ask for more than the band: the firmware
+/// brakes below it in most of them.
+#[test]
+fn r157s_cut_ins_are_avoided() {
+    let t = table();
+    let mut config = Config::default();
+    config.certificate.authorities = firmware::Authorities::Two;
+    for (leader, follower) in [
+        (Leader::Comfortable, Follower::IdmWorstCase),
+        (Leader::StopAndGo, Follower::IdmReacting),
+    ] {
+        let template = Episode {
+            leader,
+            follower,
+            seconds: 40.0,
+            sensors: Sensing::Datasheet,
+            cut_in: Some(host_tests::world::CutInKind::SteadyLeader),
+            actuator: ACTUATOR_AT_LIMITS,
+            config,
+            seed: 17,
+        };
+        let (s, outcomes) = run_group(&t, firmware::DEFAULT_TABLE, template, 100, &|| {});
+        let c = s.cut_ins.expect("cut-ins were scored");
+        println!("{leader:?}/{follower:?}: {c:?}");
+        assert!(c.episodes > 80 && c.r157_requires_avoiding > 75, "{c:?}");
+        assert!(2 * s.below_band_episodes > c.episodes, "{s:?}");
+        assert_eq!(c.preventable_not_prevented, 0, "{c:?}");
+        for (seed, o) in &outcomes {
+            let Some(cut) = o.cut_in else { continue };
+            assert!(
+                cut.lateral_warning > 0.7 && cut.kept_its_speed(),
+                "{seed}: {cut:?}"
+            );
+            assert!(
+                !(o.collided && cut.r157_requires_avoiding()),
+                "seed {seed}: {o:?}"
+            );
+        }
+    }
 }

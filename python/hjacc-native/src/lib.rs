@@ -340,10 +340,11 @@ fn campaign(
     let cut_in = match cut_in {
         None => None,
         Some("leader") => Some(CutInKind::Leader),
+        Some("steady_leader") => Some(CutInKind::SteadyLeader),
         Some("follower") => Some(CutInKind::Follower),
         Some(other) => {
             return Err(value_error(format!(
-                "cut_in: None, \"leader\" or \"follower\" (got {other:?})"
+                "cut_in: None, \"leader\", \"steady_leader\" or \"follower\" (got {other:?})"
             )))
         }
     };
