@@ -133,8 +133,8 @@ pub struct Outcome {
     /// The same with a follower in the certificate's model that answers the harder braking:
     /// the IDM at its closest time gap, at once; and the follower the two-authority certificate
     /// argues with ([`firmware::Certifier::reacting_follower`]), at its largest acceleration
-    /// from when the ego's brake lights come on until its reaction time has passed, then the
-    /// IDM at its closest time gap.
+    /// while the ego's brake lights are off and until its reaction time has passed after they
+    /// come on, then the IDM at its closest time gap.
     pub cut_in_hit_from_behind_at_emergency_answered: Option<[bool; 2]>,
 }
 
@@ -408,8 +408,8 @@ pub fn run_episode(
                     };
                     let a_follower = match (behind, world.lights_on_since()) {
                         (Behind::Replayed, _) => recorded,
-                        (Behind::Reacting, Some(on))
-                            if world.time() - on < reacting.reaction_time =>
+                        (Behind::Reacting, on)
+                            if on.is_none_or(|on| world.time() - on < reacting.reaction_time) =>
                         {
                             within_speed_limit(
                                 reacting.reaction_acceleration,
@@ -464,9 +464,9 @@ enum Behind {
     Replayed,
     /// The IDM at the range's closest time gap, answering the ego at once.
     AtOnce,
-    /// The follower the two-authority certificate argues with: its largest acceleration from
-    /// when the ego's brake lights come on until its reaction time has passed, the same IDM
-    /// otherwise.
+    /// The follower the two-authority certificate argues with: its largest acceleration while
+    /// the ego's brake lights are off and until its reaction time has passed after they come
+    /// on, the same IDM from then on.
     Reacting,
 }
 
