@@ -350,3 +350,55 @@ fn the_search_with_late_reacting_followers() {
     println!("followers 2 s late: {collisions} collisions, {losses} losses");
     assert!(losses > 0, "the search found nothing to fail");
 }
+
+/// A car held at standstill is no emergency: stopped 8 m behind a stopped leader with a
+/// follower stopped at the IDM's jam distance (2 m) behind, the two-authority firmware holds
+/// the car along the emergency authority's ramp (it cannot certify a move-off: the follower's
+/// model lets it accelerate blind until the lights), its command dropping faster than
+/// ISO 15622's jerk limit in many periods; the car does not move, and none of those periods
+/// is flagged an emergency or asks the driver to take over (`Command::emergency`: the jerk
+/// check leaves out a car whose measured speed's error box reaches zero).
+#[test]
+fn a_car_held_at_standstill_is_no_emergency() {
+    let bytes = table_bytes(6.0);
+    let table = Table::parse(bytes).unwrap();
+    let model = HumanModel::of(&table).unwrap();
+    let start = Start {
+        cars: [
+            Car { x: 8.0, v: 0.0 },
+            Car { x: 0.0, v: 0.0 },
+            Car { x: -2.0, v: 0.0 },
+        ],
+        engaged_acceleration: -1.0,
+    };
+    let mut world = World::new(
+        bytes,
+        two(0),
+        model,
+        start,
+        sensors(),
+        ACTUATOR_AT_LIMITS,
+        Tolerances::default(),
+        11,
+    );
+    let h = world.period_seconds();
+    let (mut fast_drops, mut emergencies, mut takeovers) = (0, 0, 0);
+    let mut last: Option<f32> = None;
+    for _ in 0..(20.0 / h).round() as usize {
+        assert!(world.step(0.0, 0.0, None));
+        let [_, ego, _] = world.cars();
+        assert_eq!(ego.v, 0.0);
+        let (command, _) = world.last().unwrap();
+        if let Some(last) = last {
+            fast_drops += usize::from(
+                last - command.acceleration > firmware::iso15622::jerk_limit(0.0) * h + 1e-3,
+            );
+        }
+        last = Some(command.acceleration);
+        emergencies += usize::from(command.emergency);
+        takeovers += usize::from(command.takeover);
+    }
+    println!("{fast_drops} drops faster than ISO's jerk limit, {emergencies} emergencies, {takeovers} takeover requests");
+    assert!(fast_drops > 50, "{fast_drops}");
+    assert_eq!((emergencies, takeovers), (0, 0));
+}

@@ -50,7 +50,8 @@ pub struct Command {
     /// at once as hard as the leader's worst case needs, within the band where the band
     /// suffices, below it under the emergency authority where it does not; or it
     /// brakes faster than ISO 15622's jerk limit at the ego's speed allows
-    /// ([`crate::iso15622`]; a brake ramp configured above the limit). The takeover request is
+    /// ([`crate::iso15622`]; a brake ramp configured above the limit) while the ego may be
+    /// moving (its measured speed's error box does not reach zero). The takeover request is
     /// raised with it.
     pub emergency: bool,
     /// What the controller made of the leader track ([`TrackState`]).

@@ -66,7 +66,8 @@
 //! answer is at or below its command, and the ramp is kept. Either way the next step judges
 //! the state again. Every period of it
 //! is flagged in [`Command::emergency`] with the takeover request, as is any command that
-//! drops faster than ISO 15622's jerk limit.
+//! drops faster than ISO 15622's jerk limit while the car may be moving (not where its
+//! measured speed's error box reaches zero: a harder hold moves a car at rest nothing).
 //!
 //! # Emergencies: the emergency authority, bought from the follower
 //! The vehicle declares a second braking, its full one ([`CertificateConfig::emergency`]:
@@ -750,11 +751,16 @@ impl<'t> Controller<'t> {
         };
         // Braking faster than ISO 15622's jerk limit allows: an emergency (module docs).
         // Against the last command, or at engagement against the actuator's reported state.
+        // Not where the ego may be standing (its measured speed's error box reaches zero): a
+        // harder hold moves a car at rest nothing, and one that may still creep (at most
+        // twice the speed's error at rest: 0.2 m/s by default) only stops the sooner, its
+        // acceleration rising to zero. A speed not measured is not a standstill.
         let reference = self.last_command.or(self
             .reported_acceleration
             .map(|a| a - self.config.sensors.acceleration_error));
-        if let (Some(last), true) = (reference, command.mode != Mode::Standby) {
-            let speed = self.ego_history.back().map_or(f32::NAN, |e| e.1);
+        let speed = self.ego_history.back().map_or(f32::NAN, |e| e.1);
+        let standing = math::is_finite(speed) && self.config.sensors.ego_speed(speed).0 <= 0.0;
+        if let (Some(last), true) = (reference, command.mode != Mode::Standby && !standing) {
             let allowed = iso15622::jerk_limit(speed) * seconds(u64::from(self.config.period_us));
             if last - command.acceleration > allowed * (1.0 + 1e-3) + 1e-4 {
                 command.emergency = true;
