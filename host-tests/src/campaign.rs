@@ -342,13 +342,12 @@ pub fn run_episode(
                 } else {
                     ego.x - follower.x
                 };
-                let lateral = if kind == CutInKind::SteadyLeader {
-                    R157_LATERAL_VISIBILITY
-                } else {
-                    0.0
-                };
+                // A steady leader is seen from the next lane first, where the gap is larger by
+                // what the ego closes until it enters.
+                let seen = kind == CutInKind::SteadyLeader;
+                let lateral = if seen { R157_LATERAL_VISIBILITY } else { 0.0 };
                 if gap - rel * lateral + 3.0 < room {
-                    if kind == CutInKind::SteadyLeader {
+                    if seen {
                         world.cut_in_seen(gap, rel, lateral);
                     } else {
                         world.cut_in(kind, gap, rel);
