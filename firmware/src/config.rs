@@ -42,11 +42,15 @@ pub struct LawConfig {
     pub time_gap_setting: u8,
     /// Nominal ACC gap at standstill, m: where the car stops behind a stopped one.
     pub standstill_gap: f32,
-    /// The gap policy's room over the certificate, per m/s of speed (s): the law's desired
-    /// gap is at least the certificate's steady-following gap plus `gap_room_time * v +
-    /// gap_room`, so that steady following never touches the override.
-    pub gap_room_time: f32,
-    /// The gap policy's room over the certificate at standstill, m.
+    /// The gap policy's room over the certificate as a closing speed, m/s: the law's desired
+    /// gap is at least the gap the certificate needs while the ego closes on its leader at
+    /// this speed, plus `gap_room`, so that following, with the speed differences its own
+    /// transients make, does not touch the override. The room in metres is what the
+    /// certificate's braking makes of it: about `(v / level + response) gap_room_speed`, 8 m
+    /// at 30 m/s in the comfort band (3.5 m/s^2 against a leader's 6), 4.5 m with 8 m/s^2
+    /// against 9.8.
+    pub gap_room_speed: f32,
+    /// The gap policy's room over the certificate beyond the closing speed's, m.
     pub gap_room: f32,
     /// Nominal law: acceleration per metre of gap error.
     pub gap_gain: f32,
@@ -224,7 +228,7 @@ impl Config {
         let finite_non_negative = [
             self.law.set_speed,
             self.law.standstill_gap,
-            self.law.gap_room_time,
+            self.law.gap_room_speed,
             self.law.gap_room,
             self.law.gap_gain,
             self.law.rel_speed_gain,
@@ -344,7 +348,7 @@ impl Default for LawConfig {
             time_gaps: [1.0, 1.4, 1.8, 2.2],
             time_gap_setting: 2,
             standstill_gap: 4.0,
-            gap_room_time: 0.3,
+            gap_room_speed: 1.5,
             gap_room: 1.0,
             gap_gain: 0.23,
             rel_speed_gain: 0.7,

@@ -332,32 +332,27 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     let mut rows = Vec::new();
     for leader in [6.0f32, 9.8] {
         for &v in &speeds {
-            let mut report =
-                |follower: &str, behind: Option<f32>, braking: Option<firmware::Braking>| {
-                    let steady =
-                        braking.map_or(f32::INFINITY, |b| comfort.steady_gap_with(v, leader, b));
-                    let policy: Vec<f32> = by_setting
+            let mut report = |follower: &str,
+                              behind: Option<f32>,
+                              braking: Option<firmware::Braking>| {
+                let steady =
+                    braking.map_or(f32::INFINITY, |b| comfort.steady_gap_with(v, leader, b));
+                let policy: Vec<f32> = by_setting
+                    .iter()
+                    .map(|c| braking.map_or(f32::INFINITY, |b| c.desired_gap_over(v, leader, b)))
+                    .collect();
+                println!(
+                    "| {leader} | {v:.0} | {follower} | {} | {} | {} | {} |",
+                    behind.map_or("-".to_string(), |t| format!("{t}")),
+                    braking.map_or("-".to_string(), |b| format!("{:.2}", b.level)),
+                    cell(steady),
+                    policy
                         .iter()
-                        .map(|c| {
-                            if steady.is_finite() {
-                                c.desired_gap_over(v, steady)
-                            } else {
-                                f32::INFINITY
-                            }
-                        })
-                        .collect();
-                    println!(
-                        "| {leader} | {v:.0} | {follower} | {} | {} | {} | {} |",
-                        behind.map_or("-".to_string(), |t| format!("{t}")),
-                        braking.map_or("-".to_string(), |b| format!("{:.2}", b.level)),
-                        cell(steady),
-                        policy
-                            .iter()
-                            .map(|&g| cell(g))
-                            .collect::<Vec<_>>()
-                            .join(" / ")
-                    );
-                    rows.push(serde_json::json!({
+                        .map(|&g| cell(g))
+                        .collect::<Vec<_>>()
+                        .join(" / ")
+                );
+                rows.push(serde_json::json!({
                     "leader_braking_m_s2": leader,
                     "speed_m_s": v,
                     "follower": follower,
@@ -369,7 +364,7 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
                         serde_json::json!({"time_gap_s": t, "gap_m": g.is_finite().then_some(*g)})
                     }).collect::<Vec<_>>(),
                 }));
-                };
+            };
             report(
                 "comfort band only (today's certificate)",
                 None,
@@ -400,10 +395,6 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     let mut faster = config;
     faster.plant.actuator_lag_us = 100_000;
     let faster = firmware::Controller::new(bytes, faster);
-    let mut small_room = config;
-    small_room.law.time_gap_setting = 0;
-    small_room.law.gap_room_time = 0.1;
-    let small_room = firmware::Controller::new(bytes, small_room);
     let at = |c: &firmware::Controller<'_>, b: Option<f32>| {
         b.map_or(f32::INFINITY, |level| {
             c.steady_gap_with(v, 9.8, firmware::Braking { level, ..full })
@@ -442,10 +433,12 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     }
     let alone = at(&comfort, Some(full.level));
     println!(
-        "With no follower: certified {}; the gap policy at 1.0 s {} with the room 0.3 s v + 1 m, {} with 0.1 s v + 1 m.",
+        "With no follower: certified {}; the gap policy at {} s {} (its room: the gap for closing at {} m/s, plus {} m).",
         cell(alone),
-        cell(by_setting[0].desired_gap_over(v, alone)),
-        cell(small_room.desired_gap_over(v, alone))
+        settings[0],
+        cell(by_setting[0].desired_gap_over(v, 9.8, full)),
+        config.law.gap_room_speed,
+        config.law.gap_room,
     );
     let levers_json: Vec<serde_json::Value> = levers
         .iter()
@@ -485,16 +478,13 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
                 .iter()
                 .zip(&by_setting)
                 .map(|(&t, c)| {
-                    let gaps = certified
+                    let gaps = speeds
                         .iter()
-                        .map(|&(v, g)| {
+                        .map(|&v| {
                             (
                                 v,
-                                if g.is_finite() {
-                                    c.desired_gap_over(v, g)
-                                } else {
-                                    g
-                                },
+                                braking_at(v)
+                                    .map_or(f32::INFINITY, |b| c.desired_gap_over(v, leader, b)),
                             )
                         })
                         .collect();

@@ -516,7 +516,8 @@ pub fn run(
         // farther still until the start is certified with the law's room (a driver engaging
         // closer would engage into the override's emergency braking).
         let mut gap = l.gap.max(probe.desired_gap(v0));
-        let room = config.law.gap_room_time * v0 + config.law.gap_room;
+        // The law's room at the start's speed, m: its certified gap's over the steady gap.
+        let room = probe.law_certified_gap(v0) - probe.steady_gap(v0) + config.law.gap_room;
         while probe
             .certificate_with_response([gap, v, 1e4, v0, v0], response, 0.0)
             .is_some_and(|c| c.front < room)

@@ -433,6 +433,8 @@ pub struct TracePoint {
     pub parts: [f32; 3],
     /// The certificate margin the firmware computed from its measurements (NaN: none), m.
     pub firmware_margin: f32,
+    /// The command was flagged an emergency ([`firmware::Command::emergency`]).
+    pub emergency: bool,
 }
 
 /// A recorded trajectory.
@@ -1004,6 +1006,7 @@ impl<'t> World<'t> {
                 margin: certificate.map_or(f32::NEG_INFINITY, |c| c.margin()),
                 parts,
                 firmware_margin: command.margin.unwrap_or(f32::NAN),
+                emergency: command.emergency,
             });
         }
         self.period += 1;

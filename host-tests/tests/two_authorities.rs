@@ -83,7 +83,7 @@ struct Following {
     follower_gap: f32,
     /// The braking the follower allowed at the end, m/s^2.
     allowed: Option<f32>,
-    /// The law's desired gap at the end, for that braking, m.
+    /// The law's desired gap at the end ([`firmware::Controller::desired_gap`]), m.
     desired: f32,
     /// Periods flagged as emergencies.
     emergencies: usize,
@@ -155,14 +155,7 @@ fn follow(bytes: &'static [u8], config: Config, speed: f32, behind: Behind) -> F
     let score = world.score();
     let c = world.controller();
     let allowed = c.allowed_braking();
-    let desired = c.desired_gap_over(
-        ego.v,
-        c.steady_gap_with(
-            ego.v,
-            model.leader.0.abs(),
-            allowed.unwrap_or(c.config().certificate.emergency.braking),
-        ),
-    );
+    let desired = c.desired_gap(ego.v);
     Following {
         settled_gap: leader.x - ego.x,
         follower_gap: ego.x - follower.x,
@@ -178,9 +171,11 @@ fn follow(bytes: &'static [u8], config: Config, speed: f32, behind: Behind) -> F
 /// 1 m of the larger of the driver's gap (`4 m + time_gap v`) and the certificate's steady gap
 /// with the braking the follower allows plus the law's room
 /// ([`firmware::Controller::desired_gap_over`]), at every setting, against leaders braking at
-/// 6 and at 9.8 m/s^2. With no follower, against 6 m/s^2 at 30 m/s, that meets the issue's
-/// target: at most 46 m at the 1.0 s setting (1.4 s + 4 m), and four different gaps (the
-/// comfort band alone: 107 m at every setting).
+/// 6 and at 9.8 m/s^2. With no follower at 30 m/s that is at most 46 m at the 1.0 s setting
+/// (1.4 s + 4 m) against both leaders (45.6 m against 9.8 m/s^2: the certificate's 40.3 m
+/// and the room for closing at 1.5 m/s), and four different gaps at every speed (against
+/// 9.8 m/s^2 at 30 m/s the first two 0.2 m apart: the certificate binds the 1.0 s setting;
+/// the comfort band alone: 107 m at every setting).
 #[test]
 fn the_car_follows_at_the_drivers_time_gap() {
     for leader_braking in [6.0, 9.8] {
@@ -200,14 +195,17 @@ fn the_car_follows_at_the_drivers_time_gap() {
                     alone.settled_gap
                 })
                 .collect();
-            if leader_braking == 6.0 {
-                assert!(
-                    gaps.windows(2).all(|w| w[1] > w[0] + 5.0),
-                    "four settings, four gaps: {gaps:?}"
-                );
-                if speed == 30.0 {
-                    assert!(gaps[0] <= 46.0, "{gaps:?}");
-                }
+            let apart = if leader_braking == 6.0 || speed == 20.0 {
+                3.0
+            } else {
+                0.1
+            };
+            assert!(
+                gaps.windows(2).all(|w| w[1] > w[0] + apart),
+                "four settings, four gaps: {gaps:?}"
+            );
+            if speed == 30.0 {
+                assert!(gaps[0] <= 46.0, "{gaps:?}");
             }
         }
     }
@@ -217,9 +215,9 @@ fn the_car_follows_at_the_drivers_time_gap() {
 
 /// The follower sells the braking: a follower at the IDM's closest (its jam distance plus 1 s
 /// behind) allows less of it than the full 8 m/s^2, and the car keeps the room ahead that the
-/// braking it allows needs (30 m/s, the 1.0 s setting), within 1 m of the law's desired gap
-/// for it (2 m: the level moves with the measurement noise), against leaders braking at 6
-/// and at 9.8 m/s^2.
+/// braking it allows needs (30 m/s, the 1.0 s setting), within 2 m of the law's desired gap
+/// for the gentlest level of the last seconds (the level moves with the measurement noise),
+/// with no emergency period, against leaders braking at 6 and at 9.8 m/s^2.
 #[test]
 fn a_close_follower_makes_the_car_keep_more_room_ahead() {
     for leader_braking in [6.0, 9.8] {
@@ -228,6 +226,7 @@ fn a_close_follower_makes_the_car_keep_more_room_ahead() {
         let behind = follow(bytes, two(0), 30.0, Behind::At { time_gap: 1.0 });
         println!("leader {leader_braking}: no follower {alone:?}\n  follower at 1 s {behind:?}");
         assert!(!behind.lost && !behind.collided, "{behind:?}");
+        assert_eq!(behind.emergencies, 0, "{behind:?}");
         assert!((behind.follower_gap - 32.0).abs() < 1.0, "{behind:?}");
         assert!(behind.allowed.is_some_and(|l| l < 7.0), "{behind:?}");
         assert!(

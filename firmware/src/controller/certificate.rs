@@ -736,6 +736,22 @@ impl<'t> Controller<'t> {
     /// model or authority would cost in distance, with the rest of the argument unchanged. `+inf`
     /// without a table.
     pub fn steady_gap_with(&self, speed: f32, leader_braking: f32, braking: Braking) -> f32 {
+        self.closing_gap_with(speed, 0.0, leader_braking, braking)
+    }
+
+    /// [`Controller::steady_gap_with`] with the leader `closing` m/s slower than the ego
+    /// (at the error box's worst corner, as there): the least measured gap at which a command
+    /// of zero passes the look-ahead while the ego closes on the leader at that speed, m. It
+    /// grows with `closing` by about `(v / level + response) closing`: the nominal law keeps
+    /// room over the steady gap as the gap the certificate needs at
+    /// [`LawConfig::gap_room_speed`](crate::LawConfig::gap_room_speed). `+inf` without a table.
+    pub fn closing_gap_with(
+        &self,
+        speed: f32,
+        closing: f32,
+        leader_braking: f32,
+        braking: Braking,
+    ) -> f32 {
         let Ok(Certifier { model, .. }) = &self.certifier else {
             return f32::INFINITY;
         };
@@ -746,7 +762,7 @@ impl<'t> Controller<'t> {
         let lag = seconds(u64::from(c.plant.actuator_lag_us));
         let age = seconds(u64::from(sensors.latency_us) + u64::from(sensors.cycle_us));
         let (ego_low, ego_high) = sensors.ego_speed(speed);
-        let leader_low = math::max(ego_low + sensors.range_rate(0.0).0, 0.0);
+        let leader_low = math::max(ego_low + sensors.range_rate(-closing).0, 0.0);
         let tail = self.lag_tail(model);
         let front = FrontModel {
             leader_braking,

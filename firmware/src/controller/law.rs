@@ -1,15 +1,18 @@
 //! The nominal ACC law: what a comfortable ACC would command, before the certificate has its
-//! say. It knows nothing of the certificate but one number, the certificate's steady-following
-//! gap at the ego's speed ([`Controller::steady_gap`](super::Controller::steady_gap)), which its
-//! gap policy keeps room over; the certificate never trusts it.
+//! say. It knows nothing of the certificate but one number, the gap the certificate needs at
+//! the ego's speed while it closes on its leader at `gap_room_speed`
+//! ([`Controller::law_certified_gap`](super::Controller::law_certified_gap)), which its gap
+//! policy keeps; the certificate never trusts it.
 //!
 //! # The law
 //! - **Gap policy**: the desired gap is the larger of the driver's
-//!   `standstill_gap + time_gap v` and the certificate's steady gap plus
-//!   `gap_room_time v + gap_room`. Steady following at the policy's gap is then inside the
-//!   certified set with that room to spare, so it never touches the override (before, from
-//!   27.5 m/s up the 1.8 s policy was shorter than the certified gap itself, and the override
-//!   threw the car back at full braking every 2 s).
+//!   `standstill_gap + time_gap v` and the gap the certificate needs while the ego closes on
+//!   its leader at `gap_room_speed`, plus `gap_room`. Following at the policy's gap is then
+//!   inside the certified set with room for the speed differences the law's own transients
+//!   make, so it does not touch the override. The room is a speed, not a distance: the
+//!   certificate turns it into metres with the braking it argues with, so a harder braking
+//!   buys a shorter room as well as a shorter gap (1.5 m/s is 8.3 m at 30 m/s in the comfort
+//!   band, 4.5 m with 8 m/s^2 against a leader's 9.8).
 //! - **Following**: `rel_speed_gain (rel_speed + closing(e)) + feedforward_gain a_leader`, `e`
 //!   the gap's error against the policy: `closing(e) = (gap_gain / rel_speed_gain) e` near the
 //!   policy (the classic `gap_gain e + rel_speed_gain rel_speed`), but never more than
@@ -89,8 +92,9 @@ pub(super) struct LawInputs {
     pub(super) period: f32,
     pub(super) set_speed: f32,
     pub(super) time_gap: f32,
-    /// The certificate's steady-following gap at the ego's speed, m.
-    pub(super) steady_gap: f32,
+    /// The gap the certificate needs at the ego's speed while the ego closes on its leader at
+    /// `gap_room_speed`, m.
+    pub(super) certified_gap: f32,
     /// The last command issued (or what the actuator is doing, before the first), m/s^2.
     pub(super) last_command: f32,
     /// The driver asked to resume.
@@ -121,10 +125,9 @@ impl Law {
     }
 
     /// The desired gap at speed `v`, m (module docs: the gap policy).
-    pub(super) fn desired_gap(config: &Config, time_gap: f32, steady_gap: f32, v: f32) -> f32 {
+    pub(super) fn desired_gap(config: &Config, time_gap: f32, certified_gap: f32, v: f32) -> f32 {
         let driver = config.law.standstill_gap + time_gap * v;
-        let certified = steady_gap + config.law.gap_room_time * v + config.law.gap_room;
-        math::max(driver, certified)
+        math::max(driver, certified_gap + config.law.gap_room)
     }
 
     /// Whether the law holds the car at standstill (waiting for the leader or for the
@@ -257,7 +260,7 @@ impl Law {
             let a = -b * v / profile + STOP_GAIN * (profile - v);
             return math::min(a, STOP_APPROACH);
         }
-        let desired = Law::desired_gap(c, x.time_gap, x.steady_gap, v);
+        let desired = Law::desired_gap(c, x.time_gap, x.certified_gap, v);
         let feedforward = c.law.feedforward_gain * math::clamp(leader_acceleration, -3.5, 1.0);
         // The speed to close at: linear in the gap error near the policy (the classic law's
         // `gap_gain e + rel_speed_gain rel_speed`), and no faster than a braking at

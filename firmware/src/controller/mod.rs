@@ -405,6 +405,14 @@ pub const OVERRIDE_HOLD_US: u64 = 500_000;
 /// How far below the domain's top (less the ego speed's error) the law's set speed is held,
 /// m/s: room for the speed law's overshoot under the speed headroom.
 const SET_SPEED_ROOM: f32 = 0.5;
+
+/// How long the law remembers the gentlest braking the follower allowed, microseconds: its
+/// gap is the certificate's for the gentlest of the last one to two seconds. The level is
+/// found at the worst corner of the follower measurement's box, which moves with every
+/// measurement, so the level moves with the noise (4.1-4.2 m/s^2 behind a follower 1 s back at
+/// 30 m/s, about 1.3 m of certified gap per 0.05 m/s^2); a law that took the last level as it
+/// came followed at the best draw's gap and met the override at the next worse one.
+const LAW_BRAKING_MEMORY_US: u64 = 1_000_000;
 use history::{seconds, IssuedCommands, REPORTS};
 use law::{Law, LawInputs};
 use tracks::EGO_HISTORY;
@@ -438,9 +446,12 @@ pub struct Controller<'t> {
     /// With two authorities, the braking in force: the one the last passed look-ahead named,
     /// or the standby certificate's before an engagement (`None`: not known).
     in_force: Option<Braking>,
-    /// With two authorities, the hardest braking the follower allowed the last look-ahead: the
-    /// law's steady gap is the certificate's with it.
+    /// With two authorities, the hardest braking the follower allowed the last look-ahead.
     allowed: Option<Braking>,
+    /// With two authorities, the gentlest braking the follower allowed in the window under way
+    /// and in the one before it (each [`LAW_BRAKING_MEMORY_US`] long, the first starting at
+    /// the time kept): the law's gap is the certificate's with the gentler of the two.
+    law_braking: Option<(u64, Option<Braking>, Option<Braking>)>,
     /// The last command issued (`None` before the first, and after a cancel or a clock jump:
     /// then what the actuator does is only known from its reported state).
     last_command: Option<f32>,
@@ -523,6 +534,7 @@ impl<'t> Controller<'t> {
             passed: false,
             in_force: None,
             allowed: None,
+            law_braking: None,
             last_command: None,
             reported_acceleration: None,
             driver: DriverState::new(&config),
@@ -586,35 +598,67 @@ impl<'t> Controller<'t> {
     }
 
     /// The desired gap of the nominal law at `speed` with the driver's time-gap setting, m:
-    /// the gap policy (the driver's `standstill_gap + time_gap v`, at least the certificate's
-    /// steady gap plus its room) over the steady gap the law uses
-    /// ([`Controller::law_steady_gap`]).
+    /// the gap policy (the driver's `standstill_gap + time_gap v`, at least the gap the
+    /// certificate needs while closing at `gap_room_speed`, plus `gap_room`) with the braking
+    /// the law argues with ([`Controller::law_certified_gap`]).
     pub fn desired_gap(&self, speed: f32) -> f32 {
-        self.desired_gap_over(speed, self.law_steady_gap(speed))
+        let time_gap = self.config.time_gap(self.driver.time_gap_setting);
+        Law::desired_gap(&self.config, time_gap, self.law_certified_gap(speed), speed)
     }
 
-    /// The certificate's steady gap at `speed` that the nominal law keeps its room over, m: for
-    /// the braking the follower allowed the last look-ahead, or where none is known the braking
-    /// in force ([`Controller::steady_gap_with`]); in the comfort band that is the band's
-    /// ([`Controller::steady_gap`]). `+inf` without a table.
-    pub fn law_steady_gap(&self, speed: f32) -> f32 {
+    /// The gap the certificate needs at `speed` while the ego closes on its leader at the law's
+    /// `gap_room_speed` (m), which the nominal law's gap policy keeps
+    /// ([`Controller::closing_gap_with`]): for the braking the follower allowed the last
+    /// look-ahead, or where none is known the braking in force; in the comfort band the band's.
+    /// `+inf` without a table.
+    pub fn law_certified_gap(&self, speed: f32) -> f32 {
         let Ok(certifier) = &self.certifier else {
             return f32::INFINITY;
         };
         let model = certifier.model;
-        self.steady_gap_with(
+        let remembered = self
+            .law_braking
+            .and_then(|(_, window, before)| gentler(window, before));
+        self.closing_gap_with(
             speed,
+            self.config.law.gap_room_speed,
             model.leader_braking,
-            self.allowed.unwrap_or(self.braking_in_force(&model)),
+            remembered
+                .or(self.allowed)
+                .unwrap_or(self.braking_in_force(&model)),
         )
     }
 
-    /// The gap policy at `speed` with the driver's time-gap setting over a certified steady
-    /// gap `steady_gap` (m): [`Controller::desired_gap`] for another model or authority
-    /// ([`Controller::steady_gap_with`]).
-    pub fn desired_gap_over(&self, speed: f32, steady_gap: f32) -> f32 {
+    /// Keeps the gentlest braking the follower allowed, in windows of
+    /// [`LAW_BRAKING_MEMORY_US`] (`law_braking`).
+    fn remember_law_braking(&mut self, now: u64) {
+        let allowed = self.allowed.filter(|_| self.two_authorities());
+        self.law_braking = Some(match self.law_braking {
+            Some((start, window, before))
+                if now >= start && now - start < LAW_BRAKING_MEMORY_US =>
+            {
+                (start, gentler(window, allowed), before)
+            }
+            Some((start, window, _)) if now >= start && now - start < 2 * LAW_BRAKING_MEMORY_US => {
+                (now, allowed, window)
+            }
+            // Long ago, or a clock that went back: start again.
+            _ => (now, allowed, None),
+        });
+    }
+
+    /// The gap policy at `speed` with the driver's time-gap setting against a leader braking at
+    /// most at `leader_braking`, for an ego that answers with `braking` (m):
+    /// [`Controller::desired_gap`] for another model or authority. `+inf` without a table.
+    pub fn desired_gap_over(&self, speed: f32, leader_braking: f32, braking: Braking) -> f32 {
         let time_gap = self.config.time_gap(self.driver.time_gap_setting);
-        Law::desired_gap(&self.config, time_gap, steady_gap, speed)
+        let certified = self.closing_gap_with(
+            speed,
+            self.config.law.gap_room_speed,
+            leader_braking,
+            braking,
+        );
+        Law::desired_gap(&self.config, time_gap, certified, speed)
     }
 
     /// A request from the driver's controls (also taken from [`Inputs::driver`] in the step).
@@ -1017,8 +1061,8 @@ impl<'t> Controller<'t> {
                     ),
                     time_gap: config.time_gap(self.driver.time_gap_setting),
                     // Only a vehicle ahead needs the gap policy (one front evaluation).
-                    steady_gap: if math::is_finite(leader.track.gap) {
-                        self.law_steady_gap(ego_speed)
+                    certified_gap: if math::is_finite(leader.track.gap) {
+                        self.law_certified_gap(ego_speed)
                     } else {
                         f32::INFINITY
                     },
@@ -1038,6 +1082,7 @@ impl<'t> Controller<'t> {
         // command up to the proposal).
         let look = self.look_ahead(&model, now, proposal, ego_speed);
         self.allowed = look.map(|l| l.braking);
+        self.remember_law_braking(now);
         let mut front = self.enforce_front(
             &model, &leader, ego_speed, t_e, now, pending, proposal, look,
         );
@@ -1158,5 +1203,13 @@ impl<'t> Controller<'t> {
         }
         self.margin_lost = outside;
         margin
+    }
+}
+
+/// The gentler of two brakings (the lower level), either where one is unknown.
+fn gentler(a: Option<Braking>, b: Option<Braking>) -> Option<Braking> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(if b.level < a.level { b } else { a }),
+        (a, b) => a.or(b),
     }
 }
