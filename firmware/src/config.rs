@@ -46,7 +46,7 @@ pub struct LawConfig {
     /// gap is at least the gap the certificate needs while the ego closes on its leader at
     /// this speed, plus `gap_room`, so that following, with the speed differences its own
     /// transients make, does not touch the override. The room in metres is what the
-    /// certificate's braking makes of it: about `(v / level + response) gap_room_speed`, 8 m
+    /// certificate's braking makes of it: 7.3 m
     /// at 30 m/s in the comfort band (3.5 m/s^2 against a leader's 6), 4.5 m with 8 m/s^2
     /// against 9.8.
     pub gap_room_speed: f32,

@@ -11,8 +11,10 @@
 //!   inside the certified set with room for the speed differences the law's own transients
 //!   make, so it does not touch the override. The room is a speed, not a distance: the
 //!   certificate turns it into metres with the braking it argues with, so a harder braking
-//!   buys a shorter room as well as a shorter gap (1.5 m/s is 8.3 m at 30 m/s in the comfort
-//!   band, 4.5 m with 8 m/s^2 against a leader's 9.8).
+//!   buys a shorter room as well as a shorter gap (1.5 m/s is 7.3 m at 30 m/s in the comfort
+//!   band, 4.5 m with 8 m/s^2 against a leader's 9.8). With two authorities the braking is the
+//!   gentlest the follower allowed over the last one to two seconds: the level moves with the
+//!   follower's measurement noise, and the gap with it.
 //! - **Following**: `rel_speed_gain (rel_speed + closing(e)) + feedforward_gain a_leader`, `e`
 //!   the gap's error against the policy: `closing(e) = (gap_gain / rel_speed_gain) e` near the
 //!   policy (the classic `gap_gain e + rel_speed_gain rel_speed`), but never more than
