@@ -136,6 +136,13 @@ pub struct Outcome {
     /// while the ego's brake lights are off and until its reaction time has passed after they
     /// come on, then the IDM at its closest time gap.
     pub cut_in_hit_from_behind_at_emergency_answered: Option<[bool; 2]>,
+    /// The same three followers (as it drove, the IDM at once, the reacting one) started at the
+    /// worst corner of the declared error box around the follower's true state at the cut-in
+    /// (the least gap and the fastest follower that an exact measurement's box holds): whether
+    /// any hits that braking from behind. A controller that knows the follower only through
+    /// its measurement cannot rule that follower out, so a braking it hits is not one the
+    /// certificate can buy.
+    pub cut_in_hit_from_behind_at_emergency_box: Option<bool>,
 }
 
 impl Outcome {
@@ -154,6 +161,16 @@ impl Outcome {
             && self.cut_in_hit_from_behind_at_emergency_answered == Some([false, false]);
         let at_emergency = self.cut_in_unavoidable_at_emergency == Some(false);
         clear_behind && ((ahead && cut_in.r157_requires_avoiding()) || at_emergency)
+    }
+
+    /// [`Outcome::preventable_not_prevented`], and that braking not hit from behind either by
+    /// the followers at the worst corner of the error box around the follower's true state
+    /// ([`Outcome::cut_in_hit_from_behind_at_emergency_box`]): preventable by a controller
+    /// that knows the follower through the declared sensors. Where the two differ the
+    /// rear measurement's box, not the controller's choice, held the braking back.
+    pub fn preventable_through_the_sensors_not_prevented(&self, cut_in: &CutInScore) -> bool {
+        self.preventable_not_prevented(cut_in)
+            && self.cut_in_hit_from_behind_at_emergency_box == Some(false)
     }
 
     /// The outcome of an episode from its score.
@@ -191,6 +208,7 @@ impl Outcome {
             cut_in_unavoidable_at_emergency: None,
             cut_in_hit_from_behind_at_emergency: None,
             cut_in_hit_from_behind_at_emergency_answered: None,
+            cut_in_hit_from_behind_at_emergency_box: None,
         }
     }
 }
@@ -380,8 +398,23 @@ pub fn run_episode(
         // too, and with the car ahead or behind.
         let tmin = model.parameter_range().0;
         let reacting = certifier.reacting_follower();
-        let collides_braking_with = |braking: &dyn Fn(usize) -> f32, behind: Behind| {
+        // The worst corner of the declared error box around the follower's true state at the
+        // cut-in: the least gap and the fastest follower of an exact measurement's box, as
+        // the firmware's rear check takes it (`MeasurementError::rear_box`).
+        let box_corner = {
+            let [_, e, f] = counterfactual.cars();
+            let error = &config.sensors.error;
+            let gap = e.x - f.x;
+            let (lo, hi) = error.rear_box(gap, e.v - f.v, error.ego_speed(e.v));
+            (gap - lo[0], hi[1] - f.v)
+        };
+        let collides_braking_with = |braking: &dyn Fn(usize) -> f32,
+                                     behind: Behind,
+                                     corner: bool| {
             let mut world = counterfactual.clone();
+            if corner {
+                world.move_follower(box_corner.0, box_corner.1);
+            }
             // The record ends where the episode did (at its collision): past it, the humans
             // keep their last accelerations (a braking leader brakes on to a stop) for
             // `AFTER_RECORD` more, so that a braking that only delays the collision past the
@@ -425,7 +458,7 @@ pub fn run_episode(
             (collided, collided && !hit_behind, hit_behind)
         };
         outcome.cut_in_unavoidable =
-            Some(collides_braking_with(&|_| model.band_min, Behind::Replayed).0);
+            Some(collides_braking_with(&|_| model.band_min, Behind::Replayed, false).0);
         // The emergency authority as declared: the band's floor at once (the comfort
         // authority's step), then the build-up at its jerk to its level.
         let emergency = config.certificate.emergency.braking;
@@ -435,13 +468,18 @@ pub fn run_episode(
             .map_or(model.band_min, |r| r.2);
         let start = before.min(model.band_min);
         let at_emergency = |k: usize| (start - emergency.jerk * h * k as f32).max(-emergency.level);
-        let (_, ahead, behind) = collides_braking_with(&at_emergency, Behind::Replayed);
+        let (_, ahead, behind) = collides_braking_with(&at_emergency, Behind::Replayed, false);
         outcome.cut_in_unavoidable_at_emergency = Some(ahead);
         outcome.cut_in_hit_from_behind_at_emergency = Some(behind);
         outcome.cut_in_hit_from_behind_at_emergency_answered = Some([
-            collides_braking_with(&at_emergency, Behind::AtOnce).2,
-            collides_braking_with(&at_emergency, Behind::Reacting).2,
+            collides_braking_with(&at_emergency, Behind::AtOnce, false).2,
+            collides_braking_with(&at_emergency, Behind::Reacting, false).2,
         ]);
+        outcome.cut_in_hit_from_behind_at_emergency_box = Some(
+            [Behind::Replayed, Behind::AtOnce, Behind::Reacting]
+                .into_iter()
+                .any(|behind| collides_braking_with(&at_emergency, behind, true).2),
+        );
     }
     Some(outcome)
 }
@@ -610,6 +648,10 @@ pub struct CutInSummary {
     /// Collisions that were preventable and were not prevented
     /// ([`Outcome::preventable_not_prevented`]). The aim is none.
     pub preventable_not_prevented: usize,
+    /// Of those, the ones preventable through the declared sensors as well
+    /// ([`Outcome::preventable_through_the_sensors_not_prevented`]): the others the rear
+    /// measurement's error box held back.
+    pub preventable_through_the_sensors_not_prevented: usize,
 }
 
 /// Runs `episodes` episodes of one group in parallel, seeds `seed..seed + episodes`.
@@ -789,6 +831,10 @@ fn cut_in_summary(outcomes: &[(u64, Outcome)]) -> CutInSummary {
             .iter()
             .filter(|(o, c)| o.preventable_not_prevented(c))
             .count(),
+        preventable_through_the_sensors_not_prevented: cuts
+            .iter()
+            .filter(|(o, c)| o.preventable_through_the_sensors_not_prevented(c))
+            .count(),
     }
 }
 
@@ -950,6 +996,9 @@ pub struct CampaignTotals {
     /// Collisions after a cut-in that were preventable and were not prevented
     /// ([`Outcome::preventable_not_prevented`]).
     pub cut_in_collisions_preventable: usize,
+    /// Of those, the ones preventable through the declared sensors as well
+    /// ([`Outcome::preventable_through_the_sensors_not_prevented`]).
+    pub cut_in_collisions_preventable_through_the_sensors: usize,
 }
 
 /// What a campaign found: `campaign.json`.
@@ -1070,6 +1119,8 @@ pub fn run_campaign(
         }
         totals.cut_ins_r157 += c.r157_requires_avoiding;
         totals.cut_in_collisions_preventable += c.preventable_not_prevented;
+        totals.cut_in_collisions_preventable_through_the_sensors +=
+            c.preventable_through_the_sensors_not_prevented;
     }
     CampaignReport {
         episodes_per_group: settings.episodes,

@@ -605,12 +605,12 @@ fn campaign(args: CampaignArgs) -> Result<()> {
     plotted?;
     if settings.cut_in.is_some() {
         println!();
-        println!("| leader | follower | cut-ins | first track after [s] (mean, max) | recognised at once | front uncertified | of those answered within one period | their first answer, mean [m/s^2] | mean hardest command [m/s^2] | braked harder than the band (episodes) | collisions | of them hit from behind | of them unavoidable (at beta) | R157 requires avoiding | collisions unavoidable at the emergency authority | of the others, hit from behind there | preventable, not prevented |");
-        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+        println!("| leader | follower | cut-ins | first track after [s] (mean, max) | recognised at once | front uncertified | of those answered within one period | their first answer, mean [m/s^2] | mean hardest command [m/s^2] | braked harder than the band (episodes) | collisions | of them hit from behind | of them unavoidable (at beta) | R157 requires avoiding | collisions unavoidable at the emergency authority | of the others, hit from behind there | preventable, not prevented | of those, through the declared sensors too |");
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         for summary in &report.groups {
             if let Some(c) = summary.cut_ins {
                 println!(
-                    "| {:?} | {:?} | {} | {:.3}, {:.3} | {} | {} | {} | {:.2} | {:.2} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                    "| {:?} | {:?} | {} | {:.3}, {:.3} | {} | {} | {} | {:.2} | {:.2} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                     summary.leader,
                     summary.follower,
                     c.episodes,
@@ -628,7 +628,8 @@ fn campaign(args: CampaignArgs) -> Result<()> {
                     c.r157_requires_avoiding,
                     c.unavoidable_at_emergency,
                     c.hit_from_behind_at_emergency,
-                    c.preventable_not_prevented
+                    c.preventable_not_prevented,
+                    c.preventable_through_the_sensors_not_prevented
                 );
             }
         }

@@ -693,6 +693,15 @@ impl<'t> World<'t> {
         self.cars
     }
 
+    /// Moves the follower `closer` metres towards the ego and makes it `faster` m/s faster (at
+    /// least at rest): a counterfactual's follower at a corner of an error box around its true
+    /// state. The firmware's memory is left as it was.
+    pub fn move_follower(&mut self, closer: f32, faster: f32) {
+        let follower = &mut self.cars[2];
+        follower.x += closer;
+        follower.v = (follower.v + faster).max(0.0);
+    }
+
     /// The deceleration beyond which the ego's brake lights are on (the configuration's
     /// declaration, which the table's matches), m/s^2.
     fn lights_deceleration(&self) -> f32 {

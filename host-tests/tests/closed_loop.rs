@@ -239,6 +239,10 @@ fn cut_in_collisions_are_scored_at_the_emergency_authority_and_by_r157() {
         assert_eq!(o.cut_in_unavoidable.is_some(), o.collided);
         assert_eq!(o.cut_in_unavoidable_at_emergency.is_some(), o.collided);
         assert_eq!(o.cut_in_hit_from_behind_at_emergency.is_some(), o.collided);
+        assert_eq!(
+            o.cut_in_hit_from_behind_at_emergency_box.is_some(),
+            o.collided
+        );
         // Ahead or behind, never both: the counterfactual stops at its first collision.
         assert!(
             !(o.cut_in_unavoidable_at_emergency == Some(true)
@@ -249,7 +253,7 @@ fn cut_in_collisions_are_scored_at_the_emergency_authority_and_by_r157() {
     // Behind a follower that ignores the model (full acceleration), braking at 8 m/s^2 is hit
     // from behind when the follower replays what it did; the IDM in its place, answering the
     // braking at once or after a person's reaction, far less often.
-    let (s, _) = run_group(
+    let (s, unbounded) = run_group(
         &t,
         firmware::DEFAULT_TABLE,
         Episode {
@@ -265,6 +269,21 @@ fn cut_in_collisions_are_scored_at_the_emergency_authority_and_by_r157() {
     for answered in c.hit_from_behind_at_emergency_answered {
         assert!(2 * answered < c.hit_from_behind_at_emergency, "{c:?}");
     }
+    // The follower at the worst corner of the box around its true state (closer, faster),
+    // driving as it did, hits every braking the true one hits: it is there sooner.
+    for (seed, o) in &unbounded {
+        if o.cut_in_hit_from_behind_at_emergency == Some(true) {
+            assert_eq!(
+                o.cut_in_hit_from_behind_at_emergency_box,
+                Some(true),
+                "{seed}"
+            );
+        }
+    }
+    assert!(
+        c.preventable_through_the_sensors_not_prevented <= c.preventable_not_prevented,
+        "{c:?}"
+    );
     // Braking at 8 m/s^2 avoids some of what 3.5 could not.
     assert!(c.unavoidable_at_emergency < c.collisions, "{c:?}");
     // None is preventable that braking harder only moves behind the ego.
