@@ -528,7 +528,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     println!(
-        "| leader | follower | in model | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | min margin [m] (front, rear) | min gap front [m] | min gap rear [m] | override | uncertified min-risk periods | fallback periods (episodes) | oldest track [s] (front, rear) | leader stops | standstill starts | max jerk [m/s^3] | ISO 15622 held (episodes whose leader braked at most 3.5 m/s^2, engaged without an emergency) | worst ISO ratio there | emergency periods: engagement / cut-in / uncertified truth / certified truth (engagements that were one) |"
+        "| leader | follower | in model | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | min margin [m] (front, rear) | min gap front [m] | min gap rear [m] | override | uncertified min-risk periods | fallback periods (episodes) | oldest track [s] (front, rear) | leader stops | standstill starts | max jerk [m/s^3] | ISO 15622 held (episodes whose leader braked at most 3.5 m/s^2, engaged without an emergency) | worst ISO ratio there | emergency periods: engagement / cut-in / uncertified truth / certified truth [of which by the comfort band alone] (engagements that were one) |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut plotted: Result<()> = Ok(());
@@ -540,7 +540,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
             let l = summary.certificate_losses_by_mode;
             bar.suspend(|| {
                 println!(
-                    "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {} | {} ({}) | {:.2}, {:.2} | {:.1} | {} | {:.0} | {} of {} | {:.2} | {} / {} / {} / {} ({}) |",
+                    "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {} | {} ({}) | {:.2}, {:.2} | {:.1} | {} | {:.0} | {} of {} | {:.2} | {} / {} / {} / {} [{}] ({}) |",
                     summary.leader,
                     summary.follower,
                     summary.in_model,
@@ -577,6 +577,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
                     summary.emergencies.cut_in,
                     summary.emergencies.uncertified_truth,
                     summary.emergencies.certified_truth,
+                    summary.emergencies.comfort_certified_truth,
                     summary.engaged_in_emergency
                 )
             });
@@ -654,12 +655,14 @@ fn campaign(args: CampaignArgs) -> Result<()> {
     let e = &t.emergencies;
     println!(
         "emergency periods there: {} at engagement, {} after a cut-in, {} with the true state \
-         uncertified, {} with it certified (made by the measurement or the delays' bounds); \
+         uncertified, {} with it certified (made by the measurement or the delays' bounds), \
+         {} of those with it certified by the comfort band alone; \
          {} periods in {} episodes braked harder than the band",
         e.engagement,
         e.cut_in,
         e.uncertified_truth,
         e.certified_truth,
+        e.comfort_certified_truth,
         t.below_band_periods,
         t.below_band_episodes
     );

@@ -216,6 +216,14 @@ pub struct EmergencyCauses {
     /// or the delays' bounds made an emergency the truth did not need. The firmware aims at
     /// none.
     pub certified_truth: u64,
+    /// Of those, the periods of runs whose true state at their first period the comfort band
+    /// alone certified, braking along its ramp from the last command before the run, its
+    /// lights coming on along that ramp
+    /// ([`firmware::Controller::comfort_certificate_with_actuator`]): the emergency authority
+    /// was not needed either. With one authority (the comfort band) all of them. A lower bound
+    /// of what the comfort band could have done: the lights of a run under way are not
+    /// credited.
+    pub comfort_certified_truth: u64,
 }
 
 impl EmergencyCauses {
@@ -231,6 +239,7 @@ impl EmergencyCauses {
             cut_in: self.cut_in + other.cut_in,
             uncertified_truth: self.uncertified_truth + other.uncertified_truth,
             certified_truth: self.certified_truth + other.certified_truth,
+            comfort_certified_truth: self.comfort_certified_truth + other.comfort_certified_truth,
         }
     }
 }
@@ -499,7 +508,10 @@ enum EmergencyCause {
     Engagement,
     CutIn,
     UncertifiedTruth,
-    CertifiedTruth,
+    /// `comfort`: the comfort band alone certified the truth as well.
+    CertifiedTruth {
+        comfort: bool,
+    },
 }
 
 impl<'t> World<'t> {
@@ -770,6 +782,25 @@ impl<'t> World<'t> {
         )
     }
 
+    /// With two authorities, the certificate at the true state now were the firmware to brake
+    /// along the comfort band's ramp from the last period's command
+    /// ([`firmware::Controller::comfort_certificate_with_actuator`]), with what the actuator
+    /// has yet to do. Called as [`World::certificate`] is, before [`World::last`] moves on.
+    fn comfort_certificate(&self) -> Option<Certificate> {
+        let now_us = self.period * self.period_us;
+        let (last, _) = self.last?;
+        let (_, pending) = self.actuator.response(now_us, f32::NEG_INFINITY);
+        let model = self.actuator.model();
+        self.controller.comfort_certificate_with_actuator(
+            state_of(self.cars),
+            now_us,
+            model.dead_time_us(),
+            model.lag,
+            pending,
+            last.acceleration,
+        )
+    }
+
     /// From when the ego's brake lights are on for good (its actuator's acceleration below
     /// `-theta`, the declared lights' deceleration, from then on), us, if the firmware keeps
     /// to the braking it is committed to ([`firmware::Controller::committed_braking`]): this
@@ -883,6 +914,16 @@ impl<'t> World<'t> {
         }
         self.score_cut_in(&inputs, &command);
         let certificate = self.certificate();
+        // Whether the comfort band alone certified the truth, at the first period of an
+        // emergency run (one authority: it is the certificate).
+        let comfort_certified = command.emergency
+            && self.emergency_run.is_none()
+            && match self.controller.config().certificate.authorities {
+                firmware::Authorities::ComfortBand => true,
+                firmware::Authorities::Two => {
+                    self.comfort_certificate().is_some_and(|c| c.is_certified())
+                }
+            };
         let s = &mut self.score;
         if let Some(c) = certificate {
             s.min_front = s.min_front.min(c.front);
@@ -918,7 +959,9 @@ impl<'t> World<'t> {
             } else if since_cut_in.is_some_and(|t| t <= 5.0) {
                 EmergencyCause::CutIn
             } else if truth_before.is_some_and(|m| m > 0.0) {
-                EmergencyCause::CertifiedTruth
+                EmergencyCause::CertifiedTruth {
+                    comfort: comfort_certified,
+                }
             } else {
                 EmergencyCause::UncertifiedTruth
             });
@@ -926,7 +969,10 @@ impl<'t> World<'t> {
             *match cause {
                 EmergencyCause::Engagement => &mut e.engagement,
                 EmergencyCause::CutIn => &mut e.cut_in,
-                EmergencyCause::CertifiedTruth => &mut e.certified_truth,
+                EmergencyCause::CertifiedTruth { comfort } => {
+                    e.comfort_certified_truth += u64::from(comfort);
+                    &mut e.certified_truth
+                }
                 EmergencyCause::UncertifiedTruth => &mut e.uncertified_truth,
             } += 1;
             self.emergency_run = Some(cause);

@@ -538,12 +538,80 @@ impl<'t> Controller<'t> {
         lights_on_us: Option<u64>,
     ) -> Option<Certificate> {
         let certifier = self.certifier.as_ref().ok()?;
-        let model = &certifier.model;
-        let braking = self.braking_in_force(model);
-        let jerk = braking.jerk;
-        let h = u64::from(self.config.period_us);
+        let braking = self.braking_in_force(&certifier.model);
         let last = self.last_command?;
         let ramp = self.ramp_after(now_us, last);
+        self.certificate_along(
+            state,
+            now_us,
+            dead_time_us,
+            lag,
+            (pending, last),
+            lights_on_us,
+            braking,
+            ramp,
+        )
+    }
+
+    /// With two authorities: the certificate at a true state, as
+    /// [`Controller::certificate_with_actuator_and_lights`], were the controller to brake
+    /// from the command `last` along the comfort band's braking (`beta` at `brake_jerk`) from
+    /// the next period on, whatever braking it is in fact committed to, the lights coming on
+    /// as that ramp brings them on (a run under way is not credited): whether the comfort
+    /// authority alone certifies the state. For closed-loop judges telling an emergency the
+    /// state needed from one the comfort band did not need. `None` in the comfort band or
+    /// without a table.
+    pub fn comfort_certificate_with_actuator(
+        &self,
+        state: [f32; 5],
+        now_us: u64,
+        dead_time_us: u64,
+        lag: f32,
+        pending: f32,
+        last: f32,
+    ) -> Option<Certificate> {
+        if !self.two_authorities() {
+            return None;
+        }
+        let certifier = self.certifier.as_ref().ok()?;
+        let braking = certifier
+            .model
+            .band_braking(self.config.certificate.brake_jerk);
+        let ramp = Ramp {
+            start_us: now_us.saturating_add(u64::from(self.config.period_us)),
+            from: last,
+        };
+        self.certificate_along(
+            state,
+            now_us,
+            dead_time_us,
+            lag,
+            (pending, last),
+            None,
+            braking,
+            ramp,
+        )
+    }
+
+    /// The certificate at a true state along `braking` from `ramp` (module docs), with what
+    /// the actuator has pending and the last command issued, the lights on for good from
+    /// `lights_on_us` or (`None`) as that braking brings them on.
+    #[allow(clippy::too_many_arguments)]
+    fn certificate_along(
+        &self,
+        state: [f32; 5],
+        now_us: u64,
+        dead_time_us: u64,
+        lag: f32,
+        (pending, last): (f32, f32),
+        lights_on_us: Option<u64>,
+        braking: Braking,
+        ramp: Ramp,
+    ) -> Option<Certificate> {
+        let certifier = self.certifier.as_ref().ok()?;
+        let model = &certifier.model;
+        let jerk = braking.jerk;
+        let h = u64::from(self.config.period_us);
         let (response, ramp_from) = profile(now_us, ramp, dead_time_us, lag, jerk);
         let hold = math::max(math::max(pending, last), ramp_from);
         if !self.two_authorities() {
