@@ -782,6 +782,35 @@ impl<'t> World<'t> {
         )
     }
 
+    /// The cause of an emergency run that begins this period ([`EmergencyCauses`]), judged
+    /// before [`World::last`] moves on: an engagement, a cut-in within 5 s, or the true state
+    /// certified or not along the braking the firmware was committed to when the period began
+    /// (the last period's certificate), and then whether the comfort band alone certified it
+    /// (one authority: it is the certificate).
+    fn emergency_cause(&self, engagement: bool) -> EmergencyCause {
+        let h = self.period_us as f32 * 1e-6;
+        let since_cut_in = self
+            .cut_in
+            .map(|(at, _)| self.period.saturating_sub(at) as f32 * h);
+        let truth_before = self.last.and_then(|(_, c)| c).map(|c| c.margin());
+        if engagement {
+            EmergencyCause::Engagement
+        } else if since_cut_in.is_some_and(|t| t <= 5.0) {
+            EmergencyCause::CutIn
+        } else if truth_before.is_some_and(|m| m > 0.0) {
+            EmergencyCause::CertifiedTruth {
+                comfort: match self.controller.config().certificate.authorities {
+                    firmware::Authorities::ComfortBand => true,
+                    firmware::Authorities::Two => {
+                        self.comfort_certificate().is_some_and(|c| c.is_certified())
+                    }
+                },
+            }
+        } else {
+            EmergencyCause::UncertifiedTruth
+        }
+    }
+
     /// With two authorities, the certificate at the true state now were the firmware to brake
     /// along the comfort band's ramp from the last period's command
     /// ([`firmware::Controller::comfort_certificate_with_actuator`]), with what the actuator
@@ -914,16 +943,12 @@ impl<'t> World<'t> {
         }
         self.score_cut_in(&inputs, &command);
         let certificate = self.certificate();
-        // Whether the comfort band alone certified the truth, at the first period of an
-        // emergency run (one authority: it is the certificate).
-        let comfort_certified = command.emergency
-            && self.emergency_run.is_none()
-            && match self.controller.config().certificate.authorities {
-                firmware::Authorities::ComfortBand => true,
-                firmware::Authorities::Two => {
-                    self.comfort_certificate().is_some_and(|c| c.is_certified())
-                }
-            };
+        // An emergency period counts under the cause its run began with.
+        let engagement = self.period == self.engaged_from;
+        let cause = command.emergency.then(|| {
+            self.emergency_run
+                .unwrap_or_else(|| self.emergency_cause(engagement))
+        });
         let s = &mut self.score;
         if let Some(c) = certificate {
             s.min_front = s.min_front.min(c.front);
@@ -944,27 +969,8 @@ impl<'t> World<'t> {
             Mode::Standby => 4,
         };
         s.periods_by_mode[mode_index] += 1;
-        if command.emergency {
-            // The true state's margin when the period began, along the braking the firmware
-            // was committed to then (the last period's certificate).
-            let truth_before = self.last.and_then(|(_, c)| c).map(|c| c.margin());
-            let h = self.period_us as f32 * 1e-6;
-            let since_cut_in = self
-                .cut_in
-                .map(|(at, _)| self.period.saturating_sub(at) as f32 * h);
+        if let Some(cause) = cause {
             let e = &mut s.emergencies;
-            let engagement = self.period == self.engaged_from;
-            let cause = self.emergency_run.unwrap_or(if engagement {
-                EmergencyCause::Engagement
-            } else if since_cut_in.is_some_and(|t| t <= 5.0) {
-                EmergencyCause::CutIn
-            } else if truth_before.is_some_and(|m| m > 0.0) {
-                EmergencyCause::CertifiedTruth {
-                    comfort: comfort_certified,
-                }
-            } else {
-                EmergencyCause::UncertifiedTruth
-            });
             s.engaged_in_emergency |= engagement;
             *match cause {
                 EmergencyCause::Engagement => &mut e.engagement,
@@ -975,10 +981,8 @@ impl<'t> World<'t> {
                 }
                 EmergencyCause::UncertifiedTruth => &mut e.uncertified_truth,
             } += 1;
-            self.emergency_run = Some(cause);
-        } else {
-            self.emergency_run = None;
         }
+        self.emergency_run = cause;
         s.periods += 1;
         if command.acceleration < self.model.band_min {
             s.below_band_periods += 1;

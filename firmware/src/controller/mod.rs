@@ -602,8 +602,7 @@ impl<'t> Controller<'t> {
     /// certificate needs while closing at `gap_room_speed`, plus `gap_room`) with the braking
     /// the law argues with ([`Controller::law_certified_gap`]).
     pub fn desired_gap(&self, speed: f32) -> f32 {
-        let time_gap = self.config.time_gap(self.driver.time_gap_setting);
-        Law::desired_gap(&self.config, time_gap, self.law_certified_gap(speed), speed)
+        self.gap_policy(speed, self.law_certified_gap(speed))
     }
 
     /// The gap the certificate needs at `speed` while the ego closes on its leader at the law's
@@ -619,14 +618,27 @@ impl<'t> Controller<'t> {
         let remembered = self
             .law_braking
             .and_then(|(_, window, before)| gentler(window, before));
+        let braking = remembered
+            .or(self.allowed)
+            .unwrap_or(self.braking_in_force(&model));
+        self.room_gap_with(speed, model.leader_braking, braking)
+    }
+
+    /// [`Controller::closing_gap_with`] at the law's `gap_room_speed`.
+    fn room_gap_with(&self, speed: f32, leader_braking: f32, braking: Braking) -> f32 {
         self.closing_gap_with(
             speed,
             self.config.law.gap_room_speed,
-            model.leader_braking,
-            remembered
-                .or(self.allowed)
-                .unwrap_or(self.braking_in_force(&model)),
+            leader_braking,
+            braking,
         )
+    }
+
+    /// The gap policy at `speed` with the driver's time-gap setting over the certificate's gap
+    /// `certified_gap` (m; law's module docs).
+    fn gap_policy(&self, speed: f32, certified_gap: f32) -> f32 {
+        let time_gap = self.config.time_gap(self.driver.time_gap_setting);
+        Law::desired_gap(&self.config, time_gap, certified_gap, speed)
     }
 
     /// Keeps the gentlest braking the follower allowed, in windows of
@@ -651,14 +663,7 @@ impl<'t> Controller<'t> {
     /// most at `leader_braking`, for an ego that answers with `braking` (m):
     /// [`Controller::desired_gap`] for another model or authority. `+inf` without a table.
     pub fn desired_gap_over(&self, speed: f32, leader_braking: f32, braking: Braking) -> f32 {
-        let time_gap = self.config.time_gap(self.driver.time_gap_setting);
-        let certified = self.closing_gap_with(
-            speed,
-            self.config.law.gap_room_speed,
-            leader_braking,
-            braking,
-        );
-        Law::desired_gap(&self.config, time_gap, certified, speed)
+        self.gap_policy(speed, self.room_gap_with(speed, leader_braking, braking))
     }
 
     /// A request from the driver's controls (also taken from [`Inputs::driver`] in the step).
