@@ -516,8 +516,17 @@ pub fn run(
         // farther still until the start is certified with the law's room (a driver engaging
         // closer would engage into the override's emergency braking).
         let mut gap = l.gap.max(probe.desired_gap(v0));
-        // The law's room at the start's speed, m: its certified gap's over the steady gap.
-        let room = probe.law_certified_gap(v0) - probe.steady_gap(v0) + config.law.gap_room;
+        // The law's room at the start's speed, m, over the band's certificate the start is
+        // judged with: the gap for closing at the room's speed over the steady gap, both
+        // along the band's braking.
+        let band = firmware::Braking {
+            level: -model.band_min,
+            jerk: config.certificate.brake_jerk,
+        };
+        let leader_braking = -model.leader.0;
+        let room = probe.closing_gap_with(v0, config.law.gap_room_speed, leader_braking, band)
+            - probe.steady_gap_with(v0, leader_braking, band)
+            + config.law.gap_room;
         while probe
             .certificate_with_response([gap, v, 1e4, v0, v0], response, 0.0)
             .is_some_and(|c| c.front < room)
