@@ -163,13 +163,17 @@ impl Outcome {
         clear_behind && ((ahead && cut_in.r157_requires_avoiding()) || at_emergency)
     }
 
-    /// [`Outcome::preventable_not_prevented`], and that braking not hit from behind either by
-    /// the followers at the worst corner of the error box around the follower's true state
-    /// ([`Outcome::cut_in_hit_from_behind_at_emergency_box`]): preventable by a controller
-    /// that knows the follower through the declared sensors. Where the two differ the
-    /// rear measurement's box, not the controller's choice, held the braking back.
+    /// [`Outcome::preventable_not_prevented`] for a controller that knows the cars through
+    /// the declared sensors: braking at the emergency authority from the first delivered
+    /// track of the new vehicle avoids the car ahead (UN R157's rule alone does not count: it
+    /// takes the cut-in as seen, and the declared radar may deliver it late, or its actuator
+    /// be slower than the rule's 0.35 s), and is not hit from behind either by the followers
+    /// at the worst corner of the error box around the follower's true state
+    /// ([`Outcome::cut_in_hit_from_behind_at_emergency_box`]). Where the two differ the
+    /// sensors, not the controller's choice, held the answer back.
     pub fn preventable_through_the_sensors_not_prevented(&self, cut_in: &CutInScore) -> bool {
         self.preventable_not_prevented(cut_in)
+            && self.cut_in_unavoidable_at_emergency == Some(false)
             && self.cut_in_hit_from_behind_at_emergency_box == Some(false)
     }
 
@@ -649,8 +653,9 @@ pub struct CutInSummary {
     /// ([`Outcome::preventable_not_prevented`]). The aim is none.
     pub preventable_not_prevented: usize,
     /// Of those, the ones preventable through the declared sensors as well
-    /// ([`Outcome::preventable_through_the_sensors_not_prevented`]): the others the rear
-    /// measurement's error box held back.
+    /// ([`Outcome::preventable_through_the_sensors_not_prevented`]): the others the sensors
+    /// held back (a track delivered too late for the emergency authority, or the rear
+    /// measurement's error box).
     pub preventable_through_the_sensors_not_prevented: usize,
 }
 

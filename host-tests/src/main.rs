@@ -676,7 +676,8 @@ fn campaign(args: CampaignArgs) -> Result<()> {
              instead by the follower as it drove ({} by the IDM at its closest time gap \
              answering at once, {} by the certificate's follower reacting after {} s); {} \
              cut-ins R157 requires avoiding (the new car keeping its speed); {} collisions \
-             preventable (by R157's rule or at the emergency authority) but not prevented",
+             preventable (by R157's rule or at the emergency authority) but not prevented, {} \
+             of them through the declared sensors too",
             t.cut_ins,
             t.cut_ins_answered_late,
             t.cut_in_collisions_avoidable,
@@ -689,7 +690,8 @@ fn campaign(args: CampaignArgs) -> Result<()> {
             t.cut_in_collisions_hit_from_behind_at_emergency_answered[1],
             emergency.follower_reaction_time,
             t.cut_ins_r157,
-            t.cut_in_collisions_preventable
+            t.cut_in_collisions_preventable,
+            t.cut_in_collisions_preventable_through_the_sensors
         );
     }
     println!("wrote {}", out.display());

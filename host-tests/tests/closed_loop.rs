@@ -338,3 +338,31 @@ fn r157s_cut_ins_are_avoided() {
         }
     }
 }
+
+/// A cut-in UN R157 asks to avoid that the declared radar delivered too late for any
+/// controller (`campaign --cut-in steady-leader --episodes 300`, seed 14,000,215: a car 4.7 m/s
+/// slower, its lateral motion visible from 9.4 m, its track first delivered 1.08 s later,
+/// 0.36 s after it entered the lane): preventable by the rule, not through the sensors
+/// (braking at the emergency authority from that first track hits it too).
+#[test]
+fn a_cut_in_the_radar_delivers_late_is_not_preventable_through_the_sensors() {
+    let table = table();
+    let episode = Episode {
+        leader: Leader::Random,
+        follower: Follower::IdmSwitching,
+        seconds: 120.0,
+        sensors: Sensing::Datasheet,
+        cut_in: Some(host_tests::world::CutInKind::SteadyLeader),
+        actuator: ACTUATOR_AT_LIMITS,
+        config: Config::default(),
+        seed: 14_000_215,
+    };
+    let o = run_episode(&table, firmware::DEFAULT_TABLE, &episode, None).expect("it starts");
+    let cut = o.cut_in.expect("a cut-in");
+    assert!(o.collided, "{o:?}");
+    let delivered = cut.delivered_after.expect("delivered");
+    assert!(delivered > cut.lateral_warning, "{cut:?}");
+    assert_eq!(o.cut_in_unavoidable_at_emergency, Some(true));
+    assert!(o.preventable_not_prevented(&cut));
+    assert!(!o.preventable_through_the_sensors_not_prevented(&cut));
+}
