@@ -313,3 +313,56 @@ fn the_brakes_are_released_only_where_the_follower_allows_it() {
         }
     }
 }
+
+/// The lights' hold: the emergency answer's first command is counted on to light the brake
+/// lights (the rear check credits the follower's reaction from then), so no later command is
+/// gentler until they are on for sure, whatever the front says. A car cuts in 12 m ahead,
+/// 5 m/s slower, braking at 6 m/s^2, and is gone again one period later (the old leader
+/// 200 m ahead): the answer brakes below the band at once, and the next periods hold it
+/// through the declared 0.1 s dead time, although the front is certified again; then the
+/// command is free, and comes back above the band.
+#[test]
+fn the_emergency_answer_holds_its_braking_until_its_lights_are_on() {
+    let mut c = Controller::new(DEFAULT_TABLE, firmware::Config::default());
+    let mut cars = Cars {
+        x: [200.0, 0.0, -150.0],
+        v: [20.0, 20.0, 20.0],
+    };
+    let h = 0.02;
+    let mut commands = Vec::new();
+    for k in 0..200u64 {
+        if k == 100 {
+            cars.x[0] = cars.x[1] + 12.0;
+            cars.v[0] = 15.0;
+        }
+        if k == 101 {
+            cars.x[0] = cars.x[1] + 200.0;
+            cars.v[0] = cars.v[1];
+        }
+        let cmd = c.step(&cars.inputs(k * 20_000));
+        if k >= 100 {
+            commands.push(cmd.acceleration);
+            if cmd.acceleration < -3.5 {
+                assert!(cmd.emergency && cmd.takeover, "{k}: unflagged below the band: {cmd:?}");
+            }
+        }
+        let a_leader = if k == 100 { -6.0 } else { 0.0 };
+        cars.advance([a_leader, f64::from(cmd.acceleration), 0.0], h);
+    }
+    let first = commands[0];
+    assert!(
+        first < -3.5,
+        "the answer brakes below the band: {commands:?}"
+    );
+    // The dead time (5 periods) at least, the lag's crossing of -1.3 m/s^2 after it.
+    for (k, a) in commands.iter().enumerate().take(6) {
+        assert!(
+            *a <= first,
+            "period {k} after the cut-in: {a} above {first}: {commands:?}"
+        );
+    }
+    assert!(
+        commands.iter().any(|a| *a > -3.5),
+        "released once the lights are on: {commands:?}"
+    );
+}

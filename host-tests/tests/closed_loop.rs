@@ -339,6 +339,52 @@ fn r157s_cut_ins_are_avoided() {
     }
 }
 
+/// Two leader cut-ins the campaign once scored preventable and not prevented (`campaign
+/// --cut-in leader --episodes 300`, the comfort band), each an answer the firmware's own
+/// bounds held back where braking at the emergency authority from the first track hits
+/// nothing:
+/// - seed 264 (a hard-braking leader, the IDM follower): a car cuts in 10.7 m ahead, 3.1 m/s
+///   slower, already braking at 6 m/s^2; the rear check counted the brake lights from commands
+///   at the lights' command alone (on 0.8 s after the first emergency command), so it allowed
+///   nothing beyond the band's floor, and the ego hit the car ahead at 16.3 s. With the lights'
+///   hold the run's on-time is counted from the braking commanded.
+/// - seed 11,000,058 (stop-and-go, the follower that reacts after 1.15 s): the follower's
+///   track aged past the ego-speed history's 0.32 s, the ego's speed interval at the track's
+///   time grew by 0.2 m/s every period, and the answer fell from -8 to the band's floor for
+///   0.3 s. The interval is now kept with the track.
+#[test]
+fn cut_ins_the_firmware_s_own_bounds_once_lost_are_avoided() {
+    let table = table();
+    for (leader, follower, seed) in [
+        (Leader::HardBrake, Follower::IdmFixed, 264),
+        (Leader::StopAndGo, Follower::IdmReacting, 11_000_058),
+    ] {
+        let episode = Episode {
+            leader,
+            follower,
+            seconds: 120.0,
+            sensors: Sensing::Datasheet,
+            cut_in: Some(host_tests::world::CutInKind::Leader),
+            actuator: ACTUATOR_AT_LIMITS,
+            config: Config::default(),
+            seed,
+        };
+        let o = run_episode(&table, firmware::DEFAULT_TABLE, &episode, None)
+            .expect("the episode starts");
+        let cut = o.cut_in.expect("a cut-in");
+        assert!(
+            !o.collided,
+            "{leader:?}/{follower:?} seed {seed}: collided at {:?} after the cut-in at {} s \
+             (first answer {:?}, hardest {} m/s^2)",
+            o.collision_time, cut.at, cut.first_answer, cut.hardest_command
+        );
+        assert!(
+            cut.hardest_command < -7.9,
+            "braked at the emergency authority"
+        );
+    }
+}
+
 /// A cut-in UN R157 asks to avoid that the declared radar delivered too late for any
 /// controller (`campaign --cut-in steady-leader --episodes 300`, seed 14,000,215: a car 4.7 m/s
 /// slower, its lateral motion visible from 9.4 m, its track first delivered 1.08 s later,

@@ -442,6 +442,9 @@ pub(super) struct LeaderMemo {
 pub(super) struct RearMemo {
     pub(super) at_us: u64,
     pub(super) track: Track,
+    /// The ego's speed interval at `at_us` (error included), from the ego measurements kept
+    /// when the track arrived: later steps keep fewer of those near its time.
+    pub(super) ego: (f32, f32),
     pub(super) value: Result<f32, Fault>,
 }
 /// A braking ramp: the commands from `start_us` on are at most `max(from - jerk (t -

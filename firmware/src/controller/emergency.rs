@@ -24,7 +24,82 @@ pub(super) struct EmergencyMemo {
     pub(super) last_below_band_us: u64,
 }
 
+/// A braking the lights' run's on-time was counted from: every command is at most `command`
+/// until `until_us` (the controller's module docs: emergencies).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct LightsHold {
+    /// The held command, m/s^2 (at or below the band's floor).
+    pub(super) command: f32,
+    /// When the lights are on for sure along it, microseconds.
+    pub(super) until_us: u64,
+}
+
 impl Controller<'_> {
+    /// Remembers `command` while its effect may last where it is below the band (the
+    /// emergency answer's, the lights' hold, or with two authorities the ramp of the braking
+    /// in force).
+    pub(super) fn remember_below_band(&mut self, now: u64, command: f32, model: &Model) {
+        if command < model.ego.min {
+            let level = -command;
+            let effect_lasts = self.emergency_reaches(now);
+            self.emergency = Some(EmergencyMemo {
+                level: match self.emergency {
+                    Some(m) if effect_lasts => math::max(m.level, level),
+                    _ => level,
+                },
+                last_below_band_us: now,
+            });
+        }
+    }
+
+    /// The lights' run after this period's `command` (at or below the lights' command): when
+    /// they are on for sure, and the hold that on-time needs. The run's on-time
+    /// ([`Controller::lights_on_from`]), or, for a command at or below the band's floor, the
+    /// on-time of commands at or below it from now ([`Controller::lights_on_holding`]) where
+    /// that is earlier: then every command until it must be at most this one. A hold under
+    /// way is kept while the run's on-time is its own.
+    pub(super) fn lights_run(
+        &self,
+        now: u64,
+        model: &Model,
+        command: f32,
+    ) -> (Option<u64>, Option<LightsHold>) {
+        let run = self.lights_on_from(now, model);
+        let kept = self
+            .lights_hold
+            .filter(|h| now < h.until_us && run == Some(h.until_us));
+        match (run, self.lights_on_holding(now, model, command)) {
+            (Some(r), Some(h)) if h < r => (
+                Some(h),
+                Some(LightsHold {
+                    command,
+                    until_us: h,
+                }),
+            ),
+            (None, Some(h)) => (
+                Some(h),
+                Some(LightsHold {
+                    command,
+                    until_us: h,
+                }),
+            ),
+            (r, _) => (r, kept),
+        }
+    }
+
+    /// When the brake lights are on for sure if `command` (at or below the band's floor) is
+    /// issued now and every command until then is at most it
+    /// ([`lights_on_within`](table_format::EmergencyDeclaration::lights_on_within) from what
+    /// is pending, the command at once); `None` for a command above the band's floor or a
+    /// bound that is not finite.
+    pub(super) fn lights_on_holding(&self, now: u64, model: &Model, command: f32) -> Option<u64> {
+        if !(command <= model.ego.min) {
+            return None;
+        }
+        let pending = self.pending(now, model);
+        self.lights_on_after(now, pending, command, f32::INFINITY, -command)
+    }
+
     /// The vehicle's declared lights' command ([`EmergencyDeclaration::lights_command`]): one at
     /// or below it keeps a run of braking commands going, and so the brake lights on once
     /// [`lights_on_within`](table_format::EmergencyDeclaration::lights_on_within) of the run's start has passed; one above it ends the run (the
@@ -258,9 +333,10 @@ impl Controller<'_> {
     /// evaluations. The rear is [`rear_gap_after`] at the worst corner of the follower's
     /// measurement box at its time `t_f`: the ego braking at most at the level (or the hardest
     /// since `t_f`) from then on, the follower accelerating at most at its model's top until
-    /// its reaction time after the lights come on ([`lights_on_within`](table_format::EmergencyDeclaration::lights_on_within) from the run's first
-    /// command, every later command of the run at or below the lights' command), then braking
-    /// at its model's hardest.
+    /// its reaction time after the lights come on, then braking at its model's hardest. The
+    /// lights' on-time is the run's ([`Controller::lights_on_from`]) or, where earlier, the
+    /// level's own held from now ([`Controller::lights_on_holding`]), as the step keeps it if
+    /// the level is commanded ([`Controller::lights_run`]).
     fn below_band(
         &self,
         model: &Model,
@@ -307,20 +383,29 @@ impl Controller<'_> {
     fn follower_allows(&self, model: &Model, now: u64, wanted: f32) -> Option<f32> {
         let beta = -model.ego.min;
         let rear = self.rear?;
-        let lights_on_us = self.lights_on_from(now, model)?;
+        let run = self.lights_on_from(now, model);
         if !math::is_finite(rear.track.gap) {
-            return Some(wanted);
+            return run
+                .or(self.lights_on_holding(now, model, -wanted))
+                .map(|_| wanted);
         }
         let t_f = rear.at_us;
-        let (clock, dark) = if t_f >= lights_on_us {
-            (seconds(t_f - lights_on_us), 0.0)
-        } else {
-            (0.0, seconds(lights_on_us - t_f))
-        };
         [1.0, 0.5, 0.25]
             .iter()
             .map(|share| beta + share * (wanted - beta))
-            .find(|level| self.rear_check(model, &rear, *level, clock, dark))
+            .find(|level| {
+                // The lights' run as the step will keep it if this level is commanded.
+                let held = self.lights_on_holding(now, model, -*level);
+                let Some(on) = [run, held].into_iter().flatten().min() else {
+                    return false;
+                };
+                let (clock, dark) = if t_f >= on {
+                    (seconds(t_f - on), 0.0)
+                } else {
+                    (0.0, seconds(on - t_f))
+                };
+                self.rear_check(model, &rear, *level, clock, dark)
+            })
     }
 
     /// The rear check: [`Controller::rear_gap`] above `rear_margin`.
@@ -348,11 +433,10 @@ impl Controller<'_> {
         dark: f32,
     ) -> f32 {
         let c = &self.config;
-        let ego = self.ego_speed_interval_at(rear.at_us, model);
         let (lo, hi) = c
             .sensors
             .error
-            .rear_box(rear.track.gap, rear.track.rel_speed, ego);
+            .rear_box(rear.track.gap, rear.track.rel_speed, rear.ego);
         let (gap, follower_speed, ego_speed) = (lo[0], math::min(hi[1], model.max_speed), lo[2]);
         let follower = ReactingFollower {
             reaction_time: model.follower.reaction_time + dark,

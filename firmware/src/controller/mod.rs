@@ -91,6 +91,15 @@
 //! [`EmergencyDeclaration::lights_deceleration`]'s negative, -1.3 m/s^2), while it lasts (the
 //! dead time and lag from what is pending); the
 //! reaction counts from there, so a follower close behind allows more as the braking goes on.
+//! A run counted from its commands at the lights' command alone lights them 0.6-0.7 s after it
+//! starts, whatever it brakes; a braking at or below the band's floor lights them within a few
+//! tenths. So a command `c` at or below the band's floor holds itself: where the on-time for
+//! commands at or below `c` from now is earlier than the run's, it becomes the run's, and every
+//! command until then is at most `c` (`LightsHold`, enforced in [`Controller::step`] whatever
+//! the mode, and argued with by the emergency answer's rear check for each level it tries).
+//! Holding a braking the rear check passed with is inside what that check proved (the ego
+//! braking at most at its level from the measurement on), and braking harder never lowers the
+//! front's value.
 //! Where it allows nothing beyond `beta` the answer is `beta`: the car ahead is not bought with
 //! the car behind. The lights go off again (a command above the lights' command at the end of
 //! a run that went below the band, or any while that braking may still act) only where the
@@ -396,7 +405,7 @@ use crate::math;
 use crate::sensing::TrackState;
 
 use certificate::{LeaderMemo, Ramp, RearMemo};
-use emergency::EmergencyMemo;
+use emergency::{EmergencyMemo, LightsHold};
 
 /// How long [`Mode::Override`] is still reported after the look-ahead's last trim of the law's
 /// command, microseconds: the label does not chatter while the law rides the look-ahead's edge.
@@ -489,6 +498,9 @@ pub struct Controller<'t> {
     /// The lights' run under way has had a command below the band: its end is a release the
     /// follower must allow (`Controller::release_allowed`).
     run_went_below_band: bool,
+    /// The braking the lights' run's on-time was counted from, while it must hold (module
+    /// docs: emergencies).
+    lights_hold: Option<LightsHold>,
     /// The certificate of the state measured in the last standby period (reset whenever a
     /// step is engaged): what an engagement is judged by.
     standby_certificate: Result<Certificate, DriverError>,
@@ -548,6 +560,7 @@ impl<'t> Controller<'t> {
             lights_on_us: None,
             lights_expected_us: None,
             run_went_below_band: false,
+            lights_hold: None,
             standby_certificate: Err(DriverError::CertificateUnknown),
             ego_history: Deque::new(),
         }
@@ -700,6 +713,7 @@ impl<'t> Controller<'t> {
         self.lights_on_us = None;
         self.lights_expected_us = None;
         self.run_went_below_band = false;
+        self.lights_hold = None;
         self.issued.forget();
         self.ramp = None;
         self.in_force = None;
@@ -798,6 +812,23 @@ impl<'t> Controller<'t> {
             acceleration: self.config.plant.envelope.clamp(command.acceleration),
             ..command
         };
+        // The lights' hold, in every engaged mode: the run's on-time was counted from it.
+        if let (Some(m), Some(hold), true) =
+            (model, self.lights_hold, command.mode != Mode::Standby)
+        {
+            if now < hold.until_us && command.acceleration > hold.command {
+                command.acceleration = hold.command;
+                self.remember_below_band(now, hold.command, &m);
+                // Not the law's: an override, and below the band an emergency.
+                if command.mode == Mode::Nominal {
+                    command.mode = Mode::Override;
+                }
+                if hold.command < m.ego.min {
+                    command.emergency = true;
+                    command.takeover = true;
+                }
+            }
+        }
         // Braking faster than ISO 15622's jerk limit allows: an emergency (module docs).
         // Against the last command, or at engagement against the actuator's reported state.
         // Not where the ego may be standing (its measured speed's error box reaches zero): a
@@ -840,10 +871,12 @@ impl<'t> Controller<'t> {
         // beta. A command above the floor passed the look-ahead (or is not certified at all).
         let c = command.acceleration;
         // The brake lights' run (module docs: emergencies).
-        self.lights_on_us = match model {
-            Some(m) if c <= self.lights_command() => self.lights_on_from(now, &m),
-            _ => None,
+        let (on, hold) = match model {
+            Some(m) if c <= self.lights_command() => self.lights_run(now, &m, c),
+            _ => (None, None),
         };
+        self.lights_on_us = on;
+        self.lights_hold = hold;
         self.run_went_below_band = self.lights_on_us.is_some()
             && (self.run_went_below_band || model.is_some_and(|m| c < m.ego.min));
         // A command that passed the look-ahead ends the ramp: the next step's committed ramp
@@ -1126,17 +1159,7 @@ impl<'t> Controller<'t> {
         }
         // Every command below the band (the emergency answer's, or with two authorities the
         // ramp of the braking in force) is remembered while its effect may last.
-        if front.command < model.ego.min {
-            let level = -front.command;
-            let effect_lasts = self.emergency_reaches(now);
-            self.emergency = Some(EmergencyMemo {
-                level: match self.emergency {
-                    Some(m) if effect_lasts => math::max(m.level, level),
-                    _ => level,
-                },
-                last_below_band_us: now,
-            });
-        }
+        self.remember_below_band(now, front.command, &model);
         self.front_chain = (front.value > self.config.certificate.front_margin
             && front.headroom >= 0.0)
             || front.passed

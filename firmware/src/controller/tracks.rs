@@ -171,19 +171,20 @@ impl Controller<'_> {
     ) -> TrackState {
         let newer = self.is_new_measurement(m, self.rear.map(|r| (r.at_us, r.track)), now);
         if let (true, Ok(certifier)) = (newer, &self.certifier) {
-            let (ego_low, ego_high) = self.ego_speed_interval_at(m.timestamp_us, model);
+            let (ego_low, raw_high) = self.ego_speed_interval_at(m.timestamp_us, model);
             // Where every step since before the track's time kept a speed headroom of zero or
             // more, the ego's true speed has stayed within the domain (module docs: the ego's
             // speed), and its interval is held there too.
             let ego_high = if self.speed_kept_from_us.is_some_and(|t| t <= m.timestamp_us) {
-                math::min(ego_high, model.max_ego_speed)
+                math::min(raw_high, model.max_ego_speed)
             } else {
-                ego_high
+                raw_high
             };
             let value = certifier.rear_value_of_track(m.value, (ego_low, ego_high));
             self.rear = Some(RearMemo {
                 at_us: m.timestamp_us,
                 track: m.value,
+                ego: (ego_low, raw_high),
                 value,
             });
         }
