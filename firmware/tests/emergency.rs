@@ -343,7 +343,10 @@ fn the_emergency_answer_holds_its_braking_until_its_lights_are_on() {
         if k >= 100 {
             commands.push(cmd.acceleration);
             if cmd.acceleration < -3.5 {
-                assert!(cmd.emergency && cmd.takeover, "{k}: unflagged below the band: {cmd:?}");
+                assert!(
+                    cmd.emergency && cmd.takeover,
+                    "{k}: unflagged below the band: {cmd:?}"
+                );
             }
         }
         let a_leader = if k == 100 { -6.0 } else { 0.0 };

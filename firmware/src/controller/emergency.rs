@@ -93,7 +93,9 @@ impl Controller<'_> {
     /// is pending, the command at once); `None` for a command above the band's floor or a
     /// bound that is not finite.
     pub(super) fn lights_on_holding(&self, now: u64, model: &Model, command: f32) -> Option<u64> {
-        if !(command <= model.ego.min) {
+        // (A NaN command is not at or below the floor.)
+        let below_floor = command <= model.ego.min;
+        if !below_floor {
             return None;
         }
         let pending = self.pending(now, model);
