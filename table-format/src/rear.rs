@@ -157,6 +157,11 @@ pub fn rear_gap_after(
     front_value(gap, ego_speed, follower_speed, &car_behind)
 }
 
+/// How finely [`lights_on_within`] brackets a last zero on the ramp's phase, s: a
+/// microsecond, the firmware's clock (its bound is the bracket's later end, so no earlier than
+/// the zero).
+pub const LIGHTS_RESOLUTION: f32 = 1e-6;
+
 /// How long until an ego's brake lights are on for good, at most (s): they are on for sure
 /// while its actual acceleration is below `-threshold` (m/s^2, at least zero: the declared
 /// lights' deceleration), and the follower's reaction starts there (module docs).
@@ -182,8 +187,9 @@ pub fn rear_gap_after(
 ///   `s_b + tau ln((A(s_b) + level) / level)` when `A(s_b) > 0`.
 ///
 /// So the last zero is in the last phase where `A` reaches zero: in closed form at the level,
-/// by bisection (40 halvings) on the falling side of the ramp's phase, in closed form in the
-/// dead time. `A` is below `-threshold` from the returned time on; zero when it already is and
+/// by bisection on the falling side of the ramp's phase (to [`LIGHTS_RESOLUTION`], the
+/// bracket's later end: about 20 halvings of a ramp's second), in closed form in the dead
+/// time. `A` is below `-threshold` from the returned time on; zero when it already is and
 /// stays so. NaN in any argument, or a negative threshold, gives `+inf` (no credit).
 #[allow(clippy::too_many_arguments)]
 pub fn lights_on_within(
@@ -248,8 +254,12 @@ pub fn lights_on_within(
         };
         if on_ramp(top) >= 0.0 {
             let (mut lo, mut hi) = (top, s_b);
+            // To a microsecond (the firmware's clock), or until `f32` can halve no further.
             for _ in 0..40 {
                 let mid = 0.5 * (lo + hi);
+                if hi - lo <= LIGHTS_RESOLUTION || mid <= lo || mid >= hi {
+                    break;
+                }
                 if on_ramp(mid) >= 0.0 {
                     lo = mid;
                 } else {
