@@ -54,13 +54,12 @@ impl Controller<'_> {
     /// clears.
     ///
     /// The rear check is the emergency answer's ([`Controller::rear_gap`]: the worst corner of
-    /// the follower's box at its time, the ego braking at most at the level, or the hardest
-    /// since then, from then on), with the lights off until `command` held for the period and
-    /// the emergency ramp from it bring them on for sure (what is pending held before it): a
-    /// gentler command ends a lights' run no later, and a braking command keeps one under way,
-    /// so one level serves every command up to `command`. Below the band's floor the level
-    /// would buy the follower nothing here: the ego's braking since the measurement is taken
-    /// as hard as the band's floor (the command history keeps its largest command only).
+    /// the follower's box at its time, the ego braking at most at the level from now on, an
+    /// earlier harder braking counted there), with the lights off until `command` held for the
+    /// period and the emergency ramp from it bring them on for sure (what is pending held
+    /// before it): a gentler command ends a lights' run no later, and a braking command keeps
+    /// one under way, so one level serves every command up to `command`. Levels below the
+    /// band's floor are not tried: the comfort band brakes to it.
     pub(super) fn look_ahead_braking(
         &self,
         model: &Model,
@@ -77,8 +76,9 @@ impl Controller<'_> {
         }
         let (dark, _) = self.dark_after(model, now, command, e.jerk, -model.ego.min)?;
         let margin = self.config.certificate.rear_margin;
+        let corner = self.rear_corner(model, &rear, now);
         let level = hardest_clearing(
-            |level| self.rear_gap(model, &rear, level, 0.0, dark) - margin,
+            |level| corner.gap_after(model, level, 0.0, dark) - margin,
             -model.ego.min,
             e.level,
             LEVEL_RESOLUTION,
@@ -147,7 +147,7 @@ impl Controller<'_> {
             let jerk = self.config.certificate.brake_jerk;
             let (dark, on) = self.dark_after(model, now, up_to, jerk, -model.ego.min)?;
             let rear = self.rear?;
-            self.rear_check(model, &rear, -model.ego.min, 0.0, dark)
+            self.rear_check(model, &rear, -model.ego.min, 0.0, dark, now)
                 .then_some(on)
         };
         let look = |up_to: f32| {
@@ -196,14 +196,14 @@ impl Controller<'_> {
             return f32::INFINITY;
         }
         match self.lights_on_in_force(model, now, braking) {
-            Some(on) => self.rear_slack_at(model, braking, on),
+            Some(on) => self.rear_slack_at(model, braking, on, now),
             None => f32::NEG_INFINITY,
         }
     }
 
     /// The rear half of `braking` (m, less `rear_margin`), the lights on for sure from `on`
     /// (microseconds): [`Controller::rear_gap`] with the follower's reaction counted from there.
-    pub(super) fn rear_slack_at(&self, model: &Model, braking: Braking, on: u64) -> f32 {
+    pub(super) fn rear_slack_at(&self, model: &Model, braking: Braking, on: u64, now: u64) -> f32 {
         let Some(rear) = self.rear else {
             return f32::NEG_INFINITY;
         };
@@ -216,7 +216,7 @@ impl Controller<'_> {
         } else {
             (0.0, seconds(on - t_f))
         };
-        self.rear_gap(model, &rear, braking.level, clock, dark)
+        self.rear_gap(model, &rear, braking.level, clock, dark, now)
             - self.config.certificate.rear_margin
     }
 

@@ -8,6 +8,7 @@ use table_format::rear::ReactingFollower;
 use table_format::{Bounds, FollowerModel, Game, Table};
 
 use super::authorities::Look;
+use super::emergency::rear_gap_with_debt;
 use super::history::seconds;
 use super::{Config, Controller, Fault, OverridePolicy};
 use crate::inputs::Track;
@@ -626,8 +627,8 @@ impl<'t> Controller<'t> {
         // Two authorities: the front along the braking in force, the rear against the
         // reacting follower, its reaction counted from when the lights are on for sure (the
         // run under way, or the braking's ramp from the last command, from the next period),
-        // the ego braking at most at the braking's level (or harder while an earlier braking
-        // may still act).
+        // the ego braking at most at the braking's level (an earlier harder braking counted as
+        // the rear check counts it).
         let [gap_leader, leader_speed, gap_follower, follower_speed, ego_speed] = state;
         let front = front_value(
             gap_leader,
@@ -664,12 +665,15 @@ impl<'t> Controller<'t> {
             reaction_time: model.follower.reaction_time + dark,
             ..model.follower
         };
-        let level = math::max(braking.level, -self.hardest_braking_from(now_us, model));
-        let rear = table_format::rear::rear_gap_after(
+        // The ego's braking harder than the level before now, as the rear check takes it: held
+        // for good, or its speed's debt ([`Controller::rear_gap`]).
+        let since = -self.hardest_braking_from(now_us, model);
+        let debt = self.braking_debt(now_us, now_us, since, braking.level);
+        let rear = rear_gap_with_debt(
             gap_follower,
             ego_speed,
             follower_speed,
-            level,
+            (braking.level, since, debt),
             clock,
             &follower,
         );

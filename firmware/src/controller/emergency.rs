@@ -68,22 +68,15 @@ impl Controller<'_> {
         let kept = self
             .lights_hold
             .filter(|h| now < h.until_us && run == Some(h.until_us));
-        match (run, self.lights_on_holding(now, model, command)) {
-            (Some(r), Some(h)) if h < r => (
+        match self.lights_on_holding(now, model, command) {
+            Some(h) if run.is_none_or(|r| h < r) => (
                 Some(h),
                 Some(LightsHold {
                     command,
                     until_us: h,
                 }),
             ),
-            (None, Some(h)) => (
-                Some(h),
-                Some(LightsHold {
-                    command,
-                    until_us: h,
-                }),
-            ),
-            (r, _) => (r, kept),
+            _ => (run, kept),
         }
     }
 
@@ -209,7 +202,7 @@ impl Controller<'_> {
             return false;
         };
         let dark = seconds(on.saturating_sub(rear.at_us));
-        self.rear_check(model, &rear, -model.ego.min, 0.0, dark)
+        self.rear_check(model, &rear, -model.ego.min, 0.0, dark, now)
     }
 
     /// Whether the effect of a braking below the band may reach time `t`, or after it.
@@ -333,8 +326,8 @@ impl Controller<'_> {
     /// declared: the slower of the two); its value is nearly affine in `1 / level` (the
     /// stopping distance), so a secant there, checked, finds the level in at most four
     /// evaluations. The rear is [`rear_gap_after`] at the worst corner of the follower's
-    /// measurement box at its time `t_f`: the ego braking at most at the level (or the hardest
-    /// since `t_f`) from then on, the follower accelerating at most at its model's top until
+    /// measurement box at its time `t_f` ([`Controller::rear_gap`]): the ego braking at most at
+    /// the level from now on, the follower accelerating at most at its model's top until
     /// its reaction time after the lights come on, then braking at its model's hardest. The
     /// lights' on-time is the run's ([`Controller::lights_on_from`]) or, where earlier, the
     /// level's own held from now ([`Controller::lights_on_holding`]), as the step keeps it if
@@ -392,6 +385,8 @@ impl Controller<'_> {
                 .map(|_| wanted);
         }
         let t_f = rear.at_us;
+        let corner = self.rear_corner(model, &rear, now);
+        let margin = self.config.certificate.rear_margin;
         [1.0, 0.5, 0.25]
             .iter()
             .map(|share| beta + share * (wanted - beta))
@@ -406,7 +401,7 @@ impl Controller<'_> {
                 } else {
                     (0.0, seconds(on - t_f))
                 };
-                self.rear_check(model, &rear, *level, clock, dark)
+                corner.clears(model, *level, clock, dark, margin)
             })
     }
 
@@ -418,14 +413,37 @@ impl Controller<'_> {
         level: f32,
         clock: f32,
         dark: f32,
+        now: u64,
     ) -> bool {
-        self.rear_gap(model, rear, level, clock, dark) > self.config.certificate.rear_margin
+        self.rear_corner(model, rear, now).clears(
+            model,
+            level,
+            clock,
+            dark,
+            self.config.certificate.rear_margin,
+        )
     }
 
     /// [`rear_gap_after`] at the worst corner of the kept follower measurement's box at its
-    /// time, for an ego braking at most at `level` (or the hardest since then) and a follower
+    /// time `t_f`, for an ego that brakes at most at `level` from `now` on, and a follower
     /// whose reaction has run `clock` seconds, or starts `dark` seconds after the measurement,
     /// m.
+    ///
+    /// The ego's braking between `t_f` and `now` may have been harder than `level`: up to
+    /// `since`, the hardest braking from `t_f` on ([`Controller::hardest_braking_from`]). Two
+    /// bounds of its position hold, and the larger value is taken:
+    /// - braking at `max(level, since)` from `t_f` on;
+    /// - braking at `level` from `t_f` on, from a speed lower by the braking's debt beyond
+    ///   `level` ([`debt_bound`]): the speed the ego's acceleration can lose below
+    ///   `-level` from `t_f` on. With `e(t) = max(0, -a(t) - level)` the ego's speed is at
+    ///   least `v(t_f) - level (t - t_f) - E` for `E` the integral of `e`, so its position is
+    ///   at least that of the debt taken at once, which is the closed form's ego at the lower
+    ///   speed (non-decreasing in the ego's speed).
+    ///
+    /// A braking held for a period is not then taken as held for good: one period at 5.75
+    /// m/s^2, checked at 3.5 from a track 0.08 s old, costs 1.1 m/s of speed (0.48 s of the
+    /// default lag, dead time and age at 2.25 m/s^2), where the first bound brakes at 5.75 to
+    /// a standstill.
     pub(super) fn rear_gap(
         &self,
         model: &Model,
@@ -433,25 +451,274 @@ impl Controller<'_> {
         level: f32,
         clock: f32,
         dark: f32,
+        now: u64,
     ) -> f32 {
+        self.rear_corner(model, rear, now)
+            .gap_after(model, level, clock, dark)
+    }
+
+    /// What [`Controller::rear_gap`] takes of the kept follower measurement `rear` and of the
+    /// ego's braking before `now`, whatever level it is asked about: computed once where a
+    /// step tries several.
+    pub(super) fn rear_corner(&self, model: &Model, rear: &RearMemo, now: u64) -> RearCorner {
         let c = &self.config;
         let (lo, hi) = c
             .sensors
             .error
             .rear_box(rear.track.gap, rear.track.rel_speed, rear.ego);
-        let (gap, follower_speed, ego_speed) = (lo[0], math::min(hi[1], model.max_speed), lo[2]);
-        let follower = ReactingFollower {
-            reaction_time: model.follower.reaction_time + dark,
-            ..model.follower
-        };
-        let since = -self.hardest_braking_from(rear.at_us, model);
-        rear_gap_after(
-            gap,
-            ego_speed,
-            follower_speed,
-            math::max(level, since),
+        let (owing_for, held, held_for) = self.owing(rear.at_us, now);
+        RearCorner {
+            gap: lo[0],
+            follower_speed: math::min(hi[1], model.max_speed),
+            ego_speed: lo[2],
+            since: -self.hardest_braking_from(rear.at_us, model),
+            owing_for,
+            held,
+            held_for,
+        }
+    }
+
+    /// What [`debt_bound`] takes of the ego's braking for a measurement at `t_f`, at `now`:
+    /// `(owing_for, held, held_for)`, the lag and the commands in force from the dead time
+    /// before `t_f` until now (s), the lights' hold's braking (m/s^2, zero: none) and how long
+    /// it lasts (s).
+    fn owing(&self, t_f: u64, now: u64) -> (f32, f32, f32) {
+        let c = &self.config;
+        let in_force = now
+            .saturating_sub(t_f)
+            .saturating_add(u64::from(c.plant.actuator_dead_time_us));
+        let (held, held_for) = self
+            .lights_hold
+            .filter(|h| now < h.until_us)
+            .map_or((0.0, 0.0), |h| (-h.command, seconds(h.until_us - now)));
+        (
+            seconds(u64::from(c.plant.actuator_lag_us)) + seconds(in_force),
+            held,
+            held_for,
+        )
+    }
+
+    /// The speed (m/s) an ego that brakes at most at `level` from `now` on can lose to braking
+    /// harder than `level` from `t_f` on, its braking from `t_f` on at most `since`
+    /// ([`debt_bound`]).
+    pub(super) fn braking_debt(&self, t_f: u64, now: u64, since: f32, level: f32) -> f32 {
+        let (owing_for, held, held_for) = self.owing(t_f, now);
+        debt_bound(since, level, owing_for, held, held_for)
+    }
+}
+
+/// The worst corner of the kept follower measurement's box at its time `t_f` and the ego's
+/// braking before now ([`Controller::rear_corner`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct RearCorner {
+    /// The least gap, m.
+    gap: f32,
+    /// The fastest follower, m/s (at most the model's top speed).
+    follower_speed: f32,
+    /// The slowest ego, m/s.
+    ego_speed: f32,
+    /// The hardest braking from `t_f` on, m/s^2 (positive).
+    since: f32,
+    /// How long a braking up to `since` may have owed speed, s: the lag, and the commands in
+    /// force from the dead time before `t_f` until now ([`debt_bound`]).
+    owing_for: f32,
+    /// The lights' hold's braking, m/s^2 (positive; zero: none).
+    held: f32,
+    /// How long the hold lasts from now, s.
+    held_for: f32,
+}
+
+impl RearCorner {
+    /// [`Controller::rear_gap`] for `level`, `clock` and `dark`.
+    pub(super) fn gap_after(&self, model: &Model, level: f32, clock: f32, dark: f32) -> f32 {
+        let follower = self.follower(model, dark);
+        let debt = debt_bound(self.since, level, self.owing_for, self.held, self.held_for);
+        rear_gap_with_debt(
+            self.gap,
+            self.ego_speed,
+            self.follower_speed,
+            (level, self.since, debt),
             clock,
             &follower,
         )
+    }
+
+    /// Whether [`RearCorner::gap_after`] is above `margin`: the bound that counts the debt
+    /// first, the one that holds the earlier braking for good only where that fails.
+    pub(super) fn clears(
+        &self,
+        model: &Model,
+        level: f32,
+        clock: f32,
+        dark: f32,
+        margin: f32,
+    ) -> bool {
+        let follower = self.follower(model, dark);
+        let at = |ego_speed: f32, braking: f32| {
+            rear_gap_after(
+                self.gap,
+                ego_speed,
+                self.follower_speed,
+                braking,
+                clock,
+                &follower,
+            ) > margin
+        };
+        // (A NaN level is not below `since`: the second bound alone.)
+        let harder_before = self.since > level;
+        if harder_before {
+            let debt = debt_bound(self.since, level, self.owing_for, self.held, self.held_for);
+            if at(math::max(self.ego_speed - debt, 0.0), level) {
+                return true;
+            }
+        }
+        at(self.ego_speed, math::max(level, self.since))
+    }
+
+    /// The model's follower, its reaction starting `dark` seconds after the measurement.
+    fn follower(&self, model: &Model, dark: f32) -> ReactingFollower {
+        ReactingFollower {
+            reaction_time: model.follower.reaction_time + dark,
+            ..model.follower
+        }
+    }
+}
+
+/// [`rear_gap_after`] for an ego at `ego_speed` that brakes at most at `level` from now on
+/// and at most at `since` before, its braking beyond `level` owing at most `debt` of speed
+/// ([`Controller::rear_gap`]): the larger of the value braking at `max(level, since)` and, where
+/// `since` is above `level`, the value braking at `level` from `ego_speed - debt`.
+pub(super) fn rear_gap_with_debt(
+    gap: f32,
+    ego_speed: f32,
+    follower_speed: f32,
+    (level, since, debt): (f32, f32, f32),
+    clock: f32,
+    follower: &ReactingFollower,
+) -> f32 {
+    let at_since = rear_gap_after(
+        gap,
+        ego_speed,
+        follower_speed,
+        math::max(level, since),
+        clock,
+        follower,
+    );
+    // (A NaN level is not below `since`: the first bound alone.)
+    let harder_before = since > level;
+    if !harder_before {
+        return at_since;
+    }
+    let at_level = rear_gap_after(
+        gap,
+        math::max(ego_speed - debt, 0.0),
+        follower_speed,
+        level,
+        clock,
+        follower,
+    );
+    math::max(at_since, at_level)
+}
+
+/// The speed (m/s) an ego that brakes at most at `level` from now on can lose to braking
+/// harder than `level` from the follower measurement's time `t_f` on, where its acceleration
+/// has been at least `-since` from `t_f` on ([`Controller::rear_gap`]): its actuator's lag and
+/// the commands in force from the dead time before `t_f` until now, `owing_for` seconds in
+/// all, at up to `since`; then the lights' hold, `held` for `held_for` seconds; then at most
+/// `level`.
+///
+/// The actuator is the declared dead time `D` then a first-order lag `tau`. Write
+/// `y = -a - level` for its acceleration `a` and `u(t) = -c(t - D) - level` for the commands
+/// `c`: `tau y' = u - y`. The lag of `max(u, 0)` from `max(y(t_f), 0)` bounds `y` from above
+/// and stays at or above zero, so it bounds `max(y, 0)`, and its integral from `t_f` on is at
+/// most `tau max(y(t_f), 0)` plus the integral of `max(u, 0)` (a lag passes on its input's
+/// integral and sheds its initial state's `tau y(t_f)`). So the debt is at most:
+/// - the actuator's state at `t_f`, at least `-since`: `tau (since - level)`;
+/// - the commands in force from `t_f - D` until now, each at least `-since` (a braking below
+///   the band is remembered while its effect reaches `t_f`): `(since - level)` for
+///   `now - t_f + D`;
+/// - the commands from now on: at least `-level`, but the lights' hold ([`LightsHold`]), which
+///   the step enforces: its braking beyond `level` until it ends.
+fn debt_bound(since: f32, level: f32, owing_for: f32, held: f32, held_for: f32) -> f32 {
+    math::max(since - level, 0.0) * owing_for + math::max(held - level, 0.0) * held_for
+}
+
+#[cfg(test)]
+mod tests {
+    use super::debt_bound;
+    use proptest::prelude::*;
+
+    /// The speed a first-order lag behind a dead time loses below `-level` from `t_f` on, by
+    /// brute force: piecewise-constant commands per 20 ms period, the lag solved exactly over
+    /// each piece, the excess integrated on a 0.1 ms grid, until the excess has decayed.
+    fn lost_below(
+        level: f64,
+        dead: f64,
+        lag: f64,
+        a_at_t_f: f64,
+        command_at: &dyn Fn(f64) -> f64,
+    ) -> f64 {
+        let dt = 1e-4;
+        let mut a = a_at_t_f;
+        let mut lost = 0.0;
+        let mut t = 0.0;
+        while t < 6.0 {
+            // The command in force at the actuator at `t` (after the measurement's time) was
+            // issued at `t - dead`.
+            let c = command_at(t - dead);
+            let next = c + (a - c) * (-dt / lag).exp();
+            // The excess at the two ends and the middle (Simpson on the smooth piece).
+            let mid = c + (a - c) * (-dt / (2.0 * lag)).exp();
+            let e = |x: f64| (-x - level).max(0.0);
+            lost += dt / 6.0 * (e(a) + 4.0 * e(mid) + e(next));
+            a = next;
+            t += dt;
+        }
+        lost
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+
+        /// The debt bounds the speed lost below `-level` for every history within its premises
+        /// (commands drawn per period at or above their floors, the actuator's state at
+        /// `t_f` at or above `-since`), and is the loss where every bound is taken with
+        /// equality.
+        #[test]
+        fn the_braking_debt_bounds_the_speed_lost_below_the_level(
+            dead in 0.0f64..0.2, lag in 0.02f64..0.5, level in 2.0f64..8.0,
+            harder in 0.0f64..4.0, age in 0.0f64..0.4, held_harder in 0.0f64..3.0,
+            held_for in prop_oneof![Just(0.0f64), 0.0f64..0.4],
+            draws in proptest::collection::vec(0.0f64..1.0, 64),
+        ) {
+            let since = level + harder;
+            let held = level + held_harder;
+            // Times from `t_f`; `now` is `age` after it, commands issued per 20 ms from there
+            // back to the dead time before `t_f`, and on.
+            let floor_at = |t: f64| {
+                if t < age {
+                    -since
+                } else if t < age + held_for {
+                    -held
+                } else {
+                    -level
+                }
+            };
+            let period = |t: f64| ((t - age) / 0.02).floor();
+            let drawn = |t: f64| {
+                let k = period(t).rem_euclid(draws.len() as f64) as usize;
+                floor_at(t) + 3.0 * draws[k]
+            };
+            let bound = f64::from(debt_bound(
+                since as f32, level as f32, (lag + age + dead) as f32, held as f32,
+                held_for as f32,
+            ));
+            let worst = lost_below(level, dead, lag, -since, &floor_at);
+            prop_assert!(worst <= bound * (1.0 + 1e-3) + 1e-5, "{} above {}", worst, bound);
+            prop_assert!(worst >= bound * 0.99 - 1e-4, "{} well below {}", worst, bound);
+            let a_at_t_f = -since + 2.0 * draws[0];
+            let drawn_loss = lost_below(level, dead, lag, a_at_t_f, &drawn);
+            prop_assert!(drawn_loss <= bound * (1.0 + 1e-3) + 1e-5, "{} above {}", drawn_loss, bound);
+        }
     }
 }

@@ -84,7 +84,9 @@
 //! most at its IDM's largest acceleration) until its reaction time
 //! ([`EmergencyDeclaration::follower_reaction_time`], 1.15 s: UN R157's careful driver) after the
 //! ego's brake lights are on for sure, then brakes at its clip's hardest (6 m/s^2 on the
-//! deployed table), the ego braking at most at that level (or the hardest since `t_f`). The
+//! deployed table), the ego braking at most at that level from now on (harder braking since
+//! `t_f` taken as held for good, or as the speed it can cost beyond that level through the
+//! declared lag, whichever bounds better: `Controller::rear_gap`). The
 //! lights are on from [`table_format::rear::lights_on_within`] after a run of commands at or
 //! below the vehicle's declared lights' command began ([`EmergencyDeclaration::lights_command`],
 //! -1.5 m/s^2 by default; the lights are on for sure once the acceleration is below
@@ -128,8 +130,8 @@
 //! (the committed ramp above, at `B`'s jerk down to `B`'s level) exceeds `front_margin`, the
 //! rear value of `B` against the follower that reacts `follower_reaction_time` after the brake
 //! lights (`table_format::rear::rear_gap_after` at the worst corner of the kept follower
-//! measurement's box at its time, the ego braking at most at `B`'s level or the hardest since
-//! then) exceeds `rear_margin`, and the speed headroom is not negative. The rear table is not
+//! measurement's box at its time, the ego braking at most at `B`'s level, an earlier harder
+//! braking counted as above) exceeds `rear_margin`, and the speed headroom is not negative. The rear table is not
 //! used (the follower's model is the reacting one); its header gives the models.
 //! - **The look-ahead** of a command `u` is argued along the emergency authority's build-up at
 //!   the hardest level from `beta` to the emergency level that the follower allows when `u` is
@@ -949,7 +951,7 @@ impl<'t> Controller<'t> {
             match (self.in_force, self.lights_expected_us) {
                 (Some(b), Some(on)) => Ok(Certificate {
                     front: front.value - self.config.certificate.front_margin,
-                    rear: self.rear_slack_at(&model, b, on),
+                    rear: self.rear_slack_at(&model, b, on, now),
                     speed: front.headroom,
                 }),
                 _ => Err(DriverError::NotCertified),
