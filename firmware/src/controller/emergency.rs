@@ -713,12 +713,21 @@ mod tests {
                 since as f32, level as f32, (lag + age + dead) as f32, held as f32,
                 held_for as f32,
             ));
+            // The brute force holds each grid step's command from its start: a switch
+            // between grid points shifts by up to a step, at up to 4 m/s^2 of excess, at each
+            // of the three switches (into the hold, out of it, at the draws' periods).
+            let grid = 3.0 * 4.0 * 1e-4;
             let worst = lost_below(level, dead, lag, -since, &floor_at);
-            prop_assert!(worst <= bound * (1.0 + 1e-3) + 1e-5, "{} above {}", worst, bound);
-            prop_assert!(worst >= bound * 0.99 - 1e-4, "{} well below {}", worst, bound);
+            prop_assert!(worst <= bound * (1.0 + 1e-3) + grid, "{} above {}", worst, bound);
+            prop_assert!(worst >= bound * 0.99 - grid, "{} well below {}", worst, bound);
             let a_at_t_f = -since + 2.0 * draws[0];
             let drawn_loss = lost_below(level, dead, lag, a_at_t_f, &drawn);
-            prop_assert!(drawn_loss <= bound * (1.0 + 1e-3) + 1e-5, "{} above {}", drawn_loss, bound);
+            prop_assert!(
+                drawn_loss <= bound * (1.0 + 1e-3) + grid,
+                "{} above {}",
+                drawn_loss,
+                bound
+            );
         }
     }
 }
