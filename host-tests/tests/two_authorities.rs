@@ -412,3 +412,26 @@ fn a_car_held_at_standstill_is_no_emergency() {
     assert!(fast_drops > 50, "{fast_drops}");
     assert_eq!((emergencies, takeovers), (0, 0));
 }
+
+/// A follower closing fast on a slow ego gets the brake lights the comfortable way: where the
+/// proposal passes the look-ahead but bringing the lights on at ISO 15622's jerk would leave
+/// the follower too little room, the command goes down that way at once
+/// (`Controller::look_ahead`). Behind a comfortable leader crawling at 2 m/s, a fixed-gap IDM
+/// follower closes at 8.5 m/s from 34 m back (seed 18,000,005): the firmware jumped to the
+/// lights' command -1.5 in one period five times (the first from +0.9) and stepped along the
+/// emergency authority's ramp twice, 18 emergency periods in the episode; it now goes down
+/// within ISO 15622's limits and flags no emergency.
+#[test]
+fn a_closing_follower_gets_the_lights_within_iso_15622() {
+    for leader_braking in [6.0, 9.8] {
+        let bytes = table_bytes(leader_braking);
+        let table = Table::parse(bytes).unwrap();
+        let mut e = episode(Leader::Comfortable, Follower::IdmFixed, 18_000_005);
+        e.config.law.time_gap_setting = LawConfig::default().time_gap_setting;
+        let outcome = run_episode(&table, bytes, &e, None).unwrap();
+        println!("leader {leader_braking}: {outcome:?}");
+        assert!(!outcome.collided);
+        assert_eq!(outcome.certificate_lost, None);
+        assert_eq!(outcome.emergency_periods, 0, "{:?}", outcome.emergencies);
+    }
+}

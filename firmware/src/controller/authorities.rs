@@ -15,6 +15,12 @@ use crate::{iso15622, math};
 /// ([`table_format::authority::LEVEL_RESOLUTION`]: the search never returns more).
 const LEVEL_RESOLUTION: f32 = table_format::authority::LEVEL_RESOLUTION;
 
+/// How much longer a proposal must leave the follower the comfort band's floor to leave the
+/// comfortable way down to the lights' command once it is under way, s
+/// (`Controller::lit_in_time`): a follower's range is known to 0.1 m + 1.5% (half a metre at
+/// 30 m), which moves the prediction by more than a period's worth of the way down.
+pub(super) const LIGHTS_WAY_RELEASE_S: f32 = 1.0;
+
 /// What a look-ahead argues with: the braking after the period, and the largest command it
 /// holds for (the follower may allow less after a command that keeps the lights off longer).
 #[derive(Debug, Clone, Copy)]
@@ -26,6 +32,9 @@ pub(super) struct Look {
     /// Where the comfort band's braking (its floor at the braking ramp's jerk) clears the rear
     /// too, its lights coming on along its own, slower, ramp: when they are on for sure.
     pub(super) comfort_lights_on_us: Option<u64>,
+    /// `up_to` was lowered to the comfortable way down to the lights' command
+    /// ([`Controller::look_ahead`]).
+    pub(super) way_down: bool,
 }
 
 impl Controller<'_> {
@@ -74,11 +83,11 @@ impl Controller<'_> {
         if !math::is_finite(rear.track.gap) {
             return Some(e);
         }
-        let (dark, _) = self.dark_after(model, now, command, e.jerk, -model.ego.min)?;
+        let ((clock, dark), _) = self.dark_after(model, now, command, e.jerk, -model.ego.min)?;
         let margin = self.config.certificate.rear_margin;
         let corner = self.rear_corner(model, &rear, now);
         let level = hardest_clearing(
-            |level| corner.gap_after(model, level, 0.0, dark) - margin,
+            |level| corner.gap_after(model, level, clock, dark) - margin,
             -model.ego.min,
             e.level,
             LEVEL_RESOLUTION,
@@ -89,10 +98,19 @@ impl Controller<'_> {
         })
     }
 
-    /// How long after the kept follower measurement the brake lights are on for sure (s), for
+    /// Where the follower's reaction stands at the kept follower measurement's time, for
     /// `command` held a period from `now` and then a braking ramp at `jerk` from it down to
-    /// `-level` (what is pending held before it), or the lights' run under way where that is
-    /// later; and when that ramp brings them on (microseconds).
+    /// `-level` (what is pending held before it): `(clock, dark)`, how long it has run there
+    /// or how long after it the lights are on for sure (s, [`Controller::rear_gap`]); and when
+    /// that ramp brings them on (microseconds).
+    ///
+    /// A command at or below the lights' command keeps a lights' run under way (the step
+    /// keeps its on-time, or an earlier one: [`Controller::lights_run`]), and the ramp after
+    /// it brakes harder still, so the lights are on for sure from the earlier of the run's
+    /// on-time and the ramp's: the follower's reaction has run since then, and the clock's
+    /// invariance carries the rear value a period on (`table_format::rear`'s module docs), as
+    /// for the braking in force ([`Controller::rear_slack_at`]). A gentler command may end
+    /// the run: the reaction then starts where the lights come on again, the later of the two.
     fn dark_after(
         &self,
         model: &Model,
@@ -100,11 +118,17 @@ impl Controller<'_> {
         command: f32,
         jerk: f32,
         level: f32,
-    ) -> Option<(f32, u64)> {
+    ) -> Option<((f32, f32), u64)> {
         let rear = self.rear?;
         let off = self.ramp_lights_on(model, now, command, jerk, level)?;
-        let on = self.lights_on_us.map_or(off, |run| run.max(off));
-        Some((seconds(on.saturating_sub(rear.at_us)), off))
+        // (A NaN command does not keep a run.)
+        let keeps_run = command <= self.lights_command();
+        let on = match self.lights_on_us {
+            Some(run) if keeps_run => run.min(off),
+            Some(run) => run.max(off),
+            None => off,
+        };
+        Some((reaction_at(rear.at_us, on), off))
     }
 
     /// When the lights are on for sure (microseconds) for `command` held a period from `now`,
@@ -145,9 +169,9 @@ impl Controller<'_> {
     ) -> Option<Look> {
         let comfort_lights_on = |up_to: f32| {
             let jerk = self.config.certificate.brake_jerk;
-            let (dark, on) = self.dark_after(model, now, up_to, jerk, -model.ego.min)?;
+            let ((clock, dark), on) = self.dark_after(model, now, up_to, jerk, -model.ego.min)?;
             let rear = self.rear?;
-            self.rear_check(model, &rear, -model.ego.min, 0.0, dark, now)
+            self.rear_check(model, &rear, -model.ego.min, clock, dark, now)
                 .then_some(on)
         };
         let look = |up_to: f32| {
@@ -163,6 +187,7 @@ impl Controller<'_> {
                 } else {
                     None
                 },
+                way_down: false,
             })
         };
         if !self.two_authorities() {
@@ -172,6 +197,22 @@ impl Controller<'_> {
         let step = iso15622::jerk_limit(ego_speed) * seconds(u64::from(self.config.period_us));
         let mut tried = proposal;
         let mut found = look(proposal);
+        // A proposal that passes now, but after which a follower closing on the ego would
+        // allow not even the comfort band's floor by the time the comfortable way to the
+        // lights (ISO 15622's jerk down to the lights' command) brought them on: the command
+        // goes down that way now, while it is still comfortable, where the look-ahead would
+        // later have to jump to the lights' command. One level serves every command up to the
+        // proposal (`Controller::look_ahead_braking`), so the look-ahead that passed covers it.
+        if let Some(l) = found {
+            let down = math::max(last - step, self.lights_command());
+            if down < proposal && !self.lit_in_time(model, now, proposal, ego_speed) {
+                found = Some(Look {
+                    up_to: down,
+                    way_down: true,
+                    ..l
+                });
+            }
+        }
         for candidate in [last, last - step, self.lights_command()] {
             if found.is_some() {
                 break;
@@ -182,6 +223,46 @@ impl Controller<'_> {
             }
         }
         found
+    }
+
+    /// Whether the follower would still allow the comfort band's floor if `command` were held
+    /// for as long as the comfortable way to the lights' command takes from it (ISO 15622's
+    /// jerk limit at `ego_speed`, after a period; [`LIGHTS_WAY_RELEASE_S`] longer while that
+    /// way is under way, so that the measurement's noise does not flip it every period): the
+    /// look-ahead's rear check for the
+    /// band's floor (the lights after `command` along the emergency ramp), with the follower's
+    /// box corner carried that long at its relative speed and the ego at `command`
+    /// ([`RearCorner::ahead_by`](super::emergency::RearCorner::ahead_by)). A prediction for comfort, not a bound: where it fails the
+    /// command goes down the comfortable way now ([`Controller::look_ahead`]), which the
+    /// look-ahead that passed covers, so the certificate does not rest on it. `true` without a
+    /// follower's track to argue with, or without an emergency authority.
+    fn lit_in_time(&self, model: &Model, now: u64, command: f32, ego_speed: f32) -> bool {
+        let (Some(rear), Some(e)) = (self.rear, model.emergency) else {
+            return true;
+        };
+        if !math::is_finite(rear.track.gap) {
+            return true;
+        }
+        let h = seconds(u64::from(self.config.period_us));
+        let spare = if self.lights_way_down {
+            LIGHTS_WAY_RELEASE_S
+        } else {
+            0.0
+        };
+        let lead = h + (command - self.lights_command()) / iso15622::jerk_limit(ego_speed) + spare;
+        let Some(((clock, dark), _)) = self.dark_after(model, now, command, e.jerk, -model.ego.min)
+        else {
+            return false;
+        };
+        self.rear_corner(model, &rear, now)
+            .ahead_by(lead, command)
+            .clears(
+                model,
+                -model.ego.min,
+                clock,
+                dark,
+                self.config.certificate.rear_margin,
+            )
     }
 
     /// The rear half of `braking` now (m, less `rear_margin`), with two authorities: the
@@ -210,12 +291,7 @@ impl Controller<'_> {
         if !math::is_finite(rear.track.gap) {
             return f32::INFINITY;
         }
-        let t_f = rear.at_us;
-        let (clock, dark) = if t_f >= on {
-            (seconds(t_f - on), 0.0)
-        } else {
-            (0.0, seconds(on - t_f))
-        };
+        let (clock, dark) = reaction_at(rear.at_us, on);
         self.rear_gap(model, &rear, braking.level, clock, dark, now)
             - self.config.certificate.rear_margin
     }
@@ -286,5 +362,16 @@ impl Controller<'_> {
                 self.lights_expected_us = self.lights_on_in_force(model, now, braking);
             }
         }
+    }
+}
+
+/// Where the follower's reaction to lights on for sure from `on` stands at a measurement's
+/// time `t_f` (microseconds): `(clock, dark)`, how long it has run then, or how long after it
+/// the lights are on (s; the other zero).
+pub(super) fn reaction_at(t_f: u64, on: u64) -> (f32, f32) {
+    if t_f >= on {
+        (seconds(t_f - on), 0.0)
+    } else {
+        (0.0, seconds(on - t_f))
     }
 }

@@ -5,6 +5,7 @@
 
 use table_format::rear::{rear_gap_after, ReactingFollower};
 
+use super::authorities::reaction_at;
 use super::certificate::{profile, LeaderMemo, Model, Ramp, RearMemo, WorstCorner};
 use super::history::seconds;
 use super::{Controller, CERTIFICATE_TOLERANCE};
@@ -396,11 +397,7 @@ impl Controller<'_> {
                 let Some(on) = [run, held].into_iter().flatten().min() else {
                     return false;
                 };
-                let (clock, dark) = if t_f >= on {
-                    (seconds(t_f - on), 0.0)
-                } else {
-                    (0.0, seconds(on - t_f))
-                };
+                let (clock, dark) = reaction_at(t_f, on);
                 corner.clears(model, *level, clock, dark, margin)
             })
     }
@@ -573,6 +570,28 @@ impl RearCorner {
             }
         }
         at(self.ego_speed, math::max(level, self.since))
+    }
+
+    /// The corner `t` seconds on (s), the follower and the ego keeping the corner's speeds but
+    /// for the ego's `acceleration` (m/s^2; its speed held at or above zero): a prediction of
+    /// where a follower closing on the ego will be, for comfort ([`Controller::look_ahead`]),
+    /// not a bound (the follower may accelerate).
+    pub(super) fn ahead_by(&self, t: f32, acceleration: f32) -> RearCorner {
+        let t = math::max(t, 0.0);
+        let ego_speed = math::max(self.ego_speed + acceleration * t, 0.0);
+        // The ego's distance, its speed held at zero once it stops.
+        let ego_moves = if ego_speed > 0.0 {
+            0.5 * (self.ego_speed + ego_speed) * t
+        } else if acceleration < 0.0 {
+            self.ego_speed * self.ego_speed / (-2.0 * acceleration)
+        } else {
+            0.0
+        };
+        RearCorner {
+            gap: self.gap + ego_moves - self.follower_speed * t,
+            ego_speed,
+            ..*self
+        }
     }
 
     /// The model's follower, its reaction starting `dark` seconds after the measurement.

@@ -143,7 +143,19 @@
 //!   it was found for (a gentler command lights the brakes no later), so the command is capped
 //!   there, as by the speed: where the follower allows nothing after the law's proposal, the
 //!   level is sought for the last command, then for the comfort band's step down from it, then
-//!   for the lights' command. A command braking harder than the level does not pass.
+//!   for the lights' command. A command braking harder than the level does not pass. The
+//!   follower's reaction is counted from when the lights come on along that ramp, or, for a
+//!   command at or below the lights' command (which keeps a lights' run going), from the run's
+//!   on-time where that is earlier: its reaction has then been running, as for the braking in
+//!   force.
+//! - **The comfortable way to the lights**: where the proposal passes, but a follower closing
+//!   on the ego would allow not even `beta` by the time ISO 15622's jerk limit brought the
+//!   command down to the lights' command (`authorities::lit_in_time`: the look-ahead's rear
+//!   check with the follower's box carried that long at its relative speed), the command goes
+//!   down that way now (capped at `last - jerk_limit h`, at least the lights' command), and
+//!   leaves it only for a proposal that leaves a second to spare: a prediction for comfort
+//!   (the look-ahead that passed covers the lower command), so that the lights come on
+//!   without the jump to the lights' command that the look-ahead would otherwise need later.
 //! - **The override** grades its braking between the refused command and the comfort band's
 //!   floor reached at ISO 15622's jerk limit (`last - jerk_limit h`, at least `-beta`); where
 //!   nothing passes, the command follows the ramp of the braking in force (an emergency, by the
@@ -503,6 +515,10 @@ pub struct Controller<'t> {
     /// The braking the lights' run's on-time was counted from, while it must hold (module
     /// docs: emergencies).
     lights_hold: Option<LightsHold>,
+    /// With two authorities: the last look-ahead sent the command down the comfortable way to
+    /// the lights' command (`Controller::look_ahead`), which a proposal leaves only with
+    /// [`LIGHTS_WAY_RELEASE_S`] to spare.
+    lights_way_down: bool,
     /// The certificate of the state measured in the last standby period (reset whenever a
     /// step is engaged): what an engagement is judged by.
     standby_certificate: Result<Certificate, DriverError>,
@@ -563,6 +579,7 @@ impl<'t> Controller<'t> {
             lights_expected_us: None,
             run_went_below_band: false,
             lights_hold: None,
+            lights_way_down: false,
             standby_certificate: Err(DriverError::CertificateUnknown),
             ego_history: Deque::new(),
         }
@@ -716,6 +733,7 @@ impl<'t> Controller<'t> {
         self.lights_expected_us = None;
         self.run_went_below_band = false;
         self.lights_hold = None;
+        self.lights_way_down = false;
         self.issued.forget();
         self.ramp = None;
         self.in_force = None;
@@ -1121,6 +1139,7 @@ impl<'t> Controller<'t> {
         // The look-ahead's braking (with two authorities, the level the follower allows every
         // command up to the proposal).
         let look = self.look_ahead(&model, now, proposal, ego_speed);
+        self.lights_way_down = look.is_some_and(|l| l.way_down);
         self.allowed = look.map(|l| l.braking);
         self.remember_law_braking(now);
         let mut front = self.enforce_front(
