@@ -105,12 +105,18 @@ impl Controller<'_> {
     /// that ramp brings them on (microseconds).
     ///
     /// A command at or below the lights' command keeps a lights' run under way (the step
-    /// keeps its on-time, or an earlier one: [`Controller::lights_run`]), and the ramp after
-    /// it brakes harder still, so the lights are on for sure from the earlier of the run's
-    /// on-time and the ramp's: the follower's reaction has run since then, and the clock's
-    /// invariance carries the rear value a period on (`table_format::rear`'s module docs), as
-    /// for the braking in force ([`Controller::rear_slack_at`]). A gentler command may end
-    /// the run: the reaction then starts where the lights come on again, the later of the two.
+    /// keeps its on-time, or an earlier one: [`Controller::lights_run`]), and so does the
+    /// ramp of the braking in force after it: the follower's reaction is counted from the
+    /// run's own on-time where that is earlier than the later of the run's and the ramp's
+    /// (the bound for a command that may end the run), and the clock's invariance carries the
+    /// rear value a period on (`table_format::rear`'s module docs), as for the braking in
+    /// force ([`Controller::rear_slack_at`]). The run's own: its commands alone bound it
+    /// (`lights_run_own_us`), where the run's on-time may be the earlier one a look-ahead
+    /// argued with along its ramp (`lights_expected_us`), which holds only while the commands
+    /// follow that ramp; a look-ahead that passes holds the lights' command instead (counted
+    /// from the argued time, the truth's rear fell to -0.47 m behind a follower that reacts
+    /// late, seed 5,001,692). A gentler command may end the run: the reaction then starts
+    /// where the lights come on again, the later of the two.
     fn dark_after(
         &self,
         model: &Model,
@@ -123,10 +129,10 @@ impl Controller<'_> {
         let off = self.ramp_lights_on(model, now, command, jerk, level)?;
         // (A NaN command does not keep a run.)
         let keeps_run = command <= self.lights_command();
-        let on = match self.lights_on_us {
-            Some(run) if keeps_run => run.min(off),
-            Some(run) => run.max(off),
-            None => off,
+        let on = match (self.lights_on_us, self.lights_run_own_us) {
+            (Some(run), Some(own)) if keeps_run => own.min(run.max(off)),
+            (Some(run), _) => run.max(off),
+            (None, _) => off,
         };
         Some((reaction_at(rear.at_us, on), off))
     }

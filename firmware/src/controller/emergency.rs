@@ -54,18 +54,27 @@ impl Controller<'_> {
     }
 
     /// The lights' run after this period's `command` (at or below the lights' command): when
-    /// they are on for sure, and the hold that on-time needs. The run's on-time
+    /// they are on for sure, the hold that on-time needs, and when they are on for sure by
+    /// the run's own commands (`lights_run_own_us`). The run's on-time
     /// ([`Controller::lights_on_from`]), or, for a command at or below the band's floor, the
     /// on-time of commands at or below it from now ([`Controller::lights_on_holding`]) where
     /// that is earlier: then every command until it must be at most this one. A hold under
-    /// way is kept while the run's on-time is its own.
+    /// way is kept while the run's on-time is its own. The run's own on-time is kept while it
+    /// goes on, else [`Controller::lights_run_starting`]'s, and no later than a hold's.
     pub(super) fn lights_run(
         &self,
         now: u64,
         model: &Model,
         command: f32,
-    ) -> (Option<u64>, Option<LightsHold>) {
-        let run = self.lights_on_from(now, model);
+    ) -> (Option<u64>, Option<LightsHold>, Option<u64>) {
+        // (`lights_on_from`, with the run's own bound kept.)
+        let (run, own) = match self.lights_on_us {
+            Some(on) => (Some(on), self.lights_run_own_us),
+            None => {
+                let own = self.lights_run_starting(now, model);
+                (self.lights_no_later_than_argued(own), own)
+            }
+        };
         let kept = self
             .lights_hold
             .filter(|h| now < h.until_us && run == Some(h.until_us));
@@ -76,8 +85,9 @@ impl Controller<'_> {
                     command,
                     until_us: h,
                 }),
+                Some(own.map_or(h, |o| o.min(h))),
             ),
-            _ => (run, kept),
+            _ => (run, kept, own.filter(|_| run.is_some())),
         }
     }
 
@@ -128,17 +138,24 @@ impl Controller<'_> {
         if let Some(on) = self.lights_on_us {
             return Some(on);
         }
+        // The on-time the certificate argued with holds too: the run's commands are under its
+        // ramp (they are at or below the lights' command, where that ramp ends).
+        self.lights_no_later_than_argued(self.lights_run_starting(now, model))
+    }
+
+    /// When the brake lights are on for sure (microseconds) for a run of commands at or below
+    /// the lights' command starting now, by the run alone: what the actuator may be doing
+    /// ([`Controller::pending`]) held, then the lights' command at once, through the declared
+    /// dead time and lag. `None` if the bound is not finite.
+    pub(super) fn lights_run_starting(&self, now: u64, model: &Model) -> Option<u64> {
         let pending = self.pending(now, model);
-        let run = self.lights_on_after(
+        self.lights_on_after(
             now,
             pending,
             self.lights_command(),
             f32::INFINITY,
             -self.lights_command(),
-        );
-        // The on-time the certificate argued with holds too: the run's commands are under its
-        // ramp (they are at or below the lights' command, where that ramp ends).
-        self.lights_no_later_than_argued(run)
+        )
     }
 
     /// When the brake lights are on for sure (microseconds) if, from `now`, the actuator's

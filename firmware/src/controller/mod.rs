@@ -145,9 +145,10 @@
 //!   level is sought for the last command, then for the comfort band's step down from it, then
 //!   for the lights' command. A command braking harder than the level does not pass. The
 //!   follower's reaction is counted from when the lights come on along that ramp, or, for a
-//!   command at or below the lights' command (which keeps a lights' run going), from the run's
-//!   on-time where that is earlier: its reaction has then been running, as for the braking in
-//!   force.
+//!   command at or below the lights' command (which keeps a lights' run going), from the
+//!   on-time the run's own commands bound where that is earlier: its reaction has then been
+//!   running, as for the braking in force (not from an on-time a look-ahead argued with along
+//!   its ramp, which holds only while the commands follow it).
 //! - **The comfortable way to the lights**: where the proposal passes, but a follower closing
 //!   on the ego would allow not even `beta` by the time ISO 15622's jerk limit brought the
 //!   command down to the lights' command (`authorities::lit_in_time`: the look-ahead's rear
@@ -509,6 +510,11 @@ pub struct Controller<'t> {
     /// From when the brake lights are on for sure, while every command since a run of braking
     /// commands began has been at or below the lights' command (`None`: no run).
     lights_on_us: Option<u64>,
+    /// The same by the run's commands alone (`Controller::lights_run_starting` at its start,
+    /// or its hold's): without the earlier on-time a look-ahead argued with
+    /// (`lights_expected_us`), which holds only while the commands stay under that
+    /// argument's ramp (`None`: no run).
+    lights_run_own_us: Option<u64>,
     /// The lights' run under way has had a command below the band: its end is a release the
     /// follower must allow (`Controller::release_allowed`).
     run_went_below_band: bool,
@@ -576,6 +582,7 @@ impl<'t> Controller<'t> {
             rear: None,
             emergency: None,
             lights_on_us: None,
+            lights_run_own_us: None,
             lights_expected_us: None,
             run_went_below_band: false,
             lights_hold: None,
@@ -730,6 +737,7 @@ impl<'t> Controller<'t> {
         self.front_chain = false;
         // The lights' run ends with the commands it was argued from.
         self.lights_on_us = None;
+        self.lights_run_own_us = None;
         self.lights_expected_us = None;
         self.run_went_below_band = false;
         self.lights_hold = None;
@@ -891,10 +899,11 @@ impl<'t> Controller<'t> {
         // beta. A command above the floor passed the look-ahead (or is not certified at all).
         let c = command.acceleration;
         // The brake lights' run (module docs: emergencies).
-        let (on, hold) = match model {
+        let (on, hold, own) = match model {
             Some(m) if c <= self.lights_command() => self.lights_run(now, &m, c),
-            _ => (None, None),
+            _ => (None, None, None),
         };
+        self.lights_run_own_us = own;
         self.lights_on_us = on;
         self.lights_hold = hold;
         self.run_went_below_band = self.lights_on_us.is_some()
