@@ -6,6 +6,7 @@ use table_format::authority::Braking;
 use table_format::rear::hardest_clearing;
 
 use super::certificate::Model;
+use super::emergency::RearCorner;
 use super::history::seconds;
 use super::Controller;
 use crate::config::Authorities;
@@ -35,6 +36,18 @@ pub(super) struct Look {
     /// `up_to` was lowered to the comfortable way down to the lights' command
     /// ([`Controller::look_ahead`]).
     pub(super) way_down: bool,
+    /// The rear check the braking was found with (`None` without a follower's track to argue
+    /// with, or in the comfort band).
+    argued: Option<RearArgued>,
+}
+
+/// What a look-ahead's rear check argued with: the follower's box corner, and how long its
+/// reaction has run at the measurement's time, or how long after it the lights are on (s).
+#[derive(Debug, Clone, Copy)]
+struct RearArgued {
+    corner: RearCorner,
+    clock: f32,
+    dark: f32,
 }
 
 impl Controller<'_> {
@@ -75,13 +88,25 @@ impl Controller<'_> {
         now: u64,
         command: f32,
     ) -> Option<Braking> {
+        self.look_ahead_argued(model, now, command).map(|(b, _)| b)
+    }
+
+    /// [`Controller::look_ahead_braking`], with the rear check it argued with: the follower's
+    /// box corner and where its reaction stands (`None` without a follower's track to argue
+    /// with, or in the comfort band).
+    fn look_ahead_argued(
+        &self,
+        model: &Model,
+        now: u64,
+        command: f32,
+    ) -> Option<(Braking, Option<RearArgued>)> {
         if !self.two_authorities() {
-            return Some(self.braking_in_force(model));
+            return Some((self.braking_in_force(model), None));
         }
         let e = model.emergency?;
         let rear = self.rear?;
         if !math::is_finite(rear.track.gap) {
-            return Some(e);
+            return Some((e, None));
         }
         let ((clock, dark), _) = self.dark_after(model, now, command, e.jerk, -model.ego.min)?;
         let margin = self.config.certificate.rear_margin;
@@ -92,10 +117,18 @@ impl Controller<'_> {
             e.level,
             LEVEL_RESOLUTION,
         )?;
-        Some(Braking {
+        let braking = Braking {
             level,
             jerk: e.jerk,
-        })
+        };
+        Some((
+            braking,
+            Some(RearArgued {
+                corner,
+                clock,
+                dark,
+            }),
+        ))
     }
 
     /// Where the follower's reaction stands at the kept follower measurement's time, for
@@ -181,7 +214,7 @@ impl Controller<'_> {
                 .then_some(on)
         };
         let look = |up_to: f32| {
-            let braking = self.look_ahead_braking(model, now, up_to)?;
+            let (braking, argued) = self.look_ahead_argued(model, now, up_to)?;
             Some(Look {
                 braking,
                 up_to,
@@ -194,6 +227,7 @@ impl Controller<'_> {
                     None
                 },
                 way_down: false,
+                argued,
             })
         };
         if !self.two_authorities() {
@@ -211,7 +245,7 @@ impl Controller<'_> {
         // proposal (`Controller::look_ahead_braking`), so the look-ahead that passed covers it.
         if let Some(l) = found {
             let down = math::max(last - step, self.lights_command());
-            if down < proposal && !self.lit_in_time(model, now, proposal, ego_speed) {
+            if down < proposal && !self.lit_in_time(model, l.argued, proposal, ego_speed) {
                 found = Some(Look {
                     up_to: down,
                     way_down: true,
@@ -236,19 +270,27 @@ impl Controller<'_> {
     /// jerk limit at `ego_speed`, after a period; [`LIGHTS_WAY_RELEASE_S`] longer while that
     /// way is under way, so that the measurement's noise does not flip it every period): the
     /// look-ahead's rear check for the
-    /// band's floor (the lights after `command` along the emergency ramp), with the follower's
-    /// box corner carried that long at its relative speed and the ego at `command`
-    /// ([`RearCorner::ahead_by`](super::emergency::RearCorner::ahead_by)). A prediction for comfort, not a bound: where it fails the
-    /// command goes down the comfortable way now ([`Controller::look_ahead`]), which the
-    /// look-ahead that passed covers, so the certificate does not rest on it. `true` without a
-    /// follower's track to argue with, or without an emergency authority.
-    fn lit_in_time(&self, model: &Model, now: u64, command: f32, ego_speed: f32) -> bool {
-        let (Some(rear), Some(e)) = (self.rear, model.emergency) else {
+    /// band's floor (the lights after `command` along the emergency ramp: `argued`, the
+    /// look-ahead's own for `command`), with the follower's box corner carried that long at
+    /// its relative speed and the ego at `command` ([`RearCorner::ahead_by`]). A prediction
+    /// for comfort, not a bound: where it fails the command goes down the comfortable way now
+    /// ([`Controller::look_ahead`]), which the look-ahead that passed covers, so the
+    /// certificate does not rest on it. `true` without a follower's track to argue with.
+    fn lit_in_time(
+        &self,
+        model: &Model,
+        argued: Option<RearArgued>,
+        command: f32,
+        ego_speed: f32,
+    ) -> bool {
+        let Some(RearArgued {
+            corner,
+            clock,
+            dark,
+        }) = argued
+        else {
             return true;
         };
-        if !math::is_finite(rear.track.gap) {
-            return true;
-        }
         let h = seconds(u64::from(self.config.period_us));
         let spare = if self.lights_way_down {
             LIGHTS_WAY_RELEASE_S
@@ -256,19 +298,13 @@ impl Controller<'_> {
             0.0
         };
         let lead = h + (command - self.lights_command()) / iso15622::jerk_limit(ego_speed) + spare;
-        let Some(((clock, dark), _)) = self.dark_after(model, now, command, e.jerk, -model.ego.min)
-        else {
-            return false;
-        };
-        self.rear_corner(model, &rear, now)
-            .ahead_by(lead, command)
-            .clears(
-                model,
-                -model.ego.min,
-                clock,
-                dark,
-                self.config.certificate.rear_margin,
-            )
+        corner.ahead_by(lead, command).clears(
+            model,
+            -model.ego.min,
+            clock,
+            dark,
+            self.config.certificate.rear_margin,
+        )
     }
 
     /// The rear half of `braking` now (m, less `rear_margin`), with two authorities: the
