@@ -392,7 +392,7 @@ fn cut_ins_the_firmware_s_own_bounds_once_lost_are_avoided() {
 /// -5.75 m/s^2; the next follower measurement is 0.9 m shorter at its box's corner. Argued as
 /// braking at 5.75 from the measurement's time to a standstill, no level passed there, not
 /// even the band's floor, and the answer fell to -3.5 for three periods; with the period's
-/// speed debt counted (`Controller::rear_gap`) the check passes 4.6 m/s^2 there, and the
+/// speed debt counted (`RearCorner::gap_after`) the check passes 4.6 m/s^2 there, and the
 /// answer never returns to the band's floor before it reaches the full 8.
 #[test]
 fn a_braking_held_a_period_is_not_taken_as_held_for_good() {

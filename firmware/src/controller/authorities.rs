@@ -75,7 +75,7 @@ impl Controller<'_> {
     /// ([`hardest_clearing`] to [`LEVEL_RESOLUTION`]), `None` where not even the band's floor
     /// clears.
     ///
-    /// The rear check is the emergency answer's ([`Controller::rear_gap`]: the worst corner of
+    /// The rear check is the emergency answer's ([`RearCorner::gap_after`]: the worst corner of
     /// the follower's box at its time, the ego braking at most at the level from now on, an
     /// earlier harder braking counted there), with the lights off until `command` held for the
     /// period and the emergency ramp from it bring them on for sure (what is pending held
@@ -134,7 +134,7 @@ impl Controller<'_> {
     /// Where the follower's reaction stands at the kept follower measurement's time, for
     /// `command` held a period from `now` and then a braking ramp at `jerk` from it down to
     /// `-level` (what is pending held before it): `(clock, dark)`, how long it has run there
-    /// or how long after it the lights are on for sure (s, [`Controller::rear_gap`]); and when
+    /// or how long after it the lights are on for sure (s, [`RearCorner::gap_after`]); and when
     /// that ramp brings them on (microseconds).
     ///
     /// A command at or below the lights' command keeps a lights' run under way (the step
@@ -309,7 +309,7 @@ impl Controller<'_> {
 
     /// The rear half of `braking` now (m, less `rear_margin`), with two authorities: the
     /// follower's reaction counted from the lights' run under way, or from where `braking`'s
-    /// ramp from the last command, starting now, brings the lights on ([`Controller::rear_gap`]).
+    /// ramp from the last command, starting now, brings the lights on ([`RearCorner::gap_after`]).
     /// `-inf` where the follower's track is not kept or when the lights come on is not known.
     pub(super) fn rear_slack(&self, model: &Model, now: u64, braking: Braking) -> f32 {
         let Some(rear) = self.rear else {
@@ -325,7 +325,7 @@ impl Controller<'_> {
     }
 
     /// The rear half of `braking` (m, less `rear_margin`), the lights on for sure from `on`
-    /// (microseconds): [`Controller::rear_gap`] with the follower's reaction counted from there.
+    /// (microseconds): [`RearCorner::gap_after`] with the follower's reaction counted from there.
     pub(super) fn rear_slack_at(&self, model: &Model, braking: Braking, on: u64, now: u64) -> f32 {
         let Some(rear) = self.rear else {
             return f32::NEG_INFINITY;
@@ -334,7 +334,8 @@ impl Controller<'_> {
             return f32::INFINITY;
         }
         let (clock, dark) = reaction_at(rear.at_us, on);
-        self.rear_gap(model, &rear, braking.level, clock, dark, now)
+        self.rear_corner(model, &rear, now)
+            .gap_after(model, braking.level, clock, dark)
             - self.config.certificate.rear_margin
     }
 

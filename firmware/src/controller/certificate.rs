@@ -7,8 +7,7 @@ use table_format::front::{front_value, least_braking, FrontModel};
 use table_format::rear::ReactingFollower;
 use table_format::{Bounds, FollowerModel, Game, Table};
 
-use super::authorities::Look;
-use super::emergency::rear_gap_with_debt;
+use super::authorities::{reaction_at, Look};
 use super::history::seconds;
 use super::{Config, Controller, Fault, OverridePolicy};
 use crate::inputs::Track;
@@ -656,27 +655,17 @@ impl<'t> Controller<'t> {
                     .checked_add(math::micros(within)?)?
             }
         };
-        let (clock, dark) = if now_us >= on {
-            (seconds(now_us - on), 0.0)
-        } else {
-            (0.0, seconds(on - now_us))
-        };
-        let follower = ReactingFollower {
-            reaction_time: model.follower.reaction_time + dark,
-            ..model.follower
-        };
         // The ego's braking harder than the level before now, as the rear check takes it: held
-        // for good, or its speed's debt ([`Controller::rear_gap`]).
-        let since = -self.hardest_braking_from(now_us, model);
-        let debt = self.braking_debt(now_us, now_us, since, braking.level);
-        let rear = rear_gap_with_debt(
-            gap_follower,
-            ego_speed,
-            follower_speed,
-            (braking.level, since, debt),
-            clock,
-            &follower,
-        );
+        // for good, or its speed's debt ([`RearCorner::gap_after`]).
+        let (clock, dark) = reaction_at(now_us, on);
+        let rear = self
+            .rear_state(
+                model,
+                [gap_follower, follower_speed, ego_speed],
+                now_us,
+                now_us,
+            )
+            .gap_after(model, braking.level, clock, dark);
         let peak = ego_speed + speed_rise(hold, response, ramp_from, jerk);
         Some(Certificate {
             front: front - self.config.certificate.front_margin,

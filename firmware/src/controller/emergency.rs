@@ -344,7 +344,7 @@ impl Controller<'_> {
     /// declared: the slower of the two); its value is nearly affine in `1 / level` (the
     /// stopping distance), so a secant there, checked, finds the level in at most four
     /// evaluations. The rear is [`rear_gap_after`] at the worst corner of the follower's
-    /// measurement box at its time `t_f` ([`Controller::rear_gap`]): the ego braking at most at
+    /// measurement box at its time `t_f` ([`RearCorner::gap_after`]): the ego braking at most at
     /// the level from now on, the follower accelerating at most at its model's top until
     /// its reaction time after the lights come on, then braking at its model's hardest. The
     /// lights' on-time is the run's ([`Controller::lights_on_from`]) or, where earlier, the
@@ -419,7 +419,7 @@ impl Controller<'_> {
             })
     }
 
-    /// The rear check: [`Controller::rear_gap`] above `rear_margin`.
+    /// The rear check: [`RearCorner::gap_after`] above `rear_margin`.
     pub(super) fn rear_check(
         &self,
         model: &Model,
@@ -438,54 +438,41 @@ impl Controller<'_> {
         )
     }
 
-    /// [`rear_gap_after`] at the worst corner of the kept follower measurement's box at its
-    /// time `t_f`, for an ego that brakes at most at `level` from `now` on, and a follower
-    /// whose reaction has run `clock` seconds, or starts `dark` seconds after the measurement,
-    /// m.
-    ///
-    /// The ego's braking between `t_f` and `now` may have been harder than `level`: up to
-    /// `since`, the hardest braking from `t_f` on ([`Controller::hardest_braking_from`]). Two
-    /// bounds of its position hold, and the larger value is taken:
-    /// - braking at `max(level, since)` from `t_f` on;
-    /// - braking at `level` from `t_f` on, from a speed lower by the braking's debt beyond
-    ///   `level` ([`debt_bound`]): the speed the ego's acceleration can lose below
-    ///   `-level` from `t_f` on. With `e(t) = max(0, -a(t) - level)` the ego's speed is at
-    ///   least `v(t_f) - level (t - t_f) - E` for `E` the integral of `e`, so its position is
-    ///   at least that of the debt taken at once, which is the closed form's ego at the lower
-    ///   speed (non-decreasing in the ego's speed).
-    ///
-    /// A braking held for a period is not then taken as held for good: one period at 5.75
-    /// m/s^2, checked at 3.5 from a track 0.08 s old, costs 1.1 m/s of speed (0.48 s of the
-    /// default lag, dead time and age at 2.25 m/s^2), where the first bound brakes at 5.75 to
-    /// a standstill.
-    pub(super) fn rear_gap(
-        &self,
-        model: &Model,
-        rear: &RearMemo,
-        level: f32,
-        clock: f32,
-        dark: f32,
-        now: u64,
-    ) -> f32 {
-        self.rear_corner(model, rear, now)
-            .gap_after(model, level, clock, dark)
+    /// The worst corner of the kept follower measurement `rear`'s box at its time (the least
+    /// gap, the fastest follower up to the model's top speed, the slowest ego), with the ego's
+    /// braking before `now` ([`Controller::rear_state`]): computed once where a step tries
+    /// several levels.
+    pub(super) fn rear_corner(&self, model: &Model, rear: &RearMemo, now: u64) -> RearCorner {
+        let (lo, hi) =
+            self.config
+                .sensors
+                .error
+                .rear_box(rear.track.gap, rear.track.rel_speed, rear.ego);
+        self.rear_state(
+            model,
+            [lo[0], math::min(hi[1], model.max_speed), lo[2]],
+            rear.at_us,
+            now,
+        )
     }
 
-    /// What [`Controller::rear_gap`] takes of the kept follower measurement `rear` and of the
-    /// ego's braking before `now`, whatever level it is asked about: computed once where a
-    /// step tries several.
-    pub(super) fn rear_corner(&self, model: &Model, rear: &RearMemo, now: u64) -> RearCorner {
-        let c = &self.config;
-        let (lo, hi) = c
-            .sensors
-            .error
-            .rear_box(rear.track.gap, rear.track.rel_speed, rear.ego);
-        let (owing_for, held, held_for) = self.owing(rear.at_us, now);
+    /// The rear state `[gap, follower_speed, ego_speed]` (m, m/s) at time `t_f`, with what
+    /// [`RearCorner::gap_after`] takes of the ego's braking from `t_f` until `now`: its hardest
+    /// ([`Controller::hardest_braking_from`]) and how long it may have owed speed, whatever
+    /// level it is asked about.
+    pub(super) fn rear_state(
+        &self,
+        model: &Model,
+        [gap, follower_speed, ego_speed]: [f32; 3],
+        t_f: u64,
+        now: u64,
+    ) -> RearCorner {
+        let (owing_for, held, held_for) = self.owing(t_f, now);
         RearCorner {
-            gap: lo[0],
-            follower_speed: math::min(hi[1], model.max_speed),
-            ego_speed: lo[2],
-            since: -self.hardest_braking_from(rear.at_us, model),
+            gap,
+            follower_speed,
+            ego_speed,
+            since: -self.hardest_braking_from(t_f, model),
             owing_for,
             held,
             held_for,
@@ -511,25 +498,18 @@ impl Controller<'_> {
             held_for,
         )
     }
-
-    /// The speed (m/s) an ego that brakes at most at `level` from `now` on can lose to braking
-    /// harder than `level` from `t_f` on, its braking from `t_f` on at most `since`
-    /// ([`debt_bound`]).
-    pub(super) fn braking_debt(&self, t_f: u64, now: u64, since: f32, level: f32) -> f32 {
-        let (owing_for, held, held_for) = self.owing(t_f, now);
-        debt_bound(since, level, owing_for, held, held_for)
-    }
 }
 
-/// The worst corner of the kept follower measurement's box at its time `t_f` and the ego's
-/// braking before now ([`Controller::rear_corner`]).
+/// A rear state at a follower measurement's time `t_f` (the worst corner of its box:
+/// [`Controller::rear_corner`]; a true state: [`Controller::rear_state`]) and the ego's
+/// braking from `t_f` until now.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct RearCorner {
-    /// The least gap, m.
+    /// The gap, m (at a box's worst corner, the least).
     gap: f32,
-    /// The fastest follower, m/s (at most the model's top speed).
+    /// The follower's speed, m/s (the fastest, up to the model's top speed).
     follower_speed: f32,
-    /// The slowest ego, m/s.
+    /// The ego's speed, m/s (the slowest).
     ego_speed: f32,
     /// The hardest braking from `t_f` on, m/s^2 (positive).
     since: f32,
@@ -543,18 +523,33 @@ pub(super) struct RearCorner {
 }
 
 impl RearCorner {
-    /// [`Controller::rear_gap`] for `level`, `clock` and `dark`.
+    /// [`rear_gap_after`] at this state, for an ego that brakes at most at `level` from now on,
+    /// and a follower whose reaction has run `clock` seconds, or starts `dark` seconds after
+    /// the measurement, m.
+    ///
+    /// The ego's braking between `t_f` and `now` may have been harder than `level`: up to
+    /// `since`, the hardest braking from `t_f` on ([`Controller::hardest_braking_from`]). Two
+    /// bounds of its position hold, and the larger value is taken:
+    /// - braking at `max(level, since)` from `t_f` on;
+    /// - braking at `level` from `t_f` on, from a speed lower by the braking's debt beyond
+    ///   `level` ([`debt_bound`]): the speed the ego's acceleration can lose below
+    ///   `-level` from `t_f` on. With `e(t) = max(0, -a(t) - level)` the ego's speed is at
+    ///   least `v(t_f) - level (t - t_f) - E` for `E` the integral of `e`, so its position is
+    ///   at least that of the debt taken at once, which is the closed form's ego at the lower
+    ///   speed (non-decreasing in the ego's speed).
+    ///
+    /// A braking held for a period is not then taken as held for good: one period at 5.75
+    /// m/s^2, checked at 3.5 from a track 0.08 s old, costs 1.1 m/s of speed (0.48 s of the
+    /// default lag, dead time and age at 2.25 m/s^2), where the first bound brakes at 5.75 to
+    /// a standstill.
     pub(super) fn gap_after(&self, model: &Model, level: f32, clock: f32, dark: f32) -> f32 {
         let follower = self.follower(model, dark);
-        let debt = debt_bound(self.since, level, self.owing_for, self.held, self.held_for);
-        rear_gap_with_debt(
-            self.gap,
-            self.ego_speed,
-            self.follower_speed,
-            (level, self.since, debt),
-            clock,
-            &follower,
-        )
+        let at = |(ego_speed, braking)| self.at(ego_speed, braking, clock, &follower);
+        let (owed, held) = self.bounds(level);
+        match owed {
+            Some(owed) => math::max(at(held), at(owed)),
+            None => at(held),
+        }
     }
 
     /// Whether [`RearCorner::gap_after`] is above `margin`: the bound that counts the debt
@@ -568,25 +563,35 @@ impl RearCorner {
         margin: f32,
     ) -> bool {
         let follower = self.follower(model, dark);
-        let at = |ego_speed: f32, braking: f32| {
-            rear_gap_after(
-                self.gap,
-                ego_speed,
-                self.follower_speed,
-                braking,
-                clock,
-                &follower,
-            ) > margin
-        };
-        // (A NaN level is not below `since`: the second bound alone.)
+        let at = |(ego_speed, braking)| self.at(ego_speed, braking, clock, &follower);
+        let (owed, held) = self.bounds(level);
+        owed.is_some_and(|owed| at(owed) > margin) || at(held) > margin
+    }
+
+    /// [`RearCorner::gap_after`]'s two bounds for `level`, as `(ego_speed, braking)` from this
+    /// state: braking at `level` from the speed less the debt, where `since` is harder than
+    /// `level` (a NaN level is not); and braking at `max(level, since)`.
+    fn bounds(&self, level: f32) -> (Option<(f32, f32)>, (f32, f32)) {
+        let held = (self.ego_speed, math::max(level, self.since));
         let harder_before = self.since > level;
-        if harder_before {
+        let owed = harder_before.then(|| {
             let debt = debt_bound(self.since, level, self.owing_for, self.held, self.held_for);
-            if at(math::max(self.ego_speed - debt, 0.0), level) {
-                return true;
-            }
-        }
-        at(self.ego_speed, math::max(level, self.since))
+            (math::max(self.ego_speed - debt, 0.0), level)
+        });
+        (owed, held)
+    }
+
+    /// [`rear_gap_after`] from this state's gap and follower, the ego at `ego_speed` braking
+    /// at `braking`.
+    fn at(&self, ego_speed: f32, braking: f32, clock: f32, follower: &ReactingFollower) -> f32 {
+        rear_gap_after(
+            self.gap,
+            ego_speed,
+            self.follower_speed,
+            braking,
+            clock,
+            follower,
+        )
     }
 
     /// The corner `t` seconds on (s), the follower and the ego keeping the corner's speeds but
@@ -620,45 +625,9 @@ impl RearCorner {
     }
 }
 
-/// [`rear_gap_after`] for an ego at `ego_speed` that brakes at most at `level` from now on
-/// and at most at `since` before, its braking beyond `level` owing at most `debt` of speed
-/// ([`Controller::rear_gap`]): the larger of the value braking at `max(level, since)` and, where
-/// `since` is above `level`, the value braking at `level` from `ego_speed - debt`.
-pub(super) fn rear_gap_with_debt(
-    gap: f32,
-    ego_speed: f32,
-    follower_speed: f32,
-    (level, since, debt): (f32, f32, f32),
-    clock: f32,
-    follower: &ReactingFollower,
-) -> f32 {
-    let at_since = rear_gap_after(
-        gap,
-        ego_speed,
-        follower_speed,
-        math::max(level, since),
-        clock,
-        follower,
-    );
-    // (A NaN level is not below `since`: the first bound alone.)
-    let harder_before = since > level;
-    if !harder_before {
-        return at_since;
-    }
-    let at_level = rear_gap_after(
-        gap,
-        math::max(ego_speed - debt, 0.0),
-        follower_speed,
-        level,
-        clock,
-        follower,
-    );
-    math::max(at_since, at_level)
-}
-
 /// The speed (m/s) an ego that brakes at most at `level` from now on can lose to braking
 /// harder than `level` from the follower measurement's time `t_f` on, where its acceleration
-/// has been at least `-since` from `t_f` on ([`Controller::rear_gap`]): its actuator's lag and
+/// has been at least `-since` from `t_f` on ([`RearCorner::gap_after`]): its actuator's lag and
 /// the commands in force from the dead time before `t_f` until now, `owing_for` seconds in
 /// all, at up to `since`; then the lights' hold, `held` for `held_for` seconds; then at most
 /// `level`.

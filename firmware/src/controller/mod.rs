@@ -86,7 +86,7 @@
 //! ego's brake lights are on for sure, then brakes at its clip's hardest (6 m/s^2 on the
 //! deployed table), the ego braking at most at that level from now on (harder braking since
 //! `t_f` taken as held for good, or as the speed it can cost beyond that level through the
-//! declared lag, whichever bounds better: `Controller::rear_gap`). The
+//! declared lag, whichever bounds better: `RearCorner::gap_after`). The
 //! lights are on from [`table_format::rear::lights_on_within`] after a run of commands at or
 //! below the vehicle's declared lights' command began ([`EmergencyDeclaration::lights_command`],
 //! -1.5 m/s^2 by default; the lights are on for sure once the acceleration is below
