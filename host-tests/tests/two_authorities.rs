@@ -436,6 +436,30 @@ fn a_closing_follower_gets_the_lights_within_iso_15622() {
     }
 }
 
+/// A follower closing on an ego that brakes at the lights' command keeps the lights: a
+/// proposal that would end the run where the follower would not allow the comfort band's floor
+/// once they come on again is the lights' command instead (`Controller::look_ahead`). Behind a
+/// comfortable leader braking at 2.7 m/s^2, a fixed-gap IDM follower closes at 4.8 m/s from
+/// 31 m back (seed 18,000,003): the law's command moved between -1.33 and -1.5 m/s^2, each
+/// step above ending the run, and the next look-ahead, counting the follower's reaction from
+/// the new run's on-time, failed, so the command followed the emergency authority's ramp at
+/// 12 m/s^3 (9 emergency periods in the episode); it now keeps the lights' command and flags
+/// no emergency.
+#[test]
+fn a_follower_closing_on_a_lit_ego_keeps_its_lights() {
+    for leader_braking in [6.0, 9.8] {
+        let bytes = table_bytes(leader_braking);
+        let table = Table::parse(bytes).unwrap();
+        let mut e = episode(Leader::Comfortable, Follower::IdmFixed, 18_000_003);
+        e.config.law.time_gap_setting = LawConfig::default().time_gap_setting;
+        let outcome = run_episode(&table, bytes, &e, None).unwrap();
+        println!("leader {leader_braking}: {outcome:?}");
+        assert!(!outcome.collided);
+        assert_eq!(outcome.certificate_lost, None);
+        assert_eq!(outcome.emergency_periods, 0, "{:?}", outcome.emergencies);
+    }
+}
+
 /// A look-ahead for a command that keeps a lights' run going counts the follower's reaction
 /// from the run's own on-time, not from the earlier one a look-ahead argued with along its
 /// ramp (`Controller::dark_after`). The latter holds only while the commands follow that

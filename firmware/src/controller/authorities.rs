@@ -198,7 +198,8 @@ impl Controller<'_> {
     /// lights off longer), for the last command, then for the comfort band's step down from it
     /// (ISO 15622's jerk limit), then for the lights' command (which keeps a lights' run going,
     /// or starts one): the command is capped there, as by the speed, and the follower then
-    /// lets it down gently where it can.
+    /// lets it down gently where it can. A proposal that would end a lights' run the follower
+    /// does not allow to end ([`Controller::release_allowed`]) is the lights' command.
     pub(super) fn look_ahead(
         &self,
         model: &Model,
@@ -235,6 +236,23 @@ impl Controller<'_> {
         }
         let last = self.last_command_or_unknown(model);
         let step = iso15622::jerk_limit(ego_speed) * seconds(u64::from(self.config.period_us));
+        // A proposal that ends a lights' run (above the lights' command) where the follower
+        // would allow not even the comfort band's floor with its reaction starting again when
+        // the comfort band's ramp brings the lights back (`Controller::release_allowed`, the
+        // band's rule for ending a run): the lights' command instead, which keeps the run and
+        // the follower's reaction clock going. Ended there, the run's next look-ahead, counted
+        // from the new run's own on-time, failed, and the command followed the braking in
+        // force's ramp at the emergency authority's build-up (an emergency by ISO 15622's jerk
+        // limit): 143 of the 228 emergency runs behind the comfortable leader with the fixed
+        // IDM began within 0.7 s of a run's end.
+        let keeps_lit = self.lights_on_us.is_some()
+            && proposal > self.lights_command()
+            && !self.release_allowed(model, now, proposal);
+        let proposal = if keeps_lit {
+            self.lights_command()
+        } else {
+            proposal
+        };
         let mut tried = proposal;
         let mut found = look(proposal);
         // A proposal that passes now, but after which a follower closing on the ego would

@@ -185,15 +185,17 @@ impl Controller<'_> {
         now.checked_add(math::micros(within)?)
     }
 
-    /// Whether the brake lights may be off for the next period while a braking below the band
-    /// may still act (a command `u` above the lights' command ends the lights' run, and the
-    /// follower's reaction starts again at the next braking): the rear check of
-    /// [`Controller::below_band`] for the band's floor, the hardest braking that may
-    /// come next without a check of its own, with the follower's reaction starting only when
-    /// the lights come on again after `u` is held a period and the braking ramp
-    /// (`brake_jerk`) brings the command down to the lights' command. Where it fails, the step
-    /// follows that ramp from its last command (the one the last check passed with): the
-    /// lights come on, and the follower, reacting, falls back.
+    /// Whether the brake lights may be off for the next period (a command `u` above the lights'
+    /// command ends the lights' run, and the follower's reaction starts again at the next
+    /// braking): the rear check of [`Controller::below_band`] for the band's floor, with the
+    /// follower's reaction starting only when the lights come on again after `u` is held a
+    /// period and the braking ramp (`brake_jerk`) brings the command down to the lights'
+    /// command. In the band it is asked while a braking below the band may still act (the
+    /// band's floor is then the hardest braking that may come next without a check of its
+    /// own); where it fails, the step follows that ramp from its last command (the one the
+    /// last check passed with): the lights come on, and the follower, reacting, falls back.
+    /// With two authorities it is asked of every proposal that would end a run; where it fails
+    /// the proposal is the lights' command ([`Controller::look_ahead`]).
     pub(super) fn release_allowed(&self, model: &Model, now: u64, u: f32) -> bool {
         if model.emergency.is_none() {
             return true;
