@@ -157,6 +157,13 @@
 //!   leaves it only for a proposal that leaves a second to spare: a prediction for comfort
 //!   (the look-ahead that passed covers the lower command), so that the lights come on
 //!   without the jump to the lights' command that the look-ahead would otherwise need later.
+//! - **Keeping the lights**: a proposal above the lights' command ends a lights' run, and the
+//!   follower's reaction starts again when the lights next come on. Where the follower would
+//!   then allow not even `beta` (`emergency::release_allowed`, the band's rule for ending a
+//!   run: the proposal held a period, the lights back along the comfort band's ramp), the
+//!   proposal is the lights' command instead, which the look-ahead checks as any other: a
+//!   comfort choice (a run ended under a closing follower made the next look-ahead fail and
+//!   the command follow the emergency authority's ramp), not a bound.
 //! - **The override** grades its braking between the refused command and the comfort band's
 //!   floor reached at ISO 15622's jerk limit (`last - jerk_limit h`, at least `-beta`); where
 //!   nothing passes, the command follows the ramp of the braking in force (an emergency, by the
