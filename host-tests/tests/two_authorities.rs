@@ -423,10 +423,16 @@ fn a_car_held_at_standstill_is_no_emergency() {
 /// within ISO 15622's limits and flags no emergency.
 #[test]
 fn a_closing_follower_gets_the_lights_within_iso_15622() {
+    no_emergency_behind_a_comfortable_leader(18_000_005);
+}
+
+/// The campaign's episode `seed` behind a comfortable leader with a fixed-gap IDM follower, at
+/// the default setting, at 6 and 9.8 m/s^2: no collision, no certificate loss, no emergency.
+fn no_emergency_behind_a_comfortable_leader(seed: u64) {
     for leader_braking in [6.0, 9.8] {
         let bytes = table_bytes(leader_braking);
         let table = Table::parse(bytes).unwrap();
-        let mut e = episode(Leader::Comfortable, Follower::IdmFixed, 18_000_005);
+        let mut e = episode(Leader::Comfortable, Follower::IdmFixed, seed);
         e.config.law.time_gap_setting = LawConfig::default().time_gap_setting;
         let outcome = run_episode(&table, bytes, &e, None).unwrap();
         println!("leader {leader_braking}: {outcome:?}");
@@ -447,17 +453,7 @@ fn a_closing_follower_gets_the_lights_within_iso_15622() {
 /// no emergency.
 #[test]
 fn a_follower_closing_on_a_lit_ego_keeps_its_lights() {
-    for leader_braking in [6.0, 9.8] {
-        let bytes = table_bytes(leader_braking);
-        let table = Table::parse(bytes).unwrap();
-        let mut e = episode(Leader::Comfortable, Follower::IdmFixed, 18_000_003);
-        e.config.law.time_gap_setting = LawConfig::default().time_gap_setting;
-        let outcome = run_episode(&table, bytes, &e, None).unwrap();
-        println!("leader {leader_braking}: {outcome:?}");
-        assert!(!outcome.collided);
-        assert_eq!(outcome.certificate_lost, None);
-        assert_eq!(outcome.emergency_periods, 0, "{:?}", outcome.emergencies);
-    }
+    no_emergency_behind_a_comfortable_leader(18_000_003);
 }
 
 /// A look-ahead for a command that keeps a lights' run going counts the follower's reaction
