@@ -22,6 +22,12 @@ const LEVEL_RESOLUTION: f32 = table_format::authority::LEVEL_RESOLUTION;
 /// 30 m), which moves the prediction by more than a period's worth of the way down.
 pub(super) const LIGHTS_WAY_RELEASE_S: f32 = 1.0;
 
+/// How many levels below the band's floor a look-ahead tries where the follower allows not
+/// even the floor ([`Controller::gentler_than_band`]): with the defaults 3.0, 2.5, 2.0 and
+/// 1.5 m/s^2. A handful of fixed levels rather than a search: each needs its own lights'
+/// on-time, and the step's instruction budget is shared with the rest of the look-ahead.
+const GENTLER_LEVELS: usize = 4;
+
 /// What a look-ahead argues with: the braking after the period, and the largest command it
 /// holds for (the follower may allow less after a command that keeps the lights off longer).
 #[derive(Debug, Clone, Copy)]
@@ -72,16 +78,16 @@ impl Controller<'_> {
     /// The braking a look-ahead at `now` of commands up to `command` argues with: the band's
     /// in the comfort band; with two authorities the emergency authority's build-up at the
     /// hardest level from the band's floor up to its own that the follower allows
-    /// ([`hardest_clearing`] to [`LEVEL_RESOLUTION`]), `None` where not even the band's floor
-    /// clears.
+    /// ([`hardest_clearing`] to [`LEVEL_RESOLUTION`]), where not even the band's floor clears
+    /// the hardest gentler level that does ([`Controller::gentler_than_band`]), `None` where
+    /// none does.
     ///
     /// The rear check is the emergency answer's ([`RearCorner::gap_after`]: the worst corner of
     /// the follower's box at its time, the ego braking at most at the level from now on, an
     /// earlier harder braking counted there), with the lights off until `command` held for the
     /// period and the emergency ramp from it bring them on for sure (what is pending held
     /// before it): a gentler command ends a lights' run no later, and a braking command keeps
-    /// one under way, so one level serves every command up to `command`. Levels below the
-    /// band's floor are not tried: the comfort band brakes to it.
+    /// one under way, so one level serves every command up to `command`.
     pub(super) fn look_ahead_braking(
         &self,
         model: &Model,
@@ -108,19 +114,21 @@ impl Controller<'_> {
         if !math::is_finite(rear.track.gap) {
             return Some((e, None));
         }
-        let ((clock, dark), _) = self.dark_after(model, now, command, e.jerk, -model.ego.min)?;
+        let beta = -model.ego.min;
+        let ((clock, dark), _) = self.dark_after(model, now, command, e.jerk, beta)?;
         let margin = self.config.certificate.rear_margin;
         let corner = self.rear_corner(model, &rear, now);
-        let level = hardest_clearing(
+        let braking = hardest_clearing(
             |level| corner.gap_after(model, level, clock, dark) - margin,
-            -model.ego.min,
+            beta,
             e.level,
             LEVEL_RESOLUTION,
-        )?;
-        let braking = Braking {
+        )
+        .map(|level| Braking {
             level,
             jerk: e.jerk,
-        };
+        })
+        .or_else(|| self.gentler_than_band(model, now, command, e.jerk, &corner))?;
         Some((
             braking,
             Some(RearArgued {
@@ -129,6 +137,53 @@ impl Controller<'_> {
                 dark,
             }),
         ))
+    }
+
+    /// The gentlest level a look-ahead argues with, m/s^2: the lights' command's. A braking
+    /// ramp to it ends at or below the lights' command, as one to the band's floor does, so it
+    /// keeps a lights' run going ([`Controller::lights_run`]) and lights the brakes for sure
+    /// (the lights' command is below the lights' deceleration).
+    pub(super) fn least_level(&self) -> f32 {
+        -self.lights_command()
+    }
+
+    /// The braking a look-ahead argues with where the follower allows not even the band's
+    /// floor: the hardest of [`GENTLER_LEVELS`] levels, evenly spaced from a step below the
+    /// band's floor down to [`Controller::least_level`], at which the rear check of
+    /// [`Controller::look_ahead_braking`] clears, at the emergency authority's build-up `jerk`
+    /// (the rule's brakings, `table_format::authority`'s module docs); `None` where none does.
+    /// Each level is checked with its own lights' on-time: a ramp that ends nearer the lights'
+    /// deceleration lights them later through the lag. The front needs more room at a gentler
+    /// level, which the look-ahead's front check and the law's gap policy (through the allowed
+    /// braking) take into account.
+    fn gentler_than_band(
+        &self,
+        model: &Model,
+        now: u64,
+        command: f32,
+        jerk: f32,
+        corner: &RearCorner,
+    ) -> Option<Braking> {
+        let beta = -model.ego.min;
+        let least = self.least_level();
+        // (NaN compares false: no level.)
+        let below_band = least < beta;
+        if !below_band {
+            return None;
+        }
+        let margin = self.config.certificate.rear_margin;
+        let level = |k: usize| least + (beta - least) * (k as f32) / (GENTLER_LEVELS as f32);
+        // Two neighbouring levels share the gentler one's on-time: the later, so the harder
+        // one is credited less than its own.
+        (0..GENTLER_LEVELS.div_ceil(2)).rev().find_map(|pair| {
+            let (harder, gentler) = (level(2 * pair + 1), level(2 * pair));
+            let ((clock, dark), _) = self.dark_after(model, now, command, jerk, gentler)?;
+            [harder, gentler]
+                .into_iter()
+                .filter(|l| *l < beta)
+                .find(|l| corner.clears(model, *l, clock, dark, margin))
+                .map(|level| Braking { level, jerk })
+        })
     }
 
     /// Where the follower's reaction stands at the kept follower measurement's time, for

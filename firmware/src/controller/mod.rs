@@ -136,7 +136,12 @@
 //! - **The look-ahead** of a command `u` is argued along the emergency authority's build-up at
 //!   the hardest level from `beta` to the emergency level that the follower allows when `u` is
 //!   held a period and that ramp from `u` lights the brakes
-//!   (`authorities::look_ahead_braking`, [`table_format::rear::hardest_clearing`] to 0.02 m/s^2),
+//!   (`authorities::look_ahead_braking`, [`table_format::rear::hardest_clearing`] to 0.02 m/s^2);
+//!   where it allows not even `beta`, at the hardest of four gentler levels down to the lights'
+//!   command's (3.0, 2.5, 2.0 and 1.5 m/s^2 by default, `authorities::gentler_than_band`, each
+//!   with the lights' on-time of its own ramp or a later one), as the rule's brakings go down
+//!   to `table_format::authority::LEAST_LEVEL`: the front then needs more room, which the
+//!   look-ahead checks and the law's gap keeps;
 //!   or along the comfort band's braking (`beta` at `brake_jerk`) where its front passes and
 //!   the rear clears with its own, slower, lights: a command that passes names the braking it
 //!   passed with, which is in force from then on. One level serves every command up to the one
@@ -181,12 +186,16 @@
 //! - **Engagement**: in standby the braking in force is the one a look-ahead from what the
 //!   actuator is doing finds, and the engagement is judged by its certificate.
 //!
-//! What it does not do yet: levels below `beta` (the command history keeps its largest command,
-//! so the ego's braking since a measurement is taken as hard as `beta`); move off from
-//! standstill with a follower at the IDM's jam distance behind (the follower's model lets it
-//! accelerate blind until it sees the lights, and no braking certifies that), so in stop and
-//! go the car is held, by the emergency authority's ramp; QEMU's cost figures are for the
-//! comfort band (docs/closed-loop.md has the closed-loop figures).
+//! What it does not do yet: credit a braking below `beta` since a measurement (the command
+//! history keeps its largest command, so the ego's braking since a follower measurement is
+//! taken as hard as `beta` or the emergency's level, whatever level the look-ahead argues
+//! with); move off from standstill with a follower at the IDM's jam distance behind (the
+//! follower's model lets it accelerate blind until it sees the lights, and no braking
+//! certifies that), so in stop and go the car is held, by the emergency authority's ramp; and
+//! leave the lights' command where the follower would then allow not even `beta`, even where a
+//! gentler level would pass: at 8-10 m/s with a follower 1-1.5 s behind the car is brought to
+//! a standstill the comfortable way, with no car ahead (the scenario suite's cruise on a 10%
+//! grade at 20 mph; docs/closed-loop.md has the closed-loop figures).
 //!
 //! # Delays: the measurements' age, the actuator's dead time and lag
 //! The configuration declares the actuator's dead time `D` (a command acts `D` after it is
