@@ -24,8 +24,9 @@ pub(super) const LIGHTS_WAY_RELEASE_S: f32 = 1.0;
 
 /// How many levels below the band's floor a look-ahead tries where the follower allows not
 /// even the floor ([`Controller::gentler_than_band`]): with the defaults 3.0, 2.5, 2.0 and
-/// 1.5 m/s^2. A handful of fixed levels rather than a search: each needs its own lights'
-/// on-time, and the step's instruction budget is shared with the rest of the look-ahead.
+/// 1.5 m/s^2. A handful of fixed levels rather than a search: each pair needs a lights'
+/// on-time of its own, and the step's instruction budget is shared with the rest of the
+/// look-ahead.
 const GENTLER_LEVELS: usize = 4;
 
 /// What a look-ahead argues with: the braking after the period, and the largest command it
@@ -152,8 +153,10 @@ impl Controller<'_> {
     /// band's floor down to [`Controller::least_level`], at which the rear check of
     /// [`Controller::look_ahead_braking`] clears, at the emergency authority's build-up `jerk`
     /// (the rule's brakings, `table_format::authority`'s module docs); `None` where none does.
-    /// Each level is checked with its own lights' on-time: a ramp that ends nearer the lights'
-    /// deceleration lights them later through the lag. The front needs more room at a gentler
+    /// Each pair of neighbouring levels is checked with the lights' on-time of its gentler
+    /// level: a ramp that ends nearer the lights' deceleration lights them later through the
+    /// lag (the lag is monotone in its input), so the harder level is credited no more than
+    /// its own on-time allows. The front needs more room at a gentler
     /// level, which the look-ahead's front check and the law's gap policy (through the allowed
     /// braking) take into account.
     fn gentler_than_band(
