@@ -28,6 +28,8 @@ pub(super) const LIGHTS_WAY_RELEASE_S: f32 = 1.0;
 /// on-time of its own, and the step's instruction budget is shared with the rest of the
 /// look-ahead.
 const GENTLER_LEVELS: usize = 4;
+// The levels are tried in pairs (`Controller::gentler_than_band`).
+const _: () = assert!(GENTLER_LEVELS % 2 == 0);
 
 /// What a look-ahead argues with: the braking after the period, and the largest command it
 /// holds for (the follower may allow less after a command that keeps the lights off longer).
@@ -95,16 +97,19 @@ impl Controller<'_> {
         now: u64,
         command: f32,
     ) -> Option<Braking> {
-        self.look_ahead_argued(model, now, command).map(|(b, _)| b)
+        let pending = self.pending(now, model);
+        self.look_ahead_argued(model, now, pending, command)
+            .map(|(b, _)| b)
     }
 
     /// [`Controller::look_ahead_braking`], with the rear check it argued with: the follower's
     /// box corner and where its reaction stands (`None` without a follower's track to argue
-    /// with, or in the comfort band).
+    /// with, or in the comfort band). `pending` is [`Controller::pending`] at `now`.
     fn look_ahead_argued(
         &self,
         model: &Model,
         now: u64,
+        pending: f32,
         command: f32,
     ) -> Option<(Braking, Option<RearArgued>)> {
         if !self.two_authorities() {
@@ -116,7 +121,7 @@ impl Controller<'_> {
             return Some((e, None));
         }
         let beta = -model.ego.min;
-        let ((clock, dark), _) = self.dark_after(model, now, command, e.jerk, beta)?;
+        let ((clock, dark), _) = self.dark_after(now, pending, command, e.jerk, beta)?;
         let margin = self.config.certificate.rear_margin;
         let corner = self.rear_corner(model, &rear, now);
         let braking = hardest_clearing(
@@ -129,7 +134,7 @@ impl Controller<'_> {
             level,
             jerk: e.jerk,
         })
-        .or_else(|| self.gentler_than_band(model, now, command, e.jerk, &corner))?;
+        .or_else(|| self.gentler_than_band(model, now, pending, command, e.jerk, &corner))?;
         Some((
             braking,
             Some(RearArgued {
@@ -144,7 +149,7 @@ impl Controller<'_> {
     /// ramp to it ends at or below the lights' command, as one to the band's floor does, so it
     /// keeps a lights' run going ([`Controller::lights_run`]) and lights the brakes for sure
     /// (the lights' command is below the lights' deceleration).
-    pub(super) fn least_level(&self) -> f32 {
+    fn least_level(&self) -> f32 {
         -self.lights_command()
     }
 
@@ -163,6 +168,7 @@ impl Controller<'_> {
         &self,
         model: &Model,
         now: u64,
+        pending: f32,
         command: f32,
         jerk: f32,
         corner: &RearCorner,
@@ -178,12 +184,11 @@ impl Controller<'_> {
         let level = |k: usize| least + (beta - least) * (k as f32) / (GENTLER_LEVELS as f32);
         // Two neighbouring levels share the gentler one's on-time: the later, so the harder
         // one is credited less than its own.
-        (0..GENTLER_LEVELS.div_ceil(2)).rev().find_map(|pair| {
+        (0..GENTLER_LEVELS / 2).rev().find_map(|pair| {
             let (harder, gentler) = (level(2 * pair + 1), level(2 * pair));
-            let ((clock, dark), _) = self.dark_after(model, now, command, jerk, gentler)?;
+            let ((clock, dark), _) = self.dark_after(now, pending, command, jerk, gentler)?;
             [harder, gentler]
                 .into_iter()
-                .filter(|l| *l < beta)
                 .find(|l| corner.clears(model, *l, clock, dark, margin))
                 .map(|level| Braking { level, jerk })
         })
@@ -210,14 +215,14 @@ impl Controller<'_> {
     /// where the lights come on again, the later of the two.
     fn dark_after(
         &self,
-        model: &Model,
         now: u64,
+        pending: f32,
         command: f32,
         jerk: f32,
         level: f32,
     ) -> Option<((f32, f32), u64)> {
         let rear = self.rear?;
-        let off = self.ramp_lights_on(model, now, command, jerk, level)?;
+        let off = self.ramp_lights_on(now, pending, command, jerk, level)?;
         // (A NaN command does not keep a run.)
         let keeps_run = command <= self.lights_command();
         let on = match (self.lights_on_us, self.lights_run_own_us) {
@@ -229,8 +234,8 @@ impl Controller<'_> {
     }
 
     /// When the lights are on for sure (microseconds) for `command` held a period from `now`,
-    /// then a braking ramp at `jerk` from it down to `-level` (what is pending held before
-    /// it).
+    /// then a braking ramp at `jerk` from it down to `-level` (`pending`,
+    /// [`Controller::pending`] at `now`, held before it).
     ///
     /// The ramp's commands are issued once a period and held: the committed ramp from
     /// `command` starts a period on, so it issues `command` again then, and `command - j k h`
@@ -240,14 +245,14 @@ impl Controller<'_> {
     /// later than the ramp it stays under.
     pub(super) fn ramp_lights_on(
         &self,
-        model: &Model,
         now: u64,
+        pending: f32,
         command: f32,
         jerk: f32,
         level: f32,
     ) -> Option<u64> {
         let h_us = u64::from(self.config.period_us);
-        let held = math::max(self.pending(now, model), command);
+        let held = math::max(pending, command);
         self.lights_on_after(now.saturating_add(2 * h_us), held, command, jerk, level)
     }
 
@@ -265,20 +270,22 @@ impl Controller<'_> {
         proposal: f32,
         ego_speed: f32,
     ) -> Option<Look> {
+        // What the actuator may be doing: one bound for every command the look-ahead tries.
+        let pending = self.pending(now, model);
         let comfort_lights_on = |up_to: f32| {
             let jerk = self.config.certificate.brake_jerk;
-            let ((clock, dark), on) = self.dark_after(model, now, up_to, jerk, -model.ego.min)?;
+            let ((clock, dark), on) = self.dark_after(now, pending, up_to, jerk, -model.ego.min)?;
             let rear = self.rear?;
             self.rear_check(model, &rear, -model.ego.min, clock, dark, now)
                 .then_some(on)
         };
         let look = |up_to: f32| {
-            let (braking, argued) = self.look_ahead_argued(model, now, up_to)?;
+            let (braking, argued) = self.look_ahead_argued(model, now, pending, up_to)?;
             Some(Look {
                 braking,
                 up_to,
                 lights_on_us: self
-                    .ramp_lights_on(model, now, up_to, braking.jerk, braking.level)
+                    .ramp_lights_on(now, pending, up_to, braking.jerk, braking.level)
                     .unwrap_or(u64::MAX),
                 comfort_lights_on_us: if self.two_authorities() {
                     comfort_lights_on(up_to)

@@ -984,9 +984,10 @@ impl<'t> Controller<'t> {
         if self.two_authorities() {
             let doing = self.last_command_or_unknown(&model);
             self.in_force = self.look_ahead_braking(&model, now, doing);
+            let pending_now = self.pending(now, &model);
             self.lights_expected_us = self
                 .in_force
-                .and_then(|b| self.ramp_lights_on(&model, now, doing, b.jerk, b.level));
+                .and_then(|b| self.ramp_lights_on(now, pending_now, doing, b.jerk, b.level));
         }
         let braking = self.braking_in_force(&model);
         let front = self.measured_front(&model, &leader, v, t_e, now, pending, braking);
