@@ -7,6 +7,40 @@ use table_format::rear::{allowed_braking, ReactingFollower};
 
 use crate::humans::HumanModel;
 
+/// The error box around the worst measurement of a follower `time_gap` seconds behind (plus
+/// the IDM's jam distance) an ego at `v`, both at `v`: the gap read short (the range's error
+/// taken against it), then every state within the declared error of that reading.
+struct RearBox {
+    /// The gap's interval, m.
+    gap: (f32, f32),
+    /// The ego's speed's interval, m/s.
+    ego: (f32, f32),
+    /// The follower's speed's interval, m/s (the range rate's error on each of two readings).
+    follower: (f32, f32),
+}
+
+impl RearBox {
+    fn around(config: &firmware::Config, model: &HumanModel, time_gap: f32, v: f32) -> Self {
+        let error = config.sensors.error;
+        let table_format::FollowerModel::Idm { idm, .. } = model.follower;
+        let gap = idm.jam_distance + time_gap * v;
+        let measured = gap - (error.range + error.range_relative * gap);
+        let ego_measured = v - (error.ego_speed + error.ego_speed_relative * v);
+        let ego_low = error.ego_speed(ego_measured).0;
+        let ego_high = error
+            .ego_speed(v + error.ego_speed + error.ego_speed_relative * v)
+            .1;
+        RearBox {
+            gap: error.range(measured),
+            ego: (ego_low, ego_high),
+            follower: (
+                (ego_low - 2.0 * error.range_rate).max(0.0),
+                ego_high + 2.0 * error.range_rate,
+            ),
+        }
+    }
+}
+
 /// The hardest braking, up to the declared emergency authority's
 /// ([`firmware::EmergencyDeclaration::braking`]), that a `follower` `time_gap` seconds behind
 /// (plus the IDM's jam distance, at the ego's speed `v`) allows an ego whose firmware argues
@@ -15,10 +49,9 @@ use crate::humans::HumanModel;
 /// slowest). The ego's braking shows at the latest `delay` seconds after the measurement, and
 /// the follower reacts `reaction_time` after that, so its reaction is taken `delay` longer,
 /// with the ego braking up to the level from the measurement on (an ego that brakes later
-/// covers more). Until it reacts the follower keeps what its IDM does at the box's most
-/// inviting corner (the longest gap, the slowest follower, the fastest ego, the range's closest
-/// time gap), and at least holds its speed. `None` where not even holding the ego's speed keeps
-/// the rear margin.
+/// covers more). The follower is taken as given: the firmware's own
+/// ([`firmware::Certifier::reacting_follower`]) keeps up to its IDM's largest acceleration
+/// until it reacts. `None` where not even holding the ego's speed keeps the rear margin.
 pub fn braking_a_follower_allows(
     config: &firmware::Config,
     model: &HumanModel,
@@ -27,33 +60,42 @@ pub fn braking_a_follower_allows(
     time_gap: f32,
     v: f32,
 ) -> Option<f32> {
-    let error = config.sensors.error;
-    let table_format::FollowerModel::Idm { idm, .. } = model.follower;
-    let gap = idm.jam_distance + time_gap * v;
-    let measured = gap - (error.range + error.range_relative * gap);
-    let (gap_low, gap_high) = error.range(measured);
-    let ego_measured = v - (error.ego_speed + error.ego_speed_relative * v);
-    let ego_low = error.ego_speed(ego_measured).0;
-    let ego_high = error
-        .ego_speed(v + error.ego_speed + error.ego_speed_relative * v)
-        .1;
-    let follower_high = ego_high + 2.0 * error.range_rate;
-    let follower_low = (ego_low - 2.0 * error.range_rate).max(0.0);
-    let tmin = model.parameter_range().0;
-    let idm_now = model.follower_acceleration(follower_low, ego_high, gap_high, tmin);
+    let rear = RearBox::around(config, model, time_gap, v);
     let later = ReactingFollower {
         reaction_time: follower.reaction_time + delay,
-        reaction_acceleration: idm_now.max(0.0),
         ..*follower
     };
     allowed_braking(
-        gap_low,
-        ego_low,
-        follower_high,
+        rear.gap.0,
+        rear.ego.0,
+        rear.follower.1,
         &later,
         config.certificate.rear_margin,
         config.certificate.emergency.braking.level,
     )
+}
+
+/// `follower` credited, until it reacts, with what its IDM does at the most inviting corner of
+/// the error box of [`braking_a_follower_allows`] (the longest gap, the slowest follower, the
+/// fastest ego, the range's closest time gap), and at least holding its speed, instead of its
+/// IDM's largest acceleration. What a follower that holds its acceleration from steady
+/// following through its reaction does ([`crate::humans::Follower::IdmReacting`]); the
+/// firmware does not argue with it (it does not know the follower's acceleration when its
+/// lights come on), so it is a lever, not a figure of the firmware.
+pub fn crediting_its_idm(
+    config: &firmware::Config,
+    model: &HumanModel,
+    follower: &ReactingFollower,
+    time_gap: f32,
+    v: f32,
+) -> ReactingFollower {
+    let rear = RearBox::around(config, model, time_gap, v);
+    let tmin = model.parameter_range().0;
+    let idm_now = model.follower_acceleration(rear.follower.0, rear.ego.1, rear.gap.1, tmin);
+    ReactingFollower {
+        reaction_acceleration: idm_now.max(0.0),
+        ..*follower
+    }
 }
 
 /// Runs the command: prints its tables, writes `gap-policy.json` and the plots to `out`.
@@ -188,8 +230,10 @@ pub fn run(out: &std::path::Path) -> Result<()> {
 
 /// The hardest braking a follower that reacts like a person allows the ego at exact states (no
 /// measurement error, no delay), at equal speeds with the follower 0.6, 1 and 2 s behind
-/// (`table_format::rear`): R157's careful driver, and a follower that brakes at the table's
-/// follower clip at once after the same 1.15 s. Printed as a table; returned for the report.
+/// (`table_format::rear`): R157's careful driver, a follower that holds its speed as the careful
+/// driver does and then brakes at the table's follower clip at once, and the firmware's
+/// follower ([`firmware::Certifier::reacting_follower`]: up to the IDM's top until it reacts,
+/// then its clip at once). Printed as a table; returned for the report.
 fn braking_at_exact_states(bytes: &[u8]) -> Result<serde_json::Value> {
     let table = table_format::Table::parse(bytes)?;
     let model = crate::humans::HumanModel::of(&table)
@@ -200,12 +244,22 @@ fn braking_at_exact_states(bytes: &[u8]) -> Result<serde_json::Value> {
         jerk: f32::INFINITY,
         ..careful
     };
+    let argued = firmware::Certifier::new(table_format::Table::parse(bytes)?, &Default::default())
+        .map_err(|f| anyhow::anyhow!("the default table is refused: {f:?}"))?
+        .reacting_follower();
     let followers = [
         (
-            "careful driver (1.15 s, then 7.59 m/s^2 over 0.6 s)",
+            "careful driver (its speed held for 1.15 s, then 7.59 m/s^2 over 0.6 s)",
             careful,
         ),
-        ("1.15 s, then the model's clip at once", at_clip),
+        (
+            "its speed held for 1.15 s, then the model's clip at once",
+            at_clip,
+        ),
+        (
+            "the firmware's: up to the IDM's top for 1.15 s, then its clip at once",
+            argued,
+        ),
     ];
     let time_gaps = [0.6f32, 1.0, 2.0];
     let ceiling = 12.0;
@@ -245,7 +299,10 @@ fn braking_at_exact_states(bytes: &[u8]) -> Result<serde_json::Value> {
 /// jam distance plus its time gap behind, at the ego's speed, and the braking it allows is
 /// taken where the firmware would see it: at the worst corner of the error box around the worst
 /// measurement of it, with the track as old as the radar delivers it and the period and the
-/// brake's dead time before the braking shows. Printed, drawn to `gap-policy-authorities.png`
+/// brake's dead time before the braking shows. The followers: the firmware's own
+/// ([`firmware::Certifier::reacting_follower`]), the same reacting at once, and R157's careful
+/// driver (who holds its speed until it reacts); the levers at 30 m/s add the firmware's
+/// follower credited with its IDM's output ([`crediting_its_idm`]). Printed, drawn to `gap-policy-authorities.png`
 /// and returned for the report.
 fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serde_json::Value> {
     let table = table_format::Table::parse(bytes)?;
@@ -254,35 +311,28 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     let config = firmware::Config::default();
     let declared = config.certificate.emergency;
     let full = declared.braking;
-    let table_format::FollowerModel::Idm { idm, .. } = model.follower;
-    let jam = idm.jam_distance;
-    let clip = -model.follower_clip().0;
-    let careful = ReactingFollower::careful_driver(model.max_speed);
+    let comfort = firmware::Controller::new(bytes, config);
+    let argued = comfort
+        .certifier()
+        .map(|c| c.reacting_follower())
+        .ok_or_else(|| anyhow::anyhow!("the default table is refused"))?;
     let followers = [
         (
             "instant (the paper's IDM at its clip)",
             ReactingFollower {
                 reaction_time: 0.0,
-                braking: clip,
-                jerk: f32::INFINITY,
-                ..careful
+                ..argued
             },
         ),
         (
-            "1.15 s, then the IDM's clip at once",
-            ReactingFollower {
-                braking: clip,
-                jerk: f32::INFINITY,
-                ..careful
-            },
+            "the firmware's: up to the IDM's top for 1.15 s, then its clip at once",
+            argued,
         ),
         (
-            "R157's careful driver (1.15 s, 7.59 m/s^2 over 0.6 s)",
-            careful,
+            "R157's careful driver (its speed held for 1.15 s, then 7.59 m/s^2 over 0.6 s)",
+            ReactingFollower::careful_driver(model.max_speed),
         ),
     ];
-    let comfort = firmware::Controller::new(bytes, config);
-    anyhow::ensure!(comfort.table().is_some(), "the default table is refused");
     let comfort_braking = firmware::Braking {
         level: -model.band_min,
         jerk: config.certificate.brake_jerk,
@@ -379,19 +429,25 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
             }
         }
     }
-    // What would reach the targets at 30 m/s against a 9.8 m/s^2 leader: the rear known
-    // exactly and at once, a faster brake (lag 0.1 s), and a smaller room in the gap policy.
+    // What would reach the targets at 30 m/s against a 9.8 m/s^2 leader: the follower
+    // credited with its IDM's output until it reacts, the rear known exactly and at once, a
+    // faster brake (lag 0.1 s).
     let v = 30.0f32;
-    let idm_follower = followers[1].1;
-    let exact_rear = allowed_braking(
-        jam + v,
-        v,
-        v,
-        &idm_follower,
-        config.certificate.rear_margin,
-        full.level,
-    );
-    let declared_rear = allows(&idm_follower, 1.0, v);
+    let mut exact = config;
+    exact.sensors.error = table_format::MeasurementError {
+        range: 0.0,
+        range_relative: 0.0,
+        range_rate: 0.0,
+        ego_speed: 0.0,
+        ego_speed_relative: 0.0,
+        ..config.sensors.error
+    };
+    let credited = crediting_its_idm(&config, &model, &argued, 1.0, v);
+    let credited_exact = crediting_its_idm(&exact, &model, &argued, 1.0, v);
+    let declared_rear = allows(&argued, 1.0, v);
+    let credited_rear = allows(&credited, 1.0, v);
+    let exact_rear = braking_a_follower_allows(&exact, &model, &argued, 0.0, 1.0, v);
+    let both_rear = braking_a_follower_allows(&exact, &model, &credited_exact, 0.0, 1.0, v);
     let mut faster = config;
     faster.plant.actuator_lag_us = 100_000;
     let faster = firmware::Controller::new(bytes, faster);
@@ -402,9 +458,14 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     };
     let levers = [
         (
-            "declared errors and delays",
+            "declared errors and delays (the firmware's argument)",
             declared_rear,
             at(&comfort, declared_rear),
+        ),
+        (
+            "the follower credited with its IDM's output until it reacts",
+            credited_rear,
+            at(&comfort, credited_rear),
         ),
         (
             "the follower known exactly and at once",
@@ -412,15 +473,20 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
             at(&comfort, exact_rear),
         ),
         (
+            "known exactly and at once, and credited with its IDM's output",
+            both_rear,
+            at(&comfort, both_rear),
+        ),
+        (
             "a brake lag of 0.1 s (declared 0.3 s)",
             declared_rear,
             at(&faster, declared_rear),
         ),
-        ("both", exact_rear, at(&faster, exact_rear)),
+        ("all three", both_rear, at(&faster, both_rear)),
     ];
     println!();
     println!(
-        "At 30 m/s against a 9.8 m/s^2 leader, the IDM follower 1 s behind reacting after 1.15 s:"
+        "At 30 m/s against a 9.8 m/s^2 leader, the firmware's follower 1 s behind (up to the IDM's top for 1.15 s, then its clip at once):"
     );
     println!("| what changes | braking it allows [m/s^2] | certified steady gap [m] |");
     println!("|---|---|---|");
@@ -452,14 +518,14 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     // reacts after 1.15 s at 0.6, 1 and 2 s behind, in columns.
     let speeds: Vec<f32> = (0..=70).map(|k| k as f32 * 0.5).collect();
     let mut panels = Vec::new();
-    let idm_reacting = followers[1].1;
+    let argued_follower = followers[1].1;
     for leader in [6.0f32, 9.8] {
         let columns = [None, Some(0.6f32), Some(1.0), Some(2.0)];
         for behind in columns {
             let braking_at = |v: f32| match behind {
                 None => Some(full),
                 Some(t) => {
-                    allows(&idm_reacting, t, v).map(|level| firmware::Braking { level, ..full })
+                    allows(&argued_follower, t, v).map(|level| firmware::Braking { level, ..full })
                 }
             };
             let certified: Vec<(f32, f32)> = speeds
@@ -505,7 +571,7 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     let file = out.join("gap-policy-authorities.png");
     crate::plots::gap_policy_panels(
         &file,
-        "Gap policy with the emergency authority the follower leaves (IDM follower reacting after 1.15 s)",
+        "Gap policy with the emergency authority the follower leaves (the firmware's follower: up to the IDM's top for 1.15 s, then its clip)",
         2,
         &panels,
     )?;
