@@ -378,8 +378,13 @@ pub fn run_episode(
                 }
             }
         }
-        let (mut a_leader, a_follower) =
-            humans.accelerations(world.time(), h, world.cars(), &mut rng);
+        let (mut a_leader, a_follower) = humans.accelerations(
+            world.time(),
+            h,
+            world.cars(),
+            world.lights_on_since(),
+            &mut rng,
+        );
         if snapshot.is_some() && episode.cut_in == Some(CutInKind::SteadyLeader) {
             a_leader = 0.0;
         }

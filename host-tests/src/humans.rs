@@ -46,11 +46,13 @@ pub enum Follower {
     /// Breaks the model: the largest acceleration the bounds allow, always (the paper's
     /// baseline follower's worst case).
     Unbounded,
-    /// Breaks today's model: the IDM at the range's closest time gap, seeing the ego's brake
-    /// lights only after [`REACTION_TIME`]. From the period the ego's acceleration falls below
-    /// zero (its lights come on) it keeps the acceleration it had for that long, then drives
-    /// by its IDM again, which by then sees the closing gap. The follower that reacts like a
-    /// person of `table_format::rear`, with the IDM for its braking.
+    /// Breaks the table's model: the IDM at the range's closest time gap, seeing the ego's brake
+    /// lights only after [`REACTION_TIME`]. From when the lights come on (the ego's actual
+    /// acceleration below the declared lights' deceleration's negative, as the loop samples
+    /// it: [`crate::world::World::lights_on_since`], taken a period earlier) it keeps the
+    /// acceleration it had for that long, then drives by its IDM again, which by then sees the
+    /// closing gap; lights that go off end it. The follower that reacts like a person of
+    /// `table_format::rear`, with the IDM for its braking.
     IdmReacting,
 }
 
@@ -161,9 +163,8 @@ pub struct Humans<'t> {
     /// Switching follower: the current time gap and when it next jumps.
     switching_time_gap: f32,
     next_switch: f32,
-    /// Reacting follower: the ego's speed a period ago, since when its lights are on, the
-    /// acceleration held until the follower reacts, and its last acceleration.
-    ego_speed_before: Option<f32>,
+    /// Reacting follower: since when the ego's lights are on, the acceleration held until the
+    /// follower reacts, and its last acceleration.
     lights_since: Option<f32>,
     held: f32,
     last_follower: f32,
@@ -234,19 +235,21 @@ impl<'t> Humans<'t> {
             pull_away: 0.0,
             switching_time_gap: if rng.random::<bool>() { tmin } else { tmax },
             next_switch: rng.random_range(0.2..4.0),
-            ego_speed_before: None,
             lights_since: None,
             held: 0.0,
             last_follower: 0.0,
         })
     }
 
-    /// The leader's and the follower's accelerations at time `t`, held for a period `h`.
+    /// The leader's and the follower's accelerations at time `t`, held for a period `h`, with
+    /// the ego's brake lights on since `lights_on_since` as the loop last sampled them (`None`:
+    /// off).
     pub fn accelerations(
         &mut self,
         t: f32,
         h: f32,
         cars: [Car; 3],
+        lights_on_since: Option<f32>,
         rng: &mut impl Rng,
     ) -> (f32, f32) {
         let [leader, ego, follower] = cars;
@@ -299,25 +302,20 @@ impl<'t> Humans<'t> {
             }
             Follower::Unbounded => m.follower_clip().1,
             Follower::IdmReacting => {
-                // The ego's lights: its speed fell over the last period, or it stands after a
-                // braking.
-                let falling = self.ego_speed_before.is_some_and(|v| ego.v < v - 1e-6);
-                let standing = ego.v <= 0.0 && self.lights_since.is_some();
-                if falling || standing {
-                    if self.lights_since.is_none() {
-                        self.lights_since = Some(t);
-                        self.held = self.last_follower;
-                    }
-                } else {
-                    self.lights_since = None;
+                // The lights came on after the sample before the one that saw them: the
+                // follower's clock starts then, at the earliest, so that it reacts no later
+                // than the model allows.
+                let on = lights_on_since.map(|on| on - h);
+                if on.is_some() && self.lights_since.is_none() {
+                    self.held = self.last_follower;
                 }
+                self.lights_since = on;
                 match self.lights_since {
                     Some(on) if t - on < REACTION_TIME => self.held,
                     _ => idm_with(tmin),
                 }
             }
         };
-        self.ego_speed_before = Some(ego.v);
         self.last_follower = a_follower;
         (
             within_speed_limit(a_leader, leader.v, m.max_speed, h),

@@ -7,9 +7,11 @@ use rand::rngs::StdRng;
 use rand::SeedableRng;
 use table_format::Table;
 
-/// The ego brakes at 3.5 m/s^2 from 1 s to 4 s; the follower,
-/// 20 m behind at the ego's 25 m/s: the reacting follower keeps the acceleration it had when
-/// the ego's lights came on for its whole reaction time, then drives by its IDM (at the range's
+/// The ego brakes at 3.5 m/s^2 from 1 s to 4 s, its lights sampled each period as the loop's
+/// world samples them (on from the 1.00 s sample, seen by the humans from the next period); the
+/// follower, 20 m behind at the ego's 25 m/s: the reacting follower keeps the acceleration it
+/// had when it saw the lights for its whole reaction time, counted from a period before the
+/// sample (the earliest they can have come on), then drives by its IDM (at the range's
 /// closest time gap) again. The instant IDM answers the braking within 0.1 s.
 #[test]
 fn the_reacting_follower_holds_its_acceleration_until_it_reacts() {
@@ -21,15 +23,21 @@ fn the_reacting_follower_holds_its_acceleration_until_it_reacts() {
         let mut ego = Car { x: 0.0, v: 25.0 };
         let mut behind = Car { x: -20.0, v: 25.0 };
         let mut out = Vec::new();
+        let mut lights: Option<f32> = None;
         for k in 0..300 {
             let t = k as f32 * h;
             let leader = Car {
                 x: ego.x + 1e3,
                 v: 25.0,
             };
-            let (_, a) = humans.accelerations(t, h, [leader, ego, behind], &mut rng);
+            let (_, a) = humans.accelerations(t, h, [leader, ego, behind], lights, &mut rng);
             out.push((t, a));
-            let a_ego = if (1.0..4.0).contains(&t) { -3.5 } else { 0.0 };
+            let a_ego = if (1.0 - 1e-4..4.0).contains(&t) {
+                -3.5
+            } else {
+                0.0
+            };
+            lights = (a_ego < -1.3).then(|| lights.unwrap_or(t));
             ego.advance(a_ego, h);
             behind.advance(a, h);
         }
@@ -37,20 +45,22 @@ fn the_reacting_follower_holds_its_acceleration_until_it_reacts() {
     };
     let reacting = run(Follower::IdmReacting);
     let instant = run(Follower::IdmWorstCase);
-    // The ego's speed first falls over the period from 1.00 s: the lights are seen at 1.02 s.
-    let on = 1.02f32;
+    // The lights are sampled on at 1.00 s and seen at 1.02 s; the clock starts at 0.98 s.
+    let (seen, on) = (1.0 + h, 1.0 - h);
     let at = |v: &[(f32, f32)], t: f32| v.iter().find(|p| p.0 >= t - 1e-4).unwrap().1;
-    let held = at(&reacting, on - h);
+    let held = at(&reacting, seen - h);
     for &(t, a) in &reacting {
-        if t >= on && t < on + REACTION_TIME - 1e-3 {
+        if t >= seen - 1e-4 && t < on + REACTION_TIME - 1e-3 {
             assert_eq!(a, held, "at {t}");
         }
     }
+    // It reacts in the first period from its reaction time after the earliest onset.
+    assert_ne!(at(&reacting, on + REACTION_TIME), held);
     let after = at(&reacting, on + REACTION_TIME + h);
     assert!(after < held - 1.0, "{after} after {held}");
     assert!(
-        at(&instant, on + 0.1) < held - 0.1,
+        at(&instant, seen + 0.1) < held - 0.1,
         "{}",
-        at(&instant, on + 0.1)
+        at(&instant, seen + 0.1)
     );
 }
