@@ -134,6 +134,10 @@ pub struct ScenarioResult {
     /// The leader brakes no harder than the ACC's comfort braking (3.5 m/s^2): ISO 15622's
     /// limits must hold.
     pub comfort_scope: bool,
+    /// The engagement the run starts with was refused, and why (the firmware's
+    /// `DriverError`): the car stays with its driver and the run ends there. Only with two
+    /// authorities, whose runs start from standby.
+    pub engagement_refused: Option<String>,
     /// A collision.
     pub collided: bool,
     /// The certificate was lost (beyond its tolerances) on the true state.
@@ -161,9 +165,11 @@ pub struct ScenarioResult {
 }
 
 impl ScenarioResult {
-    /// Whether the run passed: no collision, no loss, ISO 15622 in scope, the own check.
+    /// Whether the run passed: engaged, no collision, no loss, ISO 15622 in scope, the own
+    /// check.
     pub fn passed(&self) -> bool {
-        !self.collided
+        self.engagement_refused.is_none()
+            && !self.collided
             && !self.certificate_lost
             && (!self.comfort_scope || self.iso.holds())
             && self.check_holds
@@ -587,13 +593,22 @@ pub fn run(
         7,
     );
     // With two authorities the braking the certificate argues with is the firmware's choice:
-    // the run starts as a driver's engagement does, from a period in standby (refused: the
-    // car stays in standby, which the scenario's checks then see).
-    if config.certificate.authorities == firmware::Authorities::Two {
-        let _ = world.engage_from_standby(0.0, 0.0);
-    }
+    // the run starts as a driver's engagement does, from a period in standby. A refused one
+    // leaves the car to its driver: the run ends there, reported with the reason.
+    let engagement_refused = if config.certificate.authorities == firmware::Authorities::Two {
+        world
+            .engage_from_standby(0.0, 0.0)
+            .err()
+            .map(|e| format!("{e:?}"))
+    } else {
+        None
+    };
     let h = world.period_seconds();
-    let steps = (scenario.seconds / h).round() as u64;
+    let steps = if engagement_refused.is_some() {
+        0
+    } else {
+        (scenario.seconds / h).round() as u64
+    };
     let mut trace = trace;
     let mut events = scenario.driver.iter().peekable();
     let mut last_mode = None;
@@ -731,6 +746,7 @@ pub fn run(
         source_gap_m: scenario.lead.as_ref().map(|l| l.gap),
         start_gap_m: leader_start.map(|(g, _)| g),
         comfort_scope,
+        engagement_refused,
         collided: s.collision_time.is_some(),
         certificate_lost: s.certificate_lost.is_some(),
         iso: s.iso,

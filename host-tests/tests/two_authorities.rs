@@ -516,3 +516,27 @@ fn a_follower_that_allows_less_than_the_band_leaves_a_gentler_braking() {
         }
     }
 }
+
+/// A refused engagement leaves the car to its driver, and the scenario suite reports it as
+/// such: with an IDM follower 1.5 s behind at 10 km/h, the Euro NCAP CCRs run is refused
+/// (`DriverError::NotCertified`: the follower allows not even the lights' command) and ends
+/// there, neither a collision nor a pass; without a follower it engages and stops behind the
+/// target. (The suite ran a refused run on in standby, where the car rolled into the target
+/// and the firmware was charged with a collision, and a refused stop-and-go run passed.)
+#[test]
+fn a_refused_engagement_is_reported_not_driven() {
+    use host_tests::scenarios::{run, suite};
+    let bytes = table_bytes(6.0);
+    let table = Table::parse(bytes).unwrap();
+    let config = two(LawConfig::default().time_gap_setting);
+    let scenario = suite()
+        .into_iter()
+        .find(|s| s.name == "CCRs: stationary target, ego 10 km/h")
+        .unwrap();
+    let behind = run(&table, bytes, config, &scenario, true, None).unwrap();
+    assert_eq!(behind.engagement_refused.as_deref(), Some("NotCertified"));
+    assert!(!behind.collided && !behind.passed(), "{behind:?}");
+    let alone = run(&table, bytes, config, &scenario, false, None).unwrap();
+    assert_eq!(alone.engagement_refused, None);
+    assert!(alone.passed(), "{alone:?}");
+}
