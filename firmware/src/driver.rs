@@ -49,6 +49,21 @@ pub enum DriverError {
     CertificateUnknown,
 }
 
+impl core::fmt::Display for DriverError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            DriverError::SetSpeedOutOfRange => "the set speed is out of range",
+            DriverError::NoSuchTimeGap => "no such time-gap setting",
+            DriverError::NotCertified => "not engaged: the measured state is not certified",
+            DriverError::CertificateUnknown => {
+                "not engaged: no certificate could be evaluated in standby"
+            }
+        })
+    }
+}
+
+impl core::error::Error for DriverError {}
+
 /// The driver's state.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

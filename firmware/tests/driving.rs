@@ -392,3 +392,47 @@ fn an_engagement_into_an_uncertified_state_is_refused_and_the_car_stays_in_stand
     assert_eq!(cmd.mode, Mode::Nominal, "{cmd:?}");
     assert!(!cmd.emergency);
 }
+
+/// Every refusal and every fault reads as a sentence for the driver's display and the log: each
+/// message is non-empty and no two are the same (the table's own error is carried into its
+/// fault's).
+#[test]
+fn refusals_and_faults_say_what_is_wrong() {
+    use firmware::Fault;
+    let driver = [
+        DriverError::SetSpeedOutOfRange,
+        DriverError::NoSuchTimeGap,
+        DriverError::NotCertified,
+        DriverError::CertificateUnknown,
+    ]
+    .map(|e| e.to_string());
+    let faults = [
+        Fault::Table(firmware::table_format::Error::BadMagic),
+        Fault::WrongGame,
+        Fault::LeaderInvalid,
+        Fault::LeaderStale,
+        Fault::FollowerInvalid,
+        Fault::FollowerStale,
+        Fault::EgoSpeedInvalid,
+        Fault::EgoSpeedStale,
+        Fault::OutsideDomain { axis: 1 },
+        Fault::RearBoxTooWide { axis: 2 },
+        Fault::ClockWentBackwards,
+        Fault::InvalidConfig,
+        Fault::TableOutsideEnvelope,
+        Fault::EmergencyDeclarationDiffers,
+        Fault::ClockJumped,
+        Fault::TableNotVerified,
+        Fault::TableCheckedForLessError,
+        Fault::AfterEmergencyBraking,
+        Fault::RestartedAfterFault,
+    ]
+    .map(|e| e.to_string());
+    let all: Vec<&String> = driver.iter().chain(&faults).collect();
+    for (k, m) in all.iter().enumerate() {
+        assert!(!m.is_empty(), "{k}");
+        assert!(all[..k].iter().all(|o| o != m), "{m} twice");
+    }
+    assert!(faults[0].contains("bad magic"), "{}", faults[0]);
+    assert!(faults[8].contains("axis 1"), "{}", faults[8]);
+}

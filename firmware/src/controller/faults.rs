@@ -77,3 +77,51 @@ pub enum Fault {
     /// until the next power-on reset (see [`Controller::latch_minimum_risk`](super::Controller::latch_minimum_risk)).
     RestartedAfterFault,
 }
+
+impl core::fmt::Display for Fault {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Fault::Table(e) => write!(f, "the table is refused: {e}"),
+            Fault::WrongGame => f.write_str("the table is not a split three-car table"),
+            Fault::LeaderInvalid => f.write_str("the leader track is invalid"),
+            Fault::LeaderStale => f.write_str("the leader track is older than its covered age"),
+            Fault::FollowerInvalid => f.write_str("the follower track is invalid"),
+            Fault::FollowerStale => f.write_str("the follower track is older than its covered age"),
+            Fault::EgoSpeedInvalid => f.write_str("the ego speed is invalid"),
+            Fault::EgoSpeedStale => f.write_str("the ego speed is stale"),
+            Fault::OutsideDomain { axis } => {
+                write!(
+                    f,
+                    "the state is outside the rear table's domain on axis {axis}"
+                )
+            }
+            Fault::RearBoxTooWide { axis } => write!(
+                f,
+                "the measurements leave a box of rear states too wide on axis {axis}"
+            ),
+            Fault::ClockWentBackwards => f.write_str("the clock went backwards"),
+            Fault::InvalidConfig => {
+                f.write_str("the configuration is outside the certificate's limits")
+            }
+            Fault::TableOutsideEnvelope => {
+                f.write_str("the table's band does not fit the vehicle's envelope")
+            }
+            Fault::EmergencyDeclarationDiffers => f.write_str(
+                "the table declares another emergency authority, follower or lights' command",
+            ),
+            Fault::ClockJumped => f.write_str("the clock jumped forward"),
+            Fault::TableNotVerified => {
+                f.write_str("the table carries no complete proof for this configuration")
+            }
+            Fault::TableCheckedForLessError => {
+                f.write_str("the table was checked for less measurement error than declared")
+            }
+            Fault::AfterEmergencyBraking => {
+                f.write_str("the rear is unknown until a follower measurement after the braking")
+            }
+            Fault::RestartedAfterFault => f.write_str("the board restarted after a fault"),
+        }
+    }
+}
+
+impl core::error::Error for Fault {}
