@@ -382,7 +382,7 @@ pub fn run_episode(
             world.time(),
             h,
             world.cars(),
-            world.lights_on_since(),
+            world.lights_on_at_the_earliest(),
             &mut rng,
         );
         if snapshot.is_some() && episode.cut_in == Some(CutInKind::SteadyLeader) {
@@ -447,7 +447,7 @@ pub fn run_episode(
                         let a = model.follower_acceleration(f.v, e.v, e.x - f.x, tmin);
                         within_speed_limit(a, f.v, model.max_speed, h)
                     };
-                    let a_follower = match (behind, world.lights_on_since()) {
+                    let a_follower = match (behind, world.lights_on_at_the_earliest()) {
                         (Behind::Replayed, _) => recorded,
                         (Behind::Reacting, on)
                             if on.is_none_or(|on| world.time() - on < reacting.reaction_time) =>

@@ -310,7 +310,7 @@ impl<'t> Setting<'t> {
         };
         let a_follower = match (
             self.reacting.filter(|_| case.follower_reacts),
-            world.lights_on_since(),
+            world.lights_on_at_the_earliest(),
         ) {
             (Some(r), Some(on)) if t - on < r.reaction_time => r.reaction_acceleration,
             _ => m.follower_acceleration(follower.v, ego.v, ego.x - follower.x, time_gap),

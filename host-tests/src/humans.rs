@@ -48,8 +48,8 @@ pub enum Follower {
     Unbounded,
     /// Breaks the table's model: the IDM at the range's closest time gap, seeing the ego's brake
     /// lights only after [`REACTION_TIME`]. From when the lights come on (the ego's actual
-    /// acceleration below the declared lights' deceleration's negative, as the loop samples
-    /// it: [`crate::world::World::lights_on_since`], taken a period earlier) it keeps the
+    /// acceleration below the declared lights' deceleration's negative, at the earliest the
+    /// loop's samples allow: [`crate::world::World::lights_on_at_the_earliest`]) it keeps the
     /// acceleration it had for that long, then drives by its IDM again, which by then sees the
     /// closing gap; lights that go off end it. The follower that reacts like a person of
     /// `table_format::rear`, with the IDM for its braking.
@@ -242,8 +242,8 @@ impl<'t> Humans<'t> {
     }
 
     /// The leader's and the follower's accelerations at time `t`, held for a period `h`, with
-    /// the ego's brake lights on since `lights_on_since` as the loop last sampled them (`None`:
-    /// off).
+    /// the ego's brake lights on since `lights_on_since` (`None`: off), the earliest they can
+    /// have come on ([`crate::world::World::lights_on_at_the_earliest`]).
     pub fn accelerations(
         &mut self,
         t: f32,
@@ -302,10 +302,7 @@ impl<'t> Humans<'t> {
             }
             Follower::Unbounded => m.follower_clip().1,
             Follower::IdmReacting => {
-                // The lights came on after the sample before the one that saw them: the
-                // follower's clock starts then, at the earliest, so that it reacts no later
-                // than the model allows.
-                let on = lights_on_since.map(|on| on - h);
+                let on = lights_on_since;
                 if on.is_some() && self.lights_since.is_none() {
                     self.held = self.last_follower;
                 }

@@ -725,9 +725,20 @@ impl<'t> World<'t> {
     }
 
     /// Since when the ego's brake lights are on (its actual acceleration below the declared
-    /// lights' deceleration's negative), s; `None`: off.
+    /// lights' deceleration's negative), as the loop samples them at each period's start, s;
+    /// `None`: off.
     pub fn lights_on_since(&self) -> Option<f32> {
         self.lights_on_since_us.map(|t| t as f32 * 1e-6)
+    }
+
+    /// The earliest the lights on since [`World::lights_on_since`] can have come on: a period
+    /// before the sample that first saw them, the one before it having seen them off. A human
+    /// whose reaction is counted from here reacts no later than the model lets it, so that a
+    /// follower the loop drives that way stays inside the model however the lights fell
+    /// between samples.
+    pub fn lights_on_at_the_earliest(&self) -> Option<f32> {
+        self.lights_on_since()
+            .map(|on| on - self.period_us as f32 * 1e-6)
     }
 
     /// When the braking the firmware argues with last changed (with two authorities: between

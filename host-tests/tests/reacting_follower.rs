@@ -8,11 +8,11 @@ use rand::SeedableRng;
 use table_format::Table;
 
 /// The ego brakes at 3.5 m/s^2 from 1 s to 4 s, its lights sampled each period as the loop's
-/// world samples them (on from the 1.00 s sample, seen by the humans from the next period); the
-/// follower, 20 m behind at the ego's 25 m/s: the reacting follower keeps the acceleration it
-/// had when it saw the lights for its whole reaction time, counted from a period before the
-/// sample (the earliest they can have come on), then drives by its IDM (at the range's
-/// closest time gap) again. The instant IDM answers the braking within 0.1 s.
+/// world samples them (on from the 1.00 s sample, seen by the humans from the next period, as
+/// on since a period before the sample, the earliest they can have come on); the follower,
+/// 20 m behind at the ego's 25 m/s: the reacting follower keeps the acceleration it had when
+/// it saw the lights for its whole reaction time, counted from then, and drives by its IDM (at
+/// the range's closest time gap) again. The instant IDM answers the braking within 0.1 s.
 #[test]
 fn the_reacting_follower_holds_its_acceleration_until_it_reacts() {
     let table = Table::parse(firmware::DEFAULT_TABLE).unwrap();
@@ -30,7 +30,10 @@ fn the_reacting_follower_holds_its_acceleration_until_it_reacts() {
                 x: ego.x + 1e3,
                 v: 25.0,
             };
-            let (_, a) = humans.accelerations(t, h, [leader, ego, behind], lights, &mut rng);
+            // As the loop gives them: the earliest they can have come on, a period before
+            // the sample (`World::lights_on_at_the_earliest`).
+            let earliest = lights.map(|on| on - h);
+            let (_, a) = humans.accelerations(t, h, [leader, ego, behind], earliest, &mut rng);
             out.push((t, a));
             let a_ego = if (1.0 - 1e-4..4.0).contains(&t) {
                 -3.5
