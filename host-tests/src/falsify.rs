@@ -259,7 +259,7 @@ impl<'t> Setting<'t> {
     ///
     /// `case` says whether the follower reacts late ([`Case::follower_reacts`], with
     /// [`Setting::reacting`]: its largest acceleration from when the ego's brake lights come on
-    /// until its reaction time has passed, the certificate's worst case before the reaction,
+    /// ([`World::lights_on_at_the_earliest`]) until its reaction time has passed, the certificate's worst case before the reaction,
     /// then the IDM) and whether the leader brakes at authority changes.
     fn humans(
         &self,
