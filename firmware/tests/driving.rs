@@ -436,3 +436,29 @@ fn refusals_and_faults_say_what_is_wrong() {
     assert!(faults[0].contains("bad magic"), "{}", faults[0]);
     assert!(faults[8].contains("axis 1"), "{}", faults[8]);
 }
+
+/// The certifier refuses what the controller refuses: a configuration outside the limits the
+/// certificate is argued for (here the paper's bang-bang override with two authorities, which
+/// grade theirs) gets `Fault::InvalidConfig` from `Certifier::new` as from `Controller::new`,
+/// so that no host tool argues with a certificate the firmware would not run.
+#[test]
+fn the_certifier_refuses_a_configuration_the_controller_refuses() {
+    use firmware::{Authorities, Certifier, Fault};
+    let bang_bang = Config::bang_bang();
+    let config = Config {
+        certificate: CertificateConfig {
+            authorities: Authorities::Two,
+            ..bang_bang.certificate
+        },
+        ..bang_bang
+    };
+    assert!(!config.is_valid());
+    let table = firmware::table_format::Table::parse(DEFAULT_TABLE).unwrap();
+    assert_eq!(
+        Certifier::new(table, &config).err(),
+        Some(Fault::InvalidConfig)
+    );
+    assert!(Controller::new(DEFAULT_TABLE, config).table().is_none());
+    let table = firmware::table_format::Table::parse(DEFAULT_TABLE).unwrap();
+    assert!(Certifier::new(table, &Config::default()).is_ok());
+}

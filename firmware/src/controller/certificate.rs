@@ -152,11 +152,15 @@ pub struct Certifier<'t> {
 }
 
 impl<'t> Certifier<'t> {
-    /// The certifier of `table` for `config`: refused (with the reason) for a table that is not
-    /// a split three-car table covering every speed, whose band does not fit the vehicle's
-    /// envelope, or that carries no complete `solver verify` record for the configuration's
-    /// `rear_margin` and declared measurement error.
+    /// The certifier of `table` for `config`: refused (with the reason) for a configuration
+    /// outside the limits the certificate is argued for ([`Config::is_valid`]), or a table that
+    /// is not a split three-car table covering every speed, whose band does not fit the
+    /// vehicle's envelope, or that carries no complete `solver verify` record for the
+    /// configuration's `rear_margin` and declared measurement error.
     pub fn new(table: Table<'t>, config: &Config) -> Result<Self, Fault> {
+        if !config.is_valid() {
+            return Err(Fault::InvalidConfig);
+        }
         let model = model_of(&table, config)?;
         Ok(Certifier {
             table,
