@@ -259,8 +259,9 @@ impl<'t> Setting<'t> {
     ///
     /// `case` says whether the follower reacts late ([`Case::follower_reacts`], with
     /// [`Setting::reacting`]: its largest acceleration from when the ego's brake lights come on
-    /// ([`World::lights_on_at_the_earliest`]) until its reaction time has passed, the certificate's worst case before the reaction,
-    /// then the IDM) and whether the leader brakes at authority changes.
+    /// ([`World::lights_on_at_the_earliest`]) until its reaction time has passed, the
+    /// certificate's worst case before the reaction, then the IDM) and whether the leader brakes
+    /// at authority changes.
     fn humans(
         &self,
         world: &World<'_>,

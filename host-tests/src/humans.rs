@@ -302,11 +302,10 @@ impl<'t> Humans<'t> {
             }
             Follower::Unbounded => m.follower_clip().1,
             Follower::IdmReacting => {
-                let on = lights_on_since;
-                if on.is_some() && self.lights_since.is_none() {
+                if lights_on_since.is_some() && self.lights_since.is_none() {
                     self.held = self.last_follower;
                 }
-                self.lights_since = on;
+                self.lights_since = lights_on_since;
                 match self.lights_since {
                     Some(on) if t - on < REACTION_TIME => self.held,
                     _ => idm_with(tmin),
