@@ -90,15 +90,14 @@ impl Controller<'_> {
     /// earlier harder braking counted there), with the lights off until `command` held for the
     /// period and the emergency ramp from it bring them on for sure (what is pending held
     /// before it): a gentler command ends a lights' run no later, and a braking command keeps
-    /// one under way, so one level serves every command up to `command`. `pending` is
-    /// [`Controller::pending`] at `now`.
+    /// one under way, so one level serves every command up to `command`.
     pub(super) fn look_ahead_braking(
         &self,
         model: &Model,
         now: u64,
-        pending: f32,
         command: f32,
     ) -> Option<Braking> {
+        let pending = self.pending(now, model);
         self.look_ahead_argued(model, now, pending, command)
             .map(|(b, _)| b)
     }

@@ -983,8 +983,8 @@ impl<'t> Controller<'t> {
         // period after this one, where the first engaged step's ramp starts.
         if self.two_authorities() {
             let doing = self.last_command_or_unknown(&model);
+            self.in_force = self.look_ahead_braking(&model, now, doing);
             let pending_now = self.pending(now, &model);
-            self.in_force = self.look_ahead_braking(&model, now, pending_now, doing);
             self.lights_expected_us = self
                 .in_force
                 .and_then(|b| self.ramp_lights_on(now, pending_now, doing, b.jerk, b.level));
@@ -1119,8 +1119,7 @@ impl<'t> Controller<'t> {
         // certificate is judged by it.
         if self.two_authorities() && self.in_force.is_none() {
             let doing = self.last_command_or_unknown(&model);
-            let pending_now = self.pending(now, &model);
-            self.in_force = self.look_ahead_braking(&model, now, pending_now, doing);
+            self.in_force = self.look_ahead_braking(&model, now, doing);
         }
         let proposal = match lost {
             Some(_) => math::clamp(
