@@ -385,17 +385,21 @@ fn cut_ins_the_firmware_s_own_bounds_once_lost_are_avoided() {
     }
 }
 
-/// A braking the emergency answer held for a period is not taken as held for good by the
-/// next rear check (two authorities, `campaign --authorities two --cut-in leader --episodes
-/// 300`, stop-and-go behind the worst-case IDM, seed 9,000,051: a car cuts in 13.1 m ahead
-/// 4.4 m/s slower, braking at 6 m/s^2, the follower 34 m behind). The first answer is
-/// -5.75 m/s^2; the next follower measurement is 0.9 m shorter at its box's corner. Argued as
-/// braking at 5.75 from the measurement's time to a standstill, no level passed there, not
-/// even the band's floor, and the answer fell to -3.5 for three periods; with the period's
-/// speed debt counted (`RearCorner::gap_after`) the check passes 4.6 m/s^2 there, and the
-/// answer never returns to the band's floor before it reaches the full 8.
+/// A leader cut-in the two-authority campaign once scored preventable and not prevented
+/// (`campaign --authorities two --cut-in leader --episodes 300`, stop-and-go behind the
+/// worst-case IDM, seed 9,000,051: a car cuts in 13.1 m ahead 4.4 m/s slower, braking at
+/// 6 m/s^2, the follower 34 m behind) is avoided, and the answer never eases off on the way
+/// to the full braking:
+/// - the emergency answer's rear check tried three levels, the full 8 m/s^2, 5.75 and 4.625,
+///   so it held -5.75 where the follower allowed more, and more every period as its reaction
+///   clock ran: the ego hit the car ahead at 26.36 s. It now searches the hardest level the
+///   follower allows, to 0.02 m/s^2 (first -5.9, then -6.4 to -7.5 before the full 8);
+/// - a braking held for a period is not taken as held for good by the next rear check: argued
+///   as braking at the first answer's level from the measurement's time to a standstill, no
+///   level passed there, not even the band's floor, and the answer fell to -3.5 for three
+///   periods (`RearCorner::gap_after` counts the period's speed debt instead).
 #[test]
-fn a_braking_held_a_period_is_not_taken_as_held_for_good() {
+fn a_cut_in_the_follower_allows_braking_for_is_avoided() {
     let table = table();
     let mut config = Config::default();
     config.certificate.authorities = firmware::Authorities::Two;
@@ -413,6 +417,11 @@ fn a_braking_held_a_period_is_not_taken_as_held_for_good() {
     let o = run_episode(&table, firmware::DEFAULT_TABLE, &episode, Some(&mut trace))
         .expect("the episode starts");
     let cut = o.cut_in.expect("a cut-in");
+    assert!(
+        !o.collided,
+        "collided at {:?} after the cut-in at {} s (first answer {:?})",
+        o.collision_time, cut.at, cut.first_answer
+    );
     let answer: Vec<f32> = trace
         .iter()
         .filter(|p| p.t >= cut.at)
@@ -430,7 +439,7 @@ fn a_braking_held_a_period_is_not_taken_as_held_for_good() {
     );
     let gentlest = answer.iter().copied().fold(f32::NEG_INFINITY, f32::max);
     assert!(
-        gentlest < -4.0,
+        gentlest < -5.0,
         "the answer went back to {gentlest} m/s^2 before reaching the full braking: {answer:?}"
     );
 }

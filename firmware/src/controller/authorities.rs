@@ -14,7 +14,7 @@ use crate::{iso15622, math};
 
 /// How close to the hardest level the follower allows the look-ahead's level comes, m/s^2
 /// ([`table_format::authority::LEVEL_RESOLUTION`]: the search never returns more).
-const LEVEL_RESOLUTION: f32 = table_format::authority::LEVEL_RESOLUTION;
+pub(super) const LEVEL_RESOLUTION: f32 = table_format::authority::LEVEL_RESOLUTION;
 
 /// How much longer a proposal must leave the follower the comfort band's floor to leave the
 /// comfortable way down to the lights' command once it is under way, s

@@ -3,9 +3,9 @@
 //! band's floor at once cannot keep the leader's worst case off the car, no harder than the
 //! follower allows (the controller's module docs: emergencies).
 
-use table_format::rear::{rear_gap_after, ReactingFollower};
+use table_format::rear::{hardest_clearing, rear_gap_after, ReactingFollower};
 
-use super::authorities::reaction_at;
+use super::authorities::{reaction_at, LEVEL_RESOLUTION};
 use super::certificate::{profile, LeaderMemo, Model, Ramp, RearMemo, WorstCorner};
 use super::history::seconds;
 use super::{Controller, CERTIFICATE_TOLERANCE};
@@ -393,32 +393,43 @@ impl Controller<'_> {
     }
 
     /// The hardest level up to `wanted` (above the band's floor) that the rear check passes
-    /// ([`Controller::below_band`]): `None` when no level above the band's floor
-    /// passes, the follower's track is not kept, or when the lights come on is not known.
+    /// ([`Controller::below_band`]), to [`LEVEL_RESOLUTION`]: `None` when no level above the
+    /// band's floor passes, the follower's track is not kept, or when the lights come on is
+    /// not known.
+    ///
+    /// `wanted` is checked with the lights' on-time it brings held from now; where it fails,
+    /// the hardest level in the band's floor to it that clears with the on-time the band's
+    /// floor brings ([`hardest_clearing`]). A harder held command lights the brakes no later
+    /// (the lag is monotone in its input), so the level found clears with its own on-time too,
+    /// as the step keeps it ([`Controller::lights_run`]); one on-time keeps the rear value
+    /// non-increasing in the level, as the search needs.
     fn follower_allows(&self, model: &Model, now: u64, wanted: f32) -> Option<f32> {
         let beta = -model.ego.min;
         let rear = self.rear?;
         let run = self.lights_on_from(now, model);
+        let held = |level: f32| self.lights_on_holding(now, model, -level);
         if !math::is_finite(rear.track.gap) {
-            return run
-                .or(self.lights_on_holding(now, model, -wanted))
-                .map(|_| wanted);
+            return run.or(held(wanted)).map(|_| wanted);
         }
         let t_f = rear.at_us;
         let corner = self.rear_corner(model, &rear, now);
         let margin = self.config.certificate.rear_margin;
-        [1.0, 0.5, 0.25]
-            .iter()
-            .map(|share| beta + share * (wanted - beta))
-            .find(|level| {
-                // The lights' run as the step will keep it if this level is commanded.
-                let held = self.lights_on_holding(now, model, -*level);
-                let Some(on) = [run, held].into_iter().flatten().min() else {
-                    return false;
-                };
-                let (clock, dark) = reaction_at(t_f, on);
-                corner.clears(model, *level, clock, dark, margin)
-            })
+        // The lights' run as the step will keep it if `level` is commanded.
+        let clock_for = |level: f32| {
+            let on = [run, held(level)].into_iter().flatten().min()?;
+            Some(reaction_at(t_f, on))
+        };
+        let (clock, dark) = clock_for(wanted)?;
+        if corner.clears(model, wanted, clock, dark, margin) {
+            return Some(wanted);
+        }
+        let (clock, dark) = clock_for(beta)?;
+        hardest_clearing(
+            |level| corner.gap_after(model, level, clock, dark) - margin,
+            beta,
+            wanted,
+            LEVEL_RESOLUTION,
+        )
     }
 
     /// The rear check: [`RearCorner::gap_after`] above `rear_margin`.

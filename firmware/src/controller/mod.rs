@@ -78,7 +78,8 @@
 //! (the ego's acceleration held at what is pending through the dead time and the lag, then
 //! building up at the declared jerk: the slower of the two), or the full level where none
 //! does, found by a secant in `1 / level` and checked; commanded at once, flagged an
-//! emergency. The follower behind sells that braking: the level is lowered to the hardest that
+//! emergency. The follower behind sells that braking: the level is lowered to the hardest
+//! (to 0.02 m/s^2, [`table_format::rear::hardest_clearing`]) that
 //! keeps [`table_format::rear::rear_gap_after`] above `rear_margin` at the worst corner of the
 //! follower's measurement box at its time `t_f`, for a follower that keeps accelerating (at
 //! most at its IDM's largest acceleration) until its reaction time
@@ -98,7 +99,9 @@
 //! tenths. So a command `c` at or below the band's floor holds itself: where the on-time for
 //! commands at or below `c` from now is earlier than the run's, it becomes the run's, and every
 //! command until then is at most `c` (`LightsHold`, enforced in [`Controller::step`] whatever
-//! the mode, and argued with by the emergency answer's rear check for each level it tries).
+//! the mode, and argued with by the emergency answer's rear check: the level the leader's
+//! worst case wants with its own hold, a gentler one with the band's floor's, which lights the
+//! brakes no sooner).
 //! Holding a braking the rear check passed with is inside what that check proved (the ego
 //! braking at most at its level from the measurement on), and braking harder never lowers the
 //! front's value.
