@@ -75,6 +75,149 @@ pub fn braking_a_follower_allows(
     )
 }
 
+/// The ego's actuator as the firmware declares it, for [`braking_a_follower_allows_through`]:
+/// the commands take force after `dead_time` (s) through a first-order lag of `lag` (s), and
+/// the braking's command builds up at `jerk` (m/s^3; `f32::INFINITY`: at once).
+#[derive(Debug, Clone, Copy)]
+pub struct EgoActuator {
+    /// The brake's dead time, s.
+    pub dead_time: f32,
+    /// Its first-order lag, s.
+    pub lag: f32,
+    /// The build-up of the braking's command, m/s^3.
+    pub jerk: f32,
+}
+
+impl EgoActuator {
+    /// The one `config` declares, with the emergency authority's build-up.
+    pub fn declared(config: &firmware::Config) -> Self {
+        EgoActuator {
+            dead_time: config.plant.actuator_dead_time_us as f32 * 1e-6,
+            lag: config.plant.actuator_lag_us as f32 * 1e-6,
+            jerk: config.certificate.emergency.braking.jerk,
+        }
+    }
+}
+
+/// [`braking_a_follower_allows`] with the ego's braking through `actuator` (from steady
+/// following: its acceleration and commands at zero, the braking's command issued at the
+/// measurement's time, the earliest) instead of at its level at once from the measurement;
+/// the same error box, follower and `delay` before its reaction starts. The least gap is
+/// found by integrating both cars (f64, 1 ms steps: the lag's acceleration exact for the
+/// step's command, each car moved at the step's mean acceleration and held at zero speed once
+/// stopped), and the
+/// level by [`table_format::rear::hardest_clearing`] to 1e-3 m/s^2. With no dead time, no lag
+/// and a braking at once it is the closed form's figure (a test holds it to 0.01 m/s^2).
+///
+/// A lever, not a figure of the firmware: its rear check brakes the ego at the level at once
+/// (`table_format::rear::rear_gap_after` has no build-up for the car ahead of the follower),
+/// which is what this credits.
+pub fn braking_a_follower_allows_through(
+    config: &firmware::Config,
+    model: &HumanModel,
+    follower: &ReactingFollower,
+    actuator: EgoActuator,
+    delay: f32,
+    time_gap: f32,
+    v: f32,
+) -> Option<f32> {
+    let rear = RearBox::around(config, model, time_gap, v);
+    let margin = f64::from(config.certificate.rear_margin);
+    let ceiling = config.certificate.emergency.braking.level;
+    let least_gap = |level: f32| {
+        least_rear_gap(
+            [rear.gap.0, rear.ego.0, rear.follower.1].map(f64::from),
+            f64::from(level),
+            actuator,
+            follower,
+            f64::from(delay),
+        )
+    };
+    table_format::rear::hardest_clearing(
+        |level| (least_gap(level) - margin) as f32,
+        0.0,
+        ceiling,
+        1e-3,
+    )
+}
+
+/// The least gap (m) behind an ego braking at `level` through `actuator` from `[gap,
+/// ego_speed, follower_speed]`, the `follower` reacting `delay` seconds late
+/// ([`braking_a_follower_allows_through`]).
+fn least_rear_gap(
+    [gap, ego_speed, follower_speed]: [f64; 3],
+    level: f64,
+    actuator: EgoActuator,
+    follower: &ReactingFollower,
+    delay: f64,
+) -> f64 {
+    const STEP: f64 = 1e-3;
+    // Moves a car `dt` at acceleration `a`, held at zero speed once stopped: (distance, speed).
+    let advance = |v: f64, a: f64, dt: f64| {
+        let v_end = v + a * dt;
+        if v_end >= 0.0 {
+            (v * dt + 0.5 * a * dt * dt, v_end)
+        } else if a < 0.0 {
+            (v * v / (-2.0 * a), 0.0)
+        } else {
+            (0.0, 0.0)
+        }
+    };
+    let (dead, lag, jerk) = (
+        f64::from(actuator.dead_time),
+        f64::from(actuator.lag),
+        f64::from(actuator.jerk),
+    );
+    let reacts_at = f64::from(follower.reaction_time) + delay;
+    let (top, braking, follower_jerk) = (
+        f64::from(follower.max_speed),
+        f64::from(follower.braking),
+        f64::from(follower.jerk),
+    );
+    let ahead = f64::from(follower.reaction_acceleration);
+    let (mut x, mut ve, mut vf, mut a) = (gap, ego_speed, follower_speed, 0.0f64);
+    let mut least = x;
+    let mut t = 0.0f64;
+    // Until both cars stand (or 60 s: both stop from 70 m/s within it).
+    while (ve > 0.0 || vf > 0.0) && t < 60.0 {
+        // The command in force over this step, then the lag's exact answer to it.
+        let since = (t - dead).max(0.0);
+        let command = if t < dead {
+            0.0
+        } else if jerk.is_infinite() {
+            -level
+        } else {
+            -(jerk * since).min(level)
+        };
+        let a_next = if lag > 0.0 {
+            command + (a - command) * (-STEP / lag).exp()
+        } else {
+            command
+        };
+        let a_ego = 0.5 * (a + a_next);
+        a = a_next;
+        let a_follower = if t < reacts_at {
+            if vf >= top {
+                0.0
+            } else {
+                ahead
+            }
+        } else if follower_jerk.is_infinite() {
+            -braking
+        } else {
+            (ahead - follower_jerk * (t - reacts_at)).max(-braking)
+        };
+        let (de, ve_next) = advance(ve, a_ego, STEP);
+        let (df, vf_next) = advance(vf, a_follower, STEP);
+        x += de - df;
+        ve = ve_next;
+        vf = vf_next.min(top.max(follower_speed));
+        least = least.min(x);
+        t += STEP;
+    }
+    least
+}
+
 /// `follower` credited, until it reacts, with what its IDM does at the most inviting corner of
 /// the error box of [`braking_a_follower_allows`] (the longest gap, the slowest follower, the
 /// fastest ego, the range's closest time gap), and at least holding its speed, instead of its
@@ -302,7 +445,8 @@ fn braking_at_exact_states(bytes: &[u8]) -> Result<serde_json::Value> {
 /// brake's dead time before the braking shows. The followers: the firmware's own
 /// ([`firmware::Certifier::reacting_follower`]), the same reacting at once, and R157's careful
 /// driver (who holds its speed until it reacts); the levers at 30 m/s add the firmware's
-/// follower credited with its IDM's output ([`crediting_its_idm`]). Printed, drawn to `gap-policy-authorities.png`
+/// follower credited with its IDM's output ([`crediting_its_idm`]) and the ego's build-up
+/// credited in the rear ([`braking_a_follower_allows_through`]). Printed, drawn to `gap-policy-authorities.png`
 /// and returned for the report.
 fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serde_json::Value> {
     let table = table_format::Table::parse(bytes)?;
@@ -431,7 +575,7 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     }
     // What would reach the targets at 30 m/s against a 9.8 m/s^2 leader: the follower
     // credited with its IDM's output until it reacts, the rear known exactly and at once, a
-    // faster brake (lag 0.1 s).
+    // faster brake (lag 0.1 s), the ego's own build-up credited in the rear check.
     let v = 30.0f32;
     let mut exact = config;
     exact.sensors.error = table_format::MeasurementError {
@@ -448,6 +592,12 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     let credited_rear = allows(&credited, 1.0, v);
     let exact_rear = braking_a_follower_allows(&exact, &model, &argued, 0.0, 1.0, v);
     let both_rear = braking_a_follower_allows(&exact, &model, &credited_exact, 0.0, 1.0, v);
+    let actuator = EgoActuator::declared(&config);
+    let through_rear =
+        braking_a_follower_allows_through(&config, &model, &argued, actuator, delay, 1.0, v);
+    // Known exactly and at once, but its reaction from when the actuator lights the brakes.
+    let through_exact =
+        braking_a_follower_allows_through(&exact, &model, &argued, actuator, lights, 1.0, v);
     let mut faster = config;
     faster.plant.actuator_lag_us = 100_000;
     let faster = firmware::Controller::new(bytes, faster);
@@ -483,6 +633,16 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
             at(&faster, declared_rear),
         ),
         ("all three", both_rear, at(&faster, both_rear)),
+        (
+            "the ego's build-up credited in the rear check (not argued by the firmware)",
+            through_rear,
+            at(&comfort, through_rear),
+        ),
+        (
+            "the build-up credited and the follower known exactly and at once (its reaction from the lights)",
+            through_exact,
+            at(&comfort, through_exact),
+        ),
     ];
     println!();
     println!(
