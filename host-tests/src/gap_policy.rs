@@ -75,6 +75,21 @@ pub fn braking_a_follower_allows(
     )
 }
 
+/// `config` with sensors that measure the gap, the range rate and the ego's speed exactly (the
+/// rest of the sensors' declaration as it was): the levers' "known exactly".
+pub fn with_exact_sensors(config: firmware::Config) -> firmware::Config {
+    let mut exact = config;
+    exact.sensors.error = table_format::MeasurementError {
+        range: 0.0,
+        range_relative: 0.0,
+        range_rate: 0.0,
+        ego_speed: 0.0,
+        ego_speed_relative: 0.0,
+        ..config.sensors.error
+    };
+    exact
+}
+
 /// The ego's actuator as the firmware declares it, for [`braking_a_follower_allows_through`]:
 /// the commands take force after `dead_time` (s) through a first-order lag of `lag` (s), and
 /// the braking's command builds up at `jerk` (m/s^3; `f32::INFINITY`: at once).
@@ -577,15 +592,7 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     // credited with its IDM's output until it reacts, the rear known exactly and at once, a
     // faster brake (lag 0.1 s), the ego's own build-up credited in the rear check.
     let v = 30.0f32;
-    let mut exact = config;
-    exact.sensors.error = table_format::MeasurementError {
-        range: 0.0,
-        range_relative: 0.0,
-        range_rate: 0.0,
-        ego_speed: 0.0,
-        ego_speed_relative: 0.0,
-        ..config.sensors.error
-    };
+    let exact = with_exact_sensors(config);
     let credited = crediting_its_idm(&config, &model, &argued, 1.0, v);
     let credited_exact = crediting_its_idm(&exact, &model, &argued, 1.0, v);
     let declared_rear = allows(&argued, 1.0, v);

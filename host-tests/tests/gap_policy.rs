@@ -2,11 +2,12 @@
 
 use firmware::Config;
 use host_tests::gap_policy::{
-    braking_a_follower_allows, braking_a_follower_allows_through, crediting_its_idm, EgoActuator,
+    braking_a_follower_allows, braking_a_follower_allows_through, crediting_its_idm,
+    with_exact_sensors, EgoActuator,
 };
 use host_tests::humans::HumanModel;
 use table_format::rear::ReactingFollower;
-use table_format::{MeasurementError, Table};
+use table_format::Table;
 
 /// A follower 1 s behind (the IDM's 2 m jam distance plus 30 m) at 30 m/s that holds its speed
 /// for 1.15 s and then brakes at the IDM's clip at once: with exact sensors and no delay it
@@ -32,15 +33,7 @@ fn the_braking_a_follower_allows_matches_the_figures() {
             .unwrap()
             .reacting_follower();
     assert_eq!(argued.reaction_acceleration, 1.0, "{argued:?}");
-    let mut exact = Config::default();
-    exact.sensors.error = MeasurementError {
-        range: 0.0,
-        range_relative: 0.0,
-        range_rate: 0.0,
-        ego_speed: 0.0,
-        ego_speed_relative: 0.0,
-        ..exact.sensors.error
-    };
+    let exact = with_exact_sensors(Config::default());
     let near = |b: Option<f32>, want: f32| {
         assert!(
             b.is_some_and(|b| (b - want).abs() < 0.01),
@@ -86,15 +79,7 @@ fn the_build_up_lever_agrees_with_the_closed_form_at_once() {
         jerk: f32::INFINITY,
         ..ReactingFollower::careful_driver(model.max_speed)
     };
-    let mut exact = Config::default();
-    exact.sensors.error = MeasurementError {
-        range: 0.0,
-        range_relative: 0.0,
-        range_rate: 0.0,
-        ego_speed: 0.0,
-        ego_speed_relative: 0.0,
-        ..exact.sensors.error
-    };
+    let exact = with_exact_sensors(Config::default());
     let at_once = EgoActuator {
         dead_time: 0.0,
         lag: 0.0,
