@@ -230,7 +230,7 @@ fn cut_in_collisions_are_scored_at_the_emergency_authority_and_by_r157() {
         config: Config::default(),
         seed: 3,
     };
-    let (s, outcomes) = run_group(&t, firmware::DEFAULT_TABLE, template, 120, &|| {});
+    let (s, outcomes) = run_group(&t, firmware::DEFAULT_TABLE, template, 600, &|| {});
     let c = s.cut_ins.expect("cut-ins were scored");
     println!("{c:?}");
     assert!(c.episodes > 100 && c.collisions > 0, "{c:?}");
