@@ -393,7 +393,7 @@ fn cut_ins_the_firmware_s_own_bounds_once_lost_are_avoided() {
 /// - the emergency answer's rear check tried three levels, the full 8 m/s^2, 5.75 and 4.625,
 ///   so it held -5.75 where the follower allowed more, and more every period as its reaction
 ///   clock ran: the ego hit the car ahead at 26.36 s. It now searches the hardest level the
-///   follower allows, to 0.02 m/s^2 (first -5.9, then -6.4 to -7.5 before the full 8);
+///   follower allows, to 0.02 m/s^2 (first -5.9, then -5.6 to -7.5 before the full 8);
 /// - a braking held for a period is not taken as held for good by the next rear check: argued
 ///   as braking at the first answer's level from the measurement's time to a standstill, no
 ///   level passed there, not even the band's floor, and the answer fell to -3.5 for three
