@@ -6,6 +6,7 @@ use anyhow::{Context, Result};
 use table_format::rear::{allowed_braking, ReactingFollower};
 
 use crate::humans::HumanModel;
+use crate::sim::{lowest_gap, Actuator, ActuatorModel, Car};
 
 /// The error box around the worst measurement of a follower `time_gap` seconds behind (plus
 /// the IDM's jam distance) an ego at `v`, both at `v`: the gap read short (the range's error
@@ -118,10 +119,9 @@ impl EgoActuator {
 /// following: its acceleration and commands at zero, the braking's command issued at the
 /// measurement's time, the earliest) instead of at its level at once from the measurement;
 /// the same error box, follower and `delay` before its reaction starts. The least gap is
-/// found by integrating both cars (f64, 1 ms steps: the lag's acceleration exact for the
-/// step's command, each car moved at the step's mean acceleration and held at zero speed once
-/// stopped), and the
-/// level by [`table_format::rear::hardest_clearing`] to 1e-3 m/s^2. With no dead time, no lag
+/// found by the plant's integration (1 ms steps, each exact for the step's mean acceleration:
+/// the closed loop's [`Actuator`], [`Car::advance`] and [`lowest_gap`]), and the level by
+/// [`table_format::rear::hardest_clearing`] to 1e-3 m/s^2. With no dead time, no lag
 /// and a braking at once it is the closed form's figure (a test holds it to 0.01 m/s^2).
 ///
 /// A lever, not a figure of the firmware: its rear check brakes the ego at the level at once
@@ -137,98 +137,74 @@ pub fn braking_a_follower_allows_through(
     v: f32,
 ) -> Option<f32> {
     let rear = RearBox::around(config, model, time_gap, v);
-    let margin = f64::from(config.certificate.rear_margin);
-    let ceiling = config.certificate.emergency.braking.level;
-    let least_gap = |level: f32| {
-        least_rear_gap(
-            [rear.gap.0, rear.ego.0, rear.follower.1].map(f64::from),
-            f64::from(level),
-            actuator,
-            follower,
-            f64::from(delay),
-        )
-    };
+    let margin = config.certificate.rear_margin;
+    let start = [rear.gap.0, rear.ego.0, rear.follower.1];
     table_format::rear::hardest_clearing(
-        |level| (least_gap(level) - margin) as f32,
+        |level| least_rear_gap(start, level, actuator, follower, delay) - margin,
         0.0,
-        ceiling,
+        config.certificate.emergency.braking.level,
         1e-3,
     )
 }
 
 /// The least gap (m) behind an ego braking at `level` through `actuator` from `[gap,
 /// ego_speed, follower_speed]`, the `follower` reacting `delay` seconds late
-/// ([`braking_a_follower_allows_through`]).
+/// ([`braking_a_follower_allows_through`]): the plant's own actuator ([`Actuator`]), cars
+/// ([`Car::advance`]) and least gap within each step ([`lowest_gap`]), 1 ms steps.
 fn least_rear_gap(
-    [gap, ego_speed, follower_speed]: [f64; 3],
-    level: f64,
+    [gap, ego_speed, follower_speed]: [f32; 3],
+    level: f32,
     actuator: EgoActuator,
     follower: &ReactingFollower,
-    delay: f64,
-) -> f64 {
-    const STEP: f64 = 1e-3;
-    // Moves a car `dt` at acceleration `a`, held at zero speed once stopped: (distance, speed).
-    let advance = |v: f64, a: f64, dt: f64| {
-        let v_end = v + a * dt;
-        if v_end >= 0.0 {
-            (v * dt + 0.5 * a * dt * dt, v_end)
-        } else if a < 0.0 {
-            (v * v / (-2.0 * a), 0.0)
-        } else {
-            (0.0, 0.0)
-        }
+    delay: f32,
+) -> f32 {
+    const STEP_US: u64 = 1_000;
+    let h = STEP_US as f32 * 1e-6;
+    let mut brake = Actuator::new(ActuatorModel {
+        dead_time: actuator.dead_time,
+        lag: actuator.lag,
+    });
+    let reacts_at = follower.reaction_time + delay;
+    let top = follower.max_speed.max(follower_speed);
+    let mut ego = Car {
+        x: 0.0,
+        v: ego_speed,
     };
-    let (dead, lag, jerk) = (
-        f64::from(actuator.dead_time),
-        f64::from(actuator.lag),
-        f64::from(actuator.jerk),
-    );
-    let reacts_at = f64::from(follower.reaction_time) + delay;
-    let (top, braking, follower_jerk) = (
-        f64::from(follower.max_speed),
-        f64::from(follower.braking),
-        f64::from(follower.jerk),
-    );
-    let ahead = f64::from(follower.reaction_acceleration);
-    let (mut x, mut ve, mut vf, mut a) = (gap, ego_speed, follower_speed, 0.0f64);
-    let mut least = x;
-    let mut t = 0.0f64;
+    let mut behind = Car {
+        x: -gap,
+        v: follower_speed,
+    };
+    let mut least = gap;
     // Until both cars stand (or 60 s: both stop from 70 m/s within it).
-    while (ve > 0.0 || vf > 0.0) && t < 60.0 {
-        // The command in force over this step, then the lag's exact answer to it.
-        let since = (t - dead).max(0.0);
-        let command = if t < dead {
-            0.0
-        } else if jerk.is_infinite() {
+    for k in 0..60_000u64 {
+        if ego.v <= 0.0 && behind.v <= 0.0 {
+            break;
+        }
+        let t = k as f32 * h;
+        // The braking's command, built up at the declared jerk from the measurement's time.
+        let command = if actuator.jerk.is_infinite() {
             -level
         } else {
-            -(jerk * since).min(level)
+            -(actuator.jerk * t).min(level)
         };
-        let a_next = if lag > 0.0 {
-            command + (a - command) * (-STEP / lag).exp()
-        } else {
-            command
-        };
-        let a_ego = 0.5 * (a + a_next);
-        a = a_next;
+        brake.request(k * STEP_US, command);
+        let a_ego = brake.advance(k * STEP_US, STEP_US);
         let a_follower = if t < reacts_at {
-            if vf >= top {
+            if behind.v >= top {
                 0.0
             } else {
-                ahead
+                follower.reaction_acceleration
             }
-        } else if follower_jerk.is_infinite() {
-            -braking
+        } else if follower.jerk.is_infinite() {
+            -follower.braking
         } else {
-            (ahead - follower_jerk * (t - reacts_at)).max(-braking)
+            (follower.reaction_acceleration - follower.jerk * (t - reacts_at))
+                .max(-follower.braking)
         };
-        let (de, ve_next) = advance(ve, a_ego, STEP);
-        let (df, vf_next) = advance(vf, a_follower, STEP);
-        x += de - df;
-        ve = ve_next;
-        vf = vf_next.min(top.max(follower_speed));
-        least = least.min(x);
-        t += STEP;
+        least = least.min(lowest_gap(ego, a_ego, behind, a_follower, h));
+        ego.advance(a_ego, h);
+        behind.advance(a_follower, h);
+        behind.v = behind.v.min(top);
     }
     least
 }
