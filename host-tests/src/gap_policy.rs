@@ -3,7 +3,7 @@
 //! authorities would cost in distance, printed, drawn and written to `gap-policy.json`.
 
 use anyhow::{Context, Result};
-use table_format::rear::{allowed_braking, ReactingFollower};
+use table_format::rear::{allowed_braking, rear_gap_built_up, EgoBuildUp, ReactingFollower};
 
 use crate::humans::HumanModel;
 use crate::sim::{lowest_gap, Actuator, ActuatorModel, Car};
@@ -73,6 +73,53 @@ pub fn braking_a_follower_allows(
         &later,
         config.certificate.rear_margin,
         config.certificate.emergency.braking.level,
+    )
+}
+
+/// [`braking_a_follower_allows`] with the ego's braking credited with its actuator's build-up
+/// in closed form ([`table_format::rear::rear_gap_built_up`]): from steady following (its
+/// acceleration and the commands already issued at zero), the commands in force for
+/// `known_for` seconds from the measurement are those already issued (the track's age at the
+/// check plus the declared dead time), then the level, through the declared lag. The same
+/// error box, follower and `delay`. What a firmware that remembers its commands can argue
+/// (a brute-force integration of the same actuator, [`braking_a_follower_allows_through`],
+/// finds a little more: the closed form shifts a braking at once).
+pub fn braking_a_follower_allows_built_up(
+    config: &firmware::Config,
+    model: &HumanModel,
+    follower: &ReactingFollower,
+    delay: f32,
+    known_for: f32,
+    time_gap: f32,
+    v: f32,
+) -> Option<f32> {
+    let rear = RearBox::around(config, model, time_gap, v);
+    let later = ReactingFollower {
+        reaction_time: follower.reaction_time + delay,
+        ..*follower
+    };
+    let build_up = EgoBuildUp {
+        acceleration: 0.0,
+        commands: 0.0,
+        known_for,
+        lag: config.plant.actuator_lag_us as f32 * 1e-6,
+    };
+    let margin = config.certificate.rear_margin;
+    table_format::rear::hardest_clearing(
+        |level| {
+            rear_gap_built_up(
+                rear.gap.0,
+                rear.ego.0,
+                rear.follower.1,
+                level,
+                0.0,
+                &build_up,
+                &later,
+            ) - margin
+        },
+        0.0,
+        config.certificate.emergency.braking.level,
+        1e-3,
     )
 }
 
@@ -581,6 +628,21 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     // Known exactly and at once, but its reaction from when the actuator lights the brakes.
     let through_exact =
         braking_a_follower_allows_through(&exact, &model, &argued, actuator, lights, 1.0, v);
+    // The closed form's credit: the commands already issued known for the track's age at the
+    // check (the delay less the lights' bound) and the dead time; with exact sensors, a fresh
+    // measurement (the dead time alone).
+    let dead_time = config.plant.actuator_dead_time_us as f32 * 1e-6;
+    let built_up_rear = braking_a_follower_allows_built_up(
+        &config,
+        &model,
+        &argued,
+        delay,
+        delay - lights + dead_time,
+        1.0,
+        v,
+    );
+    let built_up_exact =
+        braking_a_follower_allows_built_up(&exact, &model, &argued, lights, dead_time, 1.0, v);
     let mut faster = config;
     faster.plant.actuator_lag_us = 100_000;
     let faster = firmware::Controller::new(bytes, faster);
@@ -617,12 +679,22 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
         ),
         ("all three", both_rear, at(&faster, both_rear)),
         (
-            "the ego's build-up credited in the rear check (not argued by the firmware)",
+            "the ego's dead time and lag credited in the rear check, in closed form (rear_gap_built_up; not yet argued by the firmware)",
+            built_up_rear,
+            at(&comfort, built_up_rear),
+        ),
+        (
+            "that, and the follower known exactly and at once (its reaction from the lights)",
+            built_up_exact,
+            at(&comfort, built_up_exact),
+        ),
+        (
+            "the ego's build-up credited in the rear check, by integration (dead time, lag and its 12 m/s^3 ramp)",
             through_rear,
             at(&comfort, through_rear),
         ),
         (
-            "the build-up credited and the follower known exactly and at once (its reaction from the lights)",
+            "the build-up by integration, and the follower known exactly and at once (its reaction from the lights)",
             through_exact,
             at(&comfort, through_exact),
         ),

@@ -61,6 +61,14 @@
 //! along the lag's response to a ramp, checked against a brute-force actuator; the follower's
 //! reaction is then taken that much longer. The property test `a_release_restarts_the_clock` checks that the restarted
 //! clock still bounds the gap from below after a release in which the follower accelerated.
+//!
+//! # The ego's build-up
+//! [`rear_gap`] brakes the ego at its level at once. A real ego brakes through its actuator: a
+//! dead time in which the commands already issued act, then a first-order lag. Any ego whose
+//! acceleration is at least `-level + g(s)` with `0 <= g <= level` covers at least the
+//! distance of an ego braking at `level` at once that starts `int g` faster and `int s g`
+//! further back ([`EgoBuildUp::credit`] derives it and the lag's `g`), so
+//! [`rear_gap_built_up`] is the closed form there (the larger of it and the value at once).
 
 use crate::front::{front_value, FrontModel};
 
@@ -155,6 +163,121 @@ pub fn rear_gap_after(
         }
     }
     front_value(gap, ego_speed, follower_speed, &car_behind)
+}
+
+/// What the ego's actuator guarantees of its acceleration from the follower measurement's
+/// time on, for [`rear_gap_built_up`]: the ego's acceleration is a first-order lag `lag` (s)
+/// of the command in force (the commands reach it after the actuator's dead time), it is at
+/// least `acceleration` at the measurement's time, and every command in force from then on
+/// for `known_for` seconds is at least `commands` (those already issued: the dead time plus
+/// the time from the measurement to now). Everything after is bounded by the braking level
+/// asked about. All in SI units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct EgoBuildUp {
+    /// A lower bound of the ego's acceleration at the measurement's time, m/s^2.
+    pub acceleration: f32,
+    /// A lower bound of every command in force for `known_for` seconds from then, m/s^2.
+    pub commands: f32,
+    /// How long from the measurement's time the commands in force are known, s.
+    pub known_for: f32,
+    /// The actuator's first-order lag, s (zero: none).
+    pub lag: f32,
+}
+
+impl EgoBuildUp {
+    /// The credit for an ego that brakes at most at `level` (m/s^2, positive) once the known
+    /// commands are spent: `(behind, faster)`, so that the ego is at every instant at least
+    /// where an ego `faster` m/s faster and `behind` m further back, braking at `level` at
+    /// once from the measurement, would be (both to standstill). `(0, 0)` (no credit) where
+    /// a bound is below `-level`, or NaN, or the level is not positive.
+    ///
+    /// **Derivation.** Write the ego's acceleration while it moves as at least
+    /// `a_lb(s) = -level + g(s)`, `s` from the measurement, with `0 <= g <= level`; let
+    /// `G = int g` and `M = int s g` over `s >= 0`. The unclamped `y(s) = x_0 + v_0 s +
+    /// int_0^s (s - r) a_lb(r) dr` and `z(s) = x_0 - M + (v_0 + G) s - level s^2 / 2` differ
+    /// by `y - z = int_s^inf (r - s) g(r) dr >= 0`. The real ego stays at or above `y` until
+    /// it stops (its speed is at least `y`'s), `y`'s speed reaches zero no later, and `y` then
+    /// falls (`a_lb <= 0`), so the real ego stays at or above `y` held at its first stop; that
+    /// is at or above `z` held at its stop (before `y` stops, `y >= z`; after, `y`'s stop is
+    /// its highest point, at least `y` at `z`'s stop, which is at least `z`'s highest). So the
+    /// ego covers at least the distance of the closed form's ego at `v_0 + G`, `M` back, and
+    /// the follower is unchanged: the closed form there bounds the gap from below.
+    ///
+    /// With the lag, the commands at least `p` for `T = known_for` and then at least
+    /// `-level`, and the acceleration at least `a_0`, the lag's answer to those bounds is
+    /// below the ego's (a first-order lag is monotone in its start and its input), with `p`
+    /// and `a_0` taken at most zero (a lower bound may be lowered; it keeps `a_lb <= 0`):
+    /// `a_lb = p + (a_0 - p) e^(-s/tau)` on `[0, T]`, then `-level + (a_1 + level)
+    /// e^(-(s - T)/tau)` with `a_1 = p + (a_0 - p) E`, `E = e^(-T/tau)`; so
+    /// - `G = (p + level) T + (a_0 - p) tau (1 - E) + (a_1 + level) tau`,
+    /// - `M = (p + level) T^2 / 2 + (a_0 - p) tau^2 (1 - E (1 + T / tau))
+    ///   + (a_1 + level) (tau T + tau^2)`,
+    ///
+    /// both zero for an ego that may already brake at `level` (`a_0 = p = -level`), and
+    /// without a lag (`tau = 0`) the dead time's alone: `(p + level) T` and `(p + level)
+    /// T^2 / 2`. The property test `an_ego_braking_through_its_actuator_keeps_the_credited_gap`
+    /// checks the bound against brute-force integration of the actuator and both cars.
+    pub fn credit(&self, level: f32) -> (f32, f32) {
+        let (a_0, p) = (self.acceleration.min(0.0), self.commands.min(0.0));
+        let (t, tau) = (self.known_for.max(0.0), self.lag.max(0.0));
+        // (NaN compares false: no credit.)
+        let bounded = a_0 >= -level && p >= -level && level > 0.0 && t.is_finite();
+        if !bounded || !tau.is_finite() {
+            return (0.0, 0.0);
+        }
+        let e = if tau > 0.0 { libm::expf(-t / tau) } else { 0.0 };
+        let a_1 = p + (a_0 - p) * e;
+        let faster = (p + level) * t + (a_0 - p) * tau * (1.0 - e) + (a_1 + level) * tau;
+        let first_phase_moment = if tau > 0.0 {
+            (a_0 - p) * tau * tau * (1.0 - e * (1.0 + t / tau))
+        } else {
+            0.0
+        };
+        let behind =
+            (p + level) * 0.5 * t * t + first_phase_moment + (a_1 + level) * (tau * t + tau * tau);
+        (behind, faster)
+    }
+}
+
+/// [`rear_gap_after`] for an ego whose braking builds up through its actuator (`build_up`):
+/// the larger of the value braking at `ego_braking` at once and the value with the build-up's
+/// credit ([`EgoBuildUp::credit`]: the ego `faster` and `behind`), both lower bounds of the
+/// gap. NaN in, NaN out.
+pub fn rear_gap_built_up(
+    gap: f32,
+    ego_speed: f32,
+    follower_speed: f32,
+    ego_braking: f32,
+    braking_for: f32,
+    build_up: &EgoBuildUp,
+    follower: &ReactingFollower,
+) -> f32 {
+    let at_once = rear_gap_after(
+        gap,
+        ego_speed,
+        follower_speed,
+        ego_braking,
+        braking_for,
+        follower,
+    );
+    let (behind, faster) = build_up.credit(ego_braking);
+    if faster <= 0.0 && behind <= 0.0 {
+        return at_once;
+    }
+    let credited = rear_gap_after(
+        gap - behind,
+        ego_speed + faster,
+        follower_speed,
+        ego_braking,
+        braking_for,
+        follower,
+    );
+    // (A NaN value stays NaN: `max` would drop it.)
+    if at_once.is_nan() || credited.is_nan() {
+        return f32::NAN;
+    }
+    at_once.max(credited)
 }
 
 /// How finely [`lights_on_within`] brackets a last zero on the ramp's phase, s: a
@@ -427,6 +550,66 @@ mod tests {
         }
     }
 
+    /// The smallest rear gap by brute-force integration (f64, 0.1 ms steps) for an ego whose
+    /// acceleration is a first-order lag `tau` of its commands, starting at `a_0`: the commands
+    /// in force are `commands[k]` over the k-th 50 ms until `known_for`, then `late[k]` (the
+    /// same slices, counted from `known_for`; the last held). The follower as in [`simulated`].
+    #[allow(clippy::too_many_arguments)]
+    fn simulated_through(
+        (gap, ve, vf): (f64, f64, f64),
+        a_0: f64,
+        tau: f64,
+        known_for: f64,
+        commands: &[f64],
+        late: &[f64],
+        f: &ReactingFollower,
+    ) -> f64 {
+        let dt = 1e-4;
+        let slice = |list: &[f64], t: f64| {
+            let k = ((t / 0.05) as usize).min(list.len() - 1);
+            list[k]
+        };
+        let (mut g, mut ve, mut vf, mut t, mut a) = (gap, ve, vf, 0.0, a_0);
+        let mut least = g;
+        let (rho, ar) = (
+            f64::from(f.reaction_time),
+            f64::from(f.reaction_acceleration),
+        );
+        let (bf, jf) = (f64::from(f.braking), f64::from(f.jerk));
+        while ve > 0.0 || vf > 0.0 || t <= rho + ar.max(0.0) / jf || t <= known_for {
+            let mid = t + 0.5 * dt;
+            let u = if mid < known_for {
+                slice(commands, mid)
+            } else {
+                slice(late, mid - known_for)
+            };
+            // The lag's exact step for the held command.
+            let next_a = if tau > 0.0 {
+                u + (a - u) * (-dt / tau).exp()
+            } else {
+                u
+            };
+            let ae = 0.5 * (a + next_a);
+            a = next_a;
+            let af = if mid < rho {
+                ar
+            } else {
+                (ar - jf * (mid - rho)).max(-bf)
+            };
+            let ne = (ve + ae * dt).max(0.0);
+            let nf = (vf + af * dt).max(0.0);
+            g += 0.5 * (ve + ne) * dt - 0.5 * (vf + nf) * dt;
+            ve = ne;
+            vf = nf;
+            t += dt;
+            least = least.min(g);
+            if t > 200.0 {
+                break;
+            }
+        }
+        least
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(300))]
 
@@ -461,6 +644,68 @@ mod tests {
                 f64::from(gap), f64::from(ve), f64::from(vf), f64::from(b), ego_jerk, &f,
             );
             prop_assert!(brute >= f64::from(exact) - 0.01, "{} vs {}", exact, brute);
+        }
+
+        /// The build-up's credit ([`EgoBuildUp::credit`]) bounds the least gap of an ego
+        /// braking through its actuator: its acceleration starts at or above the declared
+        /// bound, its commands are at or above theirs while known and at or above the level
+        /// after (mostly exactly there: the extremal; sometimes gentler, 50 ms at a time), the
+        /// follower at its model's bound. Run once with `behind` dropped from the credit it
+        /// fails (both cars standing, the follower closing 0.98 m on an ego credited with
+        /// none), and once with the first phase's moment short by its `E T / tau` term (0.1 m
+        /// over the value).
+        #[test]
+        fn an_ego_braking_through_its_actuator_keeps_the_credited_gap(
+            gap in 0.0f32..120.0, ve in 0.0f32..35.0, vf in 0.0f32..35.0,
+            level in 1.0f32..10.0, rho in 0.0f32..2.0, ar in -1.0f32..2.0,
+            a_0 in -10.0f32..2.0, p in -10.0f32..2.0, above in 0.0f32..1.0,
+            known_for in 0.0f32..1.0, tau in 0.0f32..0.6,
+            gentler in proptest::collection::vec((0.0f64..1.0, 0.0f64..3.0), 40),
+        ) {
+            let f = follower(rho, ar, 7.59, 12.65);
+            let build_up = EgoBuildUp { acceleration: a_0, commands: p, known_for, lag: tau };
+            let value = rear_gap_built_up(gap, ve, vf, level, 0.0, &build_up, &f);
+            // Mostly at the bound, a third of the slices gentler by up to 3 m/s^2.
+            let draw = |bound: f64| -> Vec<f64> {
+                gentler
+                    .iter()
+                    .map(|&(odds, by)| bound + if odds < 0.33 { by } else { 0.0 })
+                    .collect()
+            };
+            // The episode brakes at most at the level (the closed form's premise): a bound
+            // below it is no bound of this episode's (and earns no credit).
+            let floor = -f64::from(level);
+            let commands = draw(f64::from(p).max(floor));
+            let late = draw(floor);
+            let brute = simulated_through(
+                (f64::from(gap), f64::from(ve), f64::from(vf)),
+                f64::from(a_0).max(floor) + f64::from(above) * f64::from(gentler[0].0 < 0.5),
+                f64::from(tau),
+                f64::from(known_for),
+                &commands,
+                &late,
+                &f,
+            );
+            prop_assert!(brute >= f64::from(value) - 0.01, "{} vs {}", value, brute);
+        }
+
+        /// The credit is the closed form's own value where there is nothing to credit (an ego
+        /// that may brake at the level already, or no time and no lag), and never less than
+        /// braking at once.
+        #[test]
+        fn the_credit_is_nothing_without_a_build_up_and_never_costs(
+            gap in 0.0f32..120.0, ve in 0.0f32..35.0, vf in 0.0f32..35.0,
+            level in 1.0f32..10.0, a_0 in -10.0f32..2.0, p in -10.0f32..2.0,
+            known_for in 0.0f32..1.0, tau in 0.0f32..0.6,
+        ) {
+            let f = follower(1.15, 1.0, 7.59, 12.65);
+            let at_once = rear_gap(gap, ve, vf, level, &f);
+            let none = EgoBuildUp { acceleration: -level, commands: -level, known_for, lag: tau };
+            prop_assert_eq!(rear_gap_built_up(gap, ve, vf, level, 0.0, &none, &f), at_once);
+            let instant = EgoBuildUp { acceleration: a_0, commands: p, known_for: 0.0, lag: 0.0 };
+            prop_assert_eq!(instant.credit(level), (0.0, 0.0));
+            let some = EgoBuildUp { acceleration: a_0, commands: p, known_for, lag: tau };
+            prop_assert!(rear_gap_built_up(gap, ve, vf, level, 0.0, &some, &f) >= at_once);
         }
 
         /// What `allowed_braking` returns keeps the margin, and a braking 0.01 m/s^2 harder
