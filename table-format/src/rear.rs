@@ -165,13 +165,165 @@ pub fn rear_gap_after(
     front_value(gap, ego_speed, follower_speed, &car_behind)
 }
 
+/// What is known of the ego's acceleration from the follower measurement's time on, for
+/// [`rear_gap_built_up`]: a lower bound `a_lb(s)` of it (`s` seconds from the measurement)
+/// over the first `known_for` seconds, given by its integrals, after which the ego's
+/// acceleration is a first-order lag `lag` (s) of commands no harder than the braking level
+/// asked about. All in SI units. [`EgoBuildUp`] builds one for constant commands; the firmware
+/// sums its own commands' segments.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct KnownBraking {
+    /// How long the lower bound is known, s (at least zero).
+    pub known_for: f32,
+    /// `int_0^known_for a_lb(s) ds`, m/s.
+    pub speed: f32,
+    /// `int_0^known_for s a_lb(s) ds`, m.
+    pub moment: f32,
+    /// `a_lb(known_for)`, m/s^2: where the lag starts towards the level.
+    pub at_end: f32,
+    /// The least of `a_lb` over `[0, known_for]`, m/s^2.
+    pub least: f32,
+    /// The largest of `a_lb` over `[0, known_for]`, m/s^2: at most zero for a credit.
+    pub most: f32,
+    /// The actuator's first-order lag, s (zero: none).
+    pub lag: f32,
+}
+
+impl KnownBraking {
+    /// Nothing known: no credit at any level.
+    pub const NOTHING: KnownBraking = KnownBraking {
+        known_for: 0.0,
+        speed: 0.0,
+        moment: 0.0,
+        at_end: f32::NEG_INFINITY,
+        least: f32::NEG_INFINITY,
+        most: 0.0,
+        lag: 0.0,
+    };
+
+    /// The credit for an ego that brakes at most at `level` (m/s^2, positive) once the known
+    /// part is spent: `(behind, faster)`, so that the ego is at every instant at least where
+    /// an ego `faster` m/s faster and `behind` m further back, braking at `level` at once
+    /// from the measurement, would be (both to standstill). `(0, 0)` (no credit) where the
+    /// lower bound is below `-level` or above zero, or anything is NaN or not finite.
+    ///
+    /// **Derivation.** Write the ego's acceleration while it moves as at least
+    /// `a_lb(s) = -level + g(s)`, with `0 <= g <= level`; let `G = int g` and `M = int s g`
+    /// over `s >= 0`. The unclamped `y(s) = x_0 + v_0 s + int_0^s (s - r) a_lb(r) dr` and
+    /// `z(s) = x_0 - M + (v_0 + G) s - level s^2 / 2` differ by
+    /// `y - z = int_s^inf (r - s) g(r) dr >= 0`. The real ego stays at or above `y` until it
+    /// stops (its speed is at least `y`'s), `y`'s speed reaches zero no later, and `y` then
+    /// falls (`a_lb <= 0`), so the real ego stays at or above `y` held at its first stop;
+    /// that is at or above `z` held at its stop (before `y` stops, `y >= z`; after, `y`'s stop
+    /// is its highest point, at least `y` at `z`'s stop, which is at least `z`'s highest). So
+    /// the ego covers at least the distance of the closed form's ego at `v_0 + G`, `M` back,
+    /// and the follower is unchanged: the closed form there bounds the gap from below.
+    ///
+    /// After the known part the commands are at least `-level`, so through the lag the
+    /// acceleration is at least `-level + (at_end + level) e^(-(s - T)/tau)`, `T =
+    /// known_for` (a first-order lag is monotone in its start and its input), and
+    /// - `G = speed + level T + (at_end + level) tau`,
+    /// - `M = moment + level T^2 / 2 + (at_end + level) (tau T + tau^2)`.
+    pub fn credit(&self, level: f32) -> (f32, f32) {
+        let (t, tau) = (self.known_for, self.lag);
+        // (NaN compares false: no credit.)
+        let bounded = self.least >= -level
+            && self.at_end >= -level
+            && self.most <= 0.0
+            && level > 0.0
+            && t >= 0.0
+            && tau >= 0.0;
+        let finite = t.is_finite()
+            && tau.is_finite()
+            && self.speed.is_finite()
+            && self.moment.is_finite()
+            && level.is_finite();
+        if !(bounded && finite) {
+            return (0.0, 0.0);
+        }
+        let tail = self.at_end + level;
+        let faster = self.speed + level * t + tail * tau;
+        let behind = self.moment + level * 0.5 * t * t + tail * (tau * t + tau * tau);
+        (behind, faster)
+    }
+}
+
+/// The part of a known lower bound of the ego's acceleration that is at least a braking
+/// level, for an ego that may have braked harder than that level elsewhere: its integrals
+/// over the pieces of time `P` (from the follower measurement's time, `s` seconds) where the
+/// bound is at least `-least` and at most `most`. All in SI units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct GentlePart {
+    /// `int_P a_lb(s) ds`, m/s.
+    pub speed: f32,
+    /// `int_P s a_lb(s) ds`, m.
+    pub moment: f32,
+    /// `int_P ds`, s.
+    pub duration: f32,
+    /// `int_P s ds`, s^2.
+    pub duration_moment: f32,
+    /// The least of `a_lb` over `P`, m/s^2.
+    pub least: f32,
+    /// The largest of `a_lb` over `P`, m/s^2: at most zero for a credit.
+    pub most: f32,
+}
+
+impl GentlePart {
+    /// No piece.
+    pub const NOTHING: GentlePart = GentlePart {
+        speed: 0.0,
+        moment: 0.0,
+        duration: 0.0,
+        duration_moment: 0.0,
+        least: 0.0,
+        most: 0.0,
+    };
+
+    /// The ego that brakes at `level` at once which bounds one whose braking beyond `level`
+    /// costs it at most `debt` m/s of speed in all: `(behind, ego_speed)`, an ego starting
+    /// `behind` m further back at `ego_speed` (from the measured `ego_speed`), both at or
+    /// above zero. Without a credit (the part below `-level` or above zero, or NaN), the
+    /// debt taken at once: `(0, max(ego_speed - debt, 0))`.
+    ///
+    /// **Derivation.** Write the true acceleration as `-level + g` and the bound on `P` as
+    /// `-level + g_P` (`0 <= g_P <= g` there; `P` as returned, where the bound is at least
+    /// `-level`). Let `y` start at the ego's speed less `debt`, with acceleration `-level + g_P`
+    /// on `P` and `-level` elsewhere. While the real ego moves, its speed exceeds `y`'s by
+    /// `int_P (g - g_P) + int_rest g + debt >= 0` (the rest's `g` is at least minus the
+    /// braking beyond `level`, whose integral is at most `debt`), so it stays at or above `y`;
+    /// `y` stops no later and then falls (its acceleration is at most zero), so the real ego
+    /// stays at or above `y` held at its first stop. `y - z = int_(P, r > s) (r - s) g_P >= 0`
+    /// for `z = x_0 - M + (v_0 - debt + G) s - level s^2 / 2`, `G = int_P g_P = speed +
+    /// level duration`, `M = int_P s g_P = moment + level duration_moment`, and `y` held at
+    /// its stop is at or above `z` held at its stop as in [`KnownBraking::credit`]. A `z` that
+    /// starts below zero speed stands `M` back, which the real ego (never going back) passes.
+    pub fn with_debt(&self, level: f32, ego_speed: f32, debt: f32) -> (f32, f32) {
+        let at_once = (0.0, (ego_speed - debt).max(0.0));
+        // (NaN compares false: no credit.)
+        let bounded = self.least >= -level && self.most <= 0.0 && level > 0.0;
+        let finite = self.speed.is_finite()
+            && self.moment.is_finite()
+            && self.duration.is_finite()
+            && self.duration_moment.is_finite()
+            && level.is_finite();
+        if !(bounded && finite) || self.duration <= 0.0 {
+            return at_once;
+        }
+        let faster = self.speed + level * self.duration;
+        let behind = self.moment + level * self.duration_moment;
+        (behind, (ego_speed - debt + faster).max(0.0))
+    }
+}
+
 /// What the ego's actuator guarantees of its acceleration from the follower measurement's
-/// time on, for [`rear_gap_built_up`]: the ego's acceleration is a first-order lag `lag` (s)
-/// of the command in force (the commands reach it after the actuator's dead time), it is at
-/// least `acceleration` at the measurement's time, and every command in force from then on
-/// for `known_for` seconds is at least `commands` (those already issued: the dead time plus
-/// the time from the measurement to now). Everything after is bounded by the braking level
-/// asked about. All in SI units.
+/// time on when its commands are known only by a bound: the ego's acceleration is a
+/// first-order lag `lag` (s) of the command in force (the commands reach it after the
+/// actuator's dead time), it is at least `acceleration` at the measurement's time, and every
+/// command in force from then on for `known_for` seconds is at least `commands` (those
+/// already issued: the dead time plus the time from the measurement to now). Everything after
+/// is bounded by the braking level asked about. All in SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct EgoBuildUp {
@@ -186,57 +338,59 @@ pub struct EgoBuildUp {
 }
 
 impl EgoBuildUp {
-    /// The credit for an ego that brakes at most at `level` (m/s^2, positive) once the known
-    /// commands are spent: `(behind, faster)`, so that the ego is at every instant at least
-    /// where an ego `faster` m/s faster and `behind` m further back, braking at `level` at
-    /// once from the measurement, would be (both to standstill). `(0, 0)` (no credit) where
-    /// a bound is below `-level`, or NaN, or the level is not positive.
-    ///
-    /// **Derivation.** Write the ego's acceleration while it moves as at least
-    /// `a_lb(s) = -level + g(s)`, `s` from the measurement, with `0 <= g <= level`; let
-    /// `G = int g` and `M = int s g` over `s >= 0`. The unclamped `y(s) = x_0 + v_0 s +
-    /// int_0^s (s - r) a_lb(r) dr` and `z(s) = x_0 - M + (v_0 + G) s - level s^2 / 2` differ
-    /// by `y - z = int_s^inf (r - s) g(r) dr >= 0`. The real ego stays at or above `y` until
-    /// it stops (its speed is at least `y`'s), `y`'s speed reaches zero no later, and `y` then
-    /// falls (`a_lb <= 0`), so the real ego stays at or above `y` held at its first stop; that
-    /// is at or above `z` held at its stop (before `y` stops, `y >= z`; after, `y`'s stop is
-    /// its highest point, at least `y` at `z`'s stop, which is at least `z`'s highest). So the
-    /// ego covers at least the distance of the closed form's ego at `v_0 + G`, `M` back, and
-    /// the follower is unchanged: the closed form there bounds the gap from below.
-    ///
-    /// With the lag, the commands at least `p` for `T = known_for` and then at least
-    /// `-level`, and the acceleration at least `a_0`, the lag's answer to those bounds is
-    /// below the ego's (a first-order lag is monotone in its start and its input), with `p`
-    /// and `a_0` taken at most zero (a lower bound may be lowered; it keeps `a_lb <= 0`):
-    /// `a_lb = p + (a_0 - p) e^(-s/tau)` on `[0, T]`, then `-level + (a_1 + level)
-    /// e^(-(s - T)/tau)` with `a_1 = p + (a_0 - p) E`, `E = e^(-T/tau)`; so
-    /// - `G = (p + level) T + (a_0 - p) tau (1 - E) + (a_1 + level) tau`,
-    /// - `M = (p + level) T^2 / 2 + (a_0 - p) tau^2 (1 - E (1 + T / tau))
-    ///   + (a_1 + level) (tau T + tau^2)`,
-    ///
-    /// both zero for an ego that may already brake at `level` (`a_0 = p = -level`), and
-    /// without a lag (`tau = 0`) the dead time's alone: `(p + level) T` and `(p + level)
-    /// T^2 / 2`. The property test `an_ego_braking_through_its_actuator_keeps_the_credited_gap`
-    /// checks the bound against brute-force integration of the actuator and both cars.
-    pub fn credit(&self, level: f32) -> (f32, f32) {
+    /// The lower bound's integrals ([`KnownBraking`]): with `p = commands` and `a_0 =
+    /// acceleration` each taken at most zero (a lower bound may be lowered), the lag's answer
+    /// `a_lb = p + (a_0 - p) e^(-s/tau)` on `[0, T]`, `T = known_for`, `E = e^(-T/tau)`:
+    /// `int a_lb = p T + (a_0 - p) tau (1 - E)`, `int s a_lb = p T^2 / 2 + (a_0 - p) tau^2
+    /// (1 - E (1 + T / tau))`, ending at `p + (a_0 - p) E`, between `a_0` and `p`. Without a
+    /// lag (`tau = 0`) the commands' alone. [`KnownBraking::NOTHING`] where an argument is
+    /// NaN or not finite.
+    pub fn known(&self) -> KnownBraking {
         let (a_0, p) = (self.acceleration.min(0.0), self.commands.min(0.0));
         let (t, tau) = (self.known_for.max(0.0), self.lag.max(0.0));
-        // (NaN compares false: no credit.)
-        let bounded = a_0 >= -level && p >= -level && level > 0.0 && t.is_finite();
-        if !bounded || !tau.is_finite() {
-            return (0.0, 0.0);
+        let finite = a_0.is_finite() && p.is_finite() && t.is_finite() && tau.is_finite();
+        if !finite {
+            return KnownBraking::NOTHING;
         }
-        let e = if tau > 0.0 { libm::expf(-t / tau) } else { 0.0 };
-        let a_1 = p + (a_0 - p) * e;
-        let faster = (p + level) * t + (a_0 - p) * tau * (1.0 - e) + (a_1 + level) * tau;
-        let first_phase_moment = if tau > 0.0 {
-            (a_0 - p) * tau * tau * (1.0 - e * (1.0 + t / tau))
-        } else {
-            0.0
-        };
-        let behind =
-            (p + level) * 0.5 * t * t + first_phase_moment + (a_1 + level) * (tau * t + tau * tau);
-        (behind, faster)
+        let (speed, moment, at_end) = lag_segment(a_0, p, t, tau);
+        KnownBraking {
+            known_for: t,
+            speed,
+            moment,
+            at_end,
+            least: a_0.min(p),
+            most: a_0.max(p),
+            lag: tau,
+        }
+    }
+
+    /// [`KnownBraking::credit`] of [`EgoBuildUp::known`]. The property test
+    /// `an_ego_braking_through_its_actuator_keeps_the_credited_gap` checks the bound against
+    /// brute-force integration of the actuator and both cars.
+    pub fn credit(&self, level: f32) -> (f32, f32) {
+        self.known().credit(level)
+    }
+}
+
+/// A first-order lag `lag` (s) held at `input` for `duration` (s) from the acceleration
+/// `start` (m/s^2): `(int a, int s a, a(duration))` over `[0, duration]`, with
+/// `a(s) = input + (start - input) e^(-s/lag)`, `E = e^(-duration/lag)`:
+/// `int a = input d + (start - input) lag (1 - E)` and
+/// `int s a = input d^2 / 2 + (start - input) lag^2 (1 - E (1 + d / lag))`. Without a lag the
+/// input at once. The pieces of [`KnownBraking`]: [`EgoBuildUp::known`] in one, the
+/// firmware's record of its commands one per command.
+pub fn lag_segment(start: f32, input: f32, duration: f32, lag: f32) -> (f32, f32, f32) {
+    let d = duration;
+    if lag > 0.0 {
+        let e = libm::expf(-d / lag);
+        let excess = start - input;
+        (
+            input * d + excess * lag * (1.0 - e),
+            input * 0.5 * d * d + excess * lag * lag * (1.0 - e * (1.0 + d / lag)),
+            input + excess * e,
+        )
+    } else {
+        (input * d, input * 0.5 * d * d, input)
     }
 }
 
@@ -683,6 +837,50 @@ mod tests {
                 f64::from(tau),
                 f64::from(known_for),
                 &commands,
+                &late,
+                &f,
+            );
+            prop_assert!(brute >= f64::from(value) - 0.01, "{} vs {}", value, brute);
+        }
+
+        /// [`GentlePart::with_debt`] bounds the least gap of an ego that brakes gently, then
+        /// harder than the level for a while, then at most at the level, through its lag: the
+        /// gentle part credited, the harder braking's debt (its excess over the level, for its
+        /// time and the lag's, `(hard - level) (hard_for + tau)`) taken at once. Run once with
+        /// the debt dropped: it fails.
+        #[test]
+        fn a_gentle_part_credited_with_a_later_debt_bounds_the_gap(
+            gap in 0.0f32..120.0, ve in 0.0f32..35.0, vf in 0.0f32..35.0,
+            level in 3.5f32..8.0, harder in 0.0f32..4.0, rho in 0.0f32..2.0,
+            a_0 in -3.5f32..0.0, p in -3.5f32..0.0,
+            gentle_for in 0.0f32..0.5, hard_for in 0.0f32..0.5, tau in 0.0f32..0.5,
+        ) {
+            let f = follower(rho, 1.0, 7.59, 12.65);
+            let hard = level + harder;
+            let (speed, moment, _) = lag_segment(a_0, p, gentle_for, tau);
+            let part = GentlePart {
+                speed,
+                moment,
+                duration: gentle_for,
+                duration_moment: 0.5 * gentle_for * gentle_for,
+                least: a_0.min(p),
+                most: a_0.max(p),
+            };
+            // Commands, in 50 ms slices: `p` while gentle, `-hard` for `hard_for` rounded up
+            // to whole slices, then `-level`.
+            let hard_slices = (hard_for / 0.05).ceil() as usize;
+            let mut late = vec![-f64::from(hard); hard_slices];
+            late.push(-f64::from(level));
+            let debt = harder * (0.05 * hard_slices as f32 + tau);
+            let (behind, speed_then) = part.with_debt(level, ve, debt);
+            let value = rear_gap_after(gap - behind, speed_then, vf, level, 0.0, &f);
+            let gentle = vec![f64::from(p); ((gentle_for / 0.05).ceil() as usize).max(1)];
+            let brute = simulated_through(
+                (f64::from(gap), f64::from(ve), f64::from(vf)),
+                f64::from(a_0),
+                f64::from(tau),
+                f64::from(gentle_for),
+                &gentle,
                 &late,
                 &f,
             );
