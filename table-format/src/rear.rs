@@ -252,7 +252,7 @@ impl KnownBraking {
 /// The part of a known lower bound of the ego's acceleration that is at least a braking
 /// level, for an ego that may have braked harder than that level elsewhere: its integrals
 /// over the pieces of time `P` (from the follower measurement's time, `s` seconds) where the
-/// bound is at least `-least` and at most `most`. All in SI units.
+/// bound is at least minus the level (between `least` and `most` there). All in SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct GentlePart {
@@ -339,12 +339,9 @@ pub struct EgoBuildUp {
 
 impl EgoBuildUp {
     /// The lower bound's integrals ([`KnownBraking`]): with `p = commands` and `a_0 =
-    /// acceleration` each taken at most zero (a lower bound may be lowered), the lag's answer
-    /// `a_lb = p + (a_0 - p) e^(-s/tau)` on `[0, T]`, `T = known_for`, `E = e^(-T/tau)`:
-    /// `int a_lb = p T + (a_0 - p) tau (1 - E)`, `int s a_lb = p T^2 / 2 + (a_0 - p) tau^2
-    /// (1 - E (1 + T / tau))`, ending at `p + (a_0 - p) E`, between `a_0` and `p`. Without a
-    /// lag (`tau = 0`) the commands' alone. [`KnownBraking::NOTHING`] where an argument is
-    /// NaN or not finite.
+    /// acceleration` each taken at most zero (a lower bound may be lowered), the lag held at
+    /// `p` from `a_0` for `known_for` ([`lag_segment`]), between `a_0` and `p`.
+    /// [`KnownBraking::NOTHING`] where an argument is NaN or not finite.
     pub fn known(&self) -> KnownBraking {
         let (a_0, p) = (self.acceleration.min(0.0), self.commands.min(0.0));
         let (t, tau) = (self.known_for.max(0.0), self.lag.max(0.0));

@@ -644,7 +644,7 @@ impl RearCorner {
     /// The corner `t` seconds on (s), the follower and the ego keeping the corner's speeds but
     /// for the ego's `acceleration` (m/s^2; its speed held at or above zero): a prediction of
     /// where a follower closing on the ego will be, for comfort ([`Controller::look_ahead`]),
-    /// not a bound (the follower may accelerate).
+    /// not a bound (the follower may accelerate; the build-up's credit is the corner's own).
     pub(super) fn ahead_by(&self, t: f32, acceleration: f32) -> RearCorner {
         let t = math::max(t, 0.0);
         let ego_speed = math::max(self.ego_speed + acceleration * t, 0.0);

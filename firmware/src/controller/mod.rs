@@ -320,7 +320,7 @@
 //!   computed once per follower measurement (below). The share of measured rear states that
 //!   pass with the declared error and with exact sensors is measured by `solver verify`
 //!   (docs/certificate.md); every passing measurement's box lies in cells the proof covers.
-//!   The worst control step's cost on the Cortex-M4F, against its budget of 20,000
+//!   The worst control step's cost on the Cortex-M4F, against its budget of 24,000
 //!   instructions, is measured on QEMU (docs/board.md).
 //! - **Aging**: a measurement is argued from its own time, so its age is inside the argument.
 //!   The last plausible leader measurement is kept with the interval of the ego's speed at its
