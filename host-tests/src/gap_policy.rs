@@ -61,19 +61,7 @@ pub fn braking_a_follower_allows(
     time_gap: f32,
     v: f32,
 ) -> Option<f32> {
-    let rear = RearBox::around(config, model, time_gap, v);
-    let later = ReactingFollower {
-        reaction_time: follower.reaction_time + delay,
-        ..*follower
-    };
-    allowed_braking(
-        rear.gap.0,
-        rear.ego.0,
-        rear.follower.1,
-        &later,
-        config.certificate.rear_margin,
-        config.certificate.emergency.braking.level,
-    )
+    allowed_at_the_worst_corner(config, model, follower, delay, None, time_gap, v)
 }
 
 /// [`braking_a_follower_allows`] with the ego's braking credited with its actuator's build-up
@@ -81,9 +69,9 @@ pub fn braking_a_follower_allows(
 /// acceleration and the commands already issued at zero), the commands in force for
 /// `known_for` seconds from the measurement are those already issued (the track's age at the
 /// check plus the declared dead time), then the level, through the declared lag. The same
-/// error box, follower and `delay`. What a firmware that remembers its commands can argue
-/// (a brute-force integration of the same actuator, [`braking_a_follower_allows_through`],
-/// finds a little more: the closed form shifts a braking at once).
+/// error box, follower and `delay`. What the firmware argues with (its record of the commands,
+/// `firmware::controller`'s `build_up`); a brute-force integration of the same actuator,
+/// [`braking_a_follower_allows_through`], agrees with it.
 pub fn braking_a_follower_allows_built_up(
     config: &firmware::Config,
     model: &HumanModel,
@@ -93,34 +81,45 @@ pub fn braking_a_follower_allows_built_up(
     time_gap: f32,
     v: f32,
 ) -> Option<f32> {
-    let rear = RearBox::around(config, model, time_gap, v);
-    let later = ReactingFollower {
-        reaction_time: follower.reaction_time + delay,
-        ..*follower
-    };
     let build_up = EgoBuildUp {
         acceleration: 0.0,
         commands: 0.0,
         known_for,
         lag: config.plant.actuator_lag_us as f32 * 1e-6,
     };
+    allowed_at_the_worst_corner(config, model, follower, delay, Some(build_up), time_gap, v)
+}
+
+/// The hardest braking up to the emergency authority's that the rear keeps its margin for, to
+/// 1e-3 m/s^2, at the worst corner of the box around the worst measurement of a follower
+/// `time_gap` behind at `v`, its reaction `delay` later; the ego braking at the level at once
+/// from the measurement, or credited with `build_up`.
+fn allowed_at_the_worst_corner(
+    config: &firmware::Config,
+    model: &HumanModel,
+    follower: &ReactingFollower,
+    delay: f32,
+    build_up: Option<EgoBuildUp>,
+    time_gap: f32,
+    v: f32,
+) -> Option<f32> {
+    let rear = RearBox::around(config, model, time_gap, v);
+    let later = ReactingFollower {
+        reaction_time: follower.reaction_time + delay,
+        ..*follower
+    };
+    let (gap, ego, behind) = (rear.gap.0, rear.ego.0, rear.follower.1);
     let margin = config.certificate.rear_margin;
-    table_format::rear::hardest_clearing(
-        |level| {
-            rear_gap_built_up(
-                rear.gap.0,
-                rear.ego.0,
-                rear.follower.1,
-                level,
-                0.0,
-                &build_up,
-                &later,
-            ) - margin
-        },
-        0.0,
-        config.certificate.emergency.braking.level,
-        1e-3,
-    )
+    let ceiling = config.certificate.emergency.braking.level;
+    match build_up {
+        None => allowed_braking(gap, ego, behind, &later, margin, ceiling),
+        Some(b) => table_format::rear::hardest_clearing(
+            |level| rear_gap_built_up(gap, ego, behind, level, 0.0, &b, &later) - margin,
+            0.0,
+            ceiling,
+            1e-3,
+        ),
+    }
 }
 
 /// `config` with sensors that measure the gap, the range rate and the ego's speed exactly (the

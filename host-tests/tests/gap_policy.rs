@@ -9,6 +9,19 @@ use host_tests::humans::HumanModel;
 use table_format::rear::ReactingFollower;
 use table_format::Table;
 
+/// The deployed table's humans, the default configuration and the firmware's own reacting
+/// follower.
+fn deployed() -> (HumanModel, Config, ReactingFollower) {
+    let table = Table::parse(firmware::DEFAULT_TABLE).unwrap();
+    let model = HumanModel::of(&table).unwrap();
+    let declared = Config::default();
+    let argued =
+        firmware::Certifier::new(Table::parse(firmware::DEFAULT_TABLE).unwrap(), &declared)
+            .unwrap()
+            .reacting_follower();
+    (model, declared, argued)
+}
+
 /// A follower 1 s behind (the IDM's 2 m jam distance plus 30 m) at 30 m/s that holds its speed
 /// for 1.15 s and then brakes at the IDM's clip at once: with exact sensors and no delay it
 /// allows the 5.806 m/s^2 worked out by hand in `table_format::rear`. The firmware's follower
@@ -67,13 +80,7 @@ fn the_braking_a_follower_allows_matches_the_figures() {
 /// 4.65 m/s^2 where the firmware argues with 3.89.
 #[test]
 fn the_build_up_lever_agrees_with_the_closed_form_at_once() {
-    let table = Table::parse(firmware::DEFAULT_TABLE).unwrap();
-    let model = HumanModel::of(&table).unwrap();
-    let declared = Config::default();
-    let argued =
-        firmware::Certifier::new(Table::parse(firmware::DEFAULT_TABLE).unwrap(), &declared)
-            .unwrap()
-            .reacting_follower();
+    let (model, declared, argued) = deployed();
     let holding = ReactingFollower {
         braking: -model.follower_clip().0,
         jerk: f32::INFINITY,
@@ -122,13 +129,7 @@ fn the_build_up_lever_agrees_with_the_closed_form_at_once() {
 /// braking shows (the firmware argues with 3.89 there).
 #[test]
 fn the_closed_form_build_up_credit_is_below_the_integration_and_close() {
-    let table = Table::parse(firmware::DEFAULT_TABLE).unwrap();
-    let model = HumanModel::of(&table).unwrap();
-    let declared = Config::default();
-    let argued =
-        firmware::Certifier::new(Table::parse(firmware::DEFAULT_TABLE).unwrap(), &declared)
-            .unwrap()
-            .reacting_follower();
+    let (model, declared, argued) = deployed();
     let exact = with_exact_sensors(Config::default());
     let dead_time = declared.plant.actuator_dead_time_us as f32 * 1e-6;
     let actuator = EgoActuator {

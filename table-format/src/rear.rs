@@ -649,29 +649,27 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// The smallest rear gap by brute-force integration (f64, 0.1 ms steps), the ego's braking
-    /// building up at `ego_jerk` (infinite: at once) to `ego_braking` from now, the follower
+    /// The smallest rear gap by brute-force integration (f64, 0.1 ms steps) from `(gap, ve,
+    /// vf)`, the ego's mean acceleration over each step from `ego(mid, dt)`, the follower
     /// holding `reaction_acceleration` for its reaction, then ramping at its jerk to its
-    /// braking; both to standstill.
-    fn simulated(
-        gap: f64,
-        ve: f64,
-        vf: f64,
-        ego_braking: f64,
-        ego_jerk: f64,
+    /// braking; both to standstill, and at least for `at_least` seconds.
+    fn least_gap(
+        (gap, ve, vf): (f64, f64, f64),
         f: &ReactingFollower,
+        at_least: f64,
+        mut ego: impl FnMut(f64, f64) -> f64,
     ) -> f64 {
         let dt = 1e-4;
-        let (mut g, mut ve, mut vf, mut t) = (gap, ve.clamp(0.0, f64::from(f.max_speed)), vf, 0.0);
+        let (mut g, mut ve, mut vf, mut t) = (gap, ve, vf, 0.0);
         let mut least = g;
         let (rho, ar) = (
             f64::from(f.reaction_time),
             f64::from(f.reaction_acceleration),
         );
         let (bf, jf) = (f64::from(f.braking), f64::from(f.jerk));
-        while ve > 0.0 || vf > 0.0 || t <= rho + ar.max(0.0) / jf {
+        while ve > 0.0 || vf > 0.0 || t <= rho + ar.max(0.0) / jf || t <= at_least {
             let mid = t + 0.5 * dt;
-            let ae = -(ego_jerk * mid).min(ego_braking);
+            let ae = ego(mid, dt);
             let af = if mid < rho {
                 ar
             } else {
@@ -689,6 +687,22 @@ mod tests {
             }
         }
         least
+    }
+
+    /// [`least_gap`] for an ego whose braking builds up at `ego_jerk` (infinite: at once) to
+    /// `ego_braking` from now, its speed taken at most the follower's model's top.
+    fn simulated(
+        gap: f64,
+        ve: f64,
+        vf: f64,
+        ego_braking: f64,
+        ego_jerk: f64,
+        f: &ReactingFollower,
+    ) -> f64 {
+        let ve = ve.clamp(0.0, f64::from(f.max_speed));
+        least_gap((gap, ve, vf), f, 0.0, |mid, _| {
+            -(ego_jerk * mid).min(ego_braking)
+        })
     }
 
     fn follower(rho: f32, ar: f32, bf: f32, jf: f32) -> ReactingFollower {
@@ -701,13 +715,12 @@ mod tests {
         }
     }
 
-    /// The smallest rear gap by brute-force integration (f64, 0.1 ms steps) for an ego whose
-    /// acceleration is a first-order lag `tau` of its commands, starting at `a_0`: the commands
-    /// in force are `commands[k]` over the k-th 50 ms until `known_for`, then `late[k]` (the
-    /// same slices, counted from `known_for`; the last held). The follower as in [`simulated`].
+    /// [`least_gap`] for an ego whose acceleration is a first-order lag `tau` of its commands,
+    /// starting at `a_0`: the commands in force are `commands[k]` over the k-th 50 ms until
+    /// `known_for`, then `late[k]` (the same slices, counted from `known_for`; the last held).
     #[allow(clippy::too_many_arguments)]
     fn simulated_through(
-        (gap, ve, vf): (f64, f64, f64),
+        start: (f64, f64, f64),
         a_0: f64,
         tau: f64,
         known_for: f64,
@@ -715,50 +728,27 @@ mod tests {
         late: &[f64],
         f: &ReactingFollower,
     ) -> f64 {
-        let dt = 1e-4;
         let slice = |list: &[f64], t: f64| {
             let k = ((t / 0.05) as usize).min(list.len() - 1);
             list[k]
         };
-        let (mut g, mut ve, mut vf, mut t, mut a) = (gap, ve, vf, 0.0, a_0);
-        let mut least = g;
-        let (rho, ar) = (
-            f64::from(f.reaction_time),
-            f64::from(f.reaction_acceleration),
-        );
-        let (bf, jf) = (f64::from(f.braking), f64::from(f.jerk));
-        while ve > 0.0 || vf > 0.0 || t <= rho + ar.max(0.0) / jf || t <= known_for {
-            let mid = t + 0.5 * dt;
+        let mut a = a_0;
+        least_gap(start, f, known_for, |mid, dt| {
             let u = if mid < known_for {
                 slice(commands, mid)
             } else {
                 slice(late, mid - known_for)
             };
-            // The lag's exact step for the held command.
+            // The lag's exact step for the held command; the step's mean, the ends'.
             let next_a = if tau > 0.0 {
                 u + (a - u) * (-dt / tau).exp()
             } else {
                 u
             };
-            let ae = 0.5 * (a + next_a);
+            let mean = 0.5 * (a + next_a);
             a = next_a;
-            let af = if mid < rho {
-                ar
-            } else {
-                (ar - jf * (mid - rho)).max(-bf)
-            };
-            let ne = (ve + ae * dt).max(0.0);
-            let nf = (vf + af * dt).max(0.0);
-            g += 0.5 * (ve + ne) * dt - 0.5 * (vf + nf) * dt;
-            ve = ne;
-            vf = nf;
-            t += dt;
-            least = least.min(g);
-            if t > 200.0 {
-                break;
-            }
-        }
-        least
+            mean
+        })
     }
 
     proptest! {
