@@ -63,7 +63,7 @@ echo "--- the scenario with the certificate argued with two authorities (feature
 build -p firmware --features qemu-two-authorities --bin qemu-scenario
 timeout 300 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
   -semihosting-config enable=on,target=native -kernel "$elf"
-echo "--- instructions per control step with two authorities (budget 70,000: docs/board.md)"
+echo "--- instructions per control step with two authorities (budget 60,000: docs/board.md)"
 count_instructions "$elf"
 
 echo "--- the same scenario with the firmware's defmt log (feature qemu-defmt), decoded by defmt-print"

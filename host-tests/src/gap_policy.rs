@@ -69,9 +69,10 @@ pub fn braking_a_follower_allows(
 /// acceleration and the commands already issued at zero), the commands in force for
 /// `known_for` seconds from the measurement are those already issued (the track's age at the
 /// check plus the declared dead time), then the level, through the declared lag. The same
-/// error box, follower and `delay`. What the firmware argues with (its record of the commands,
-/// `firmware::controller`'s `build_up`); a brute-force integration of the same actuator,
-/// [`braking_a_follower_allows_through`], agrees with it.
+/// error box, follower and `delay`. A lever, not the firmware's argument: it needs an actuator
+/// no faster than the declared dead time and lag, where the firmware declares one no slower
+/// (a brute-force integration of the same actuator, [`braking_a_follower_allows_through`],
+/// agrees with it).
 pub fn braking_a_follower_allows_built_up(
     config: &firmware::Config,
     model: &HumanModel,
@@ -531,13 +532,9 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
         full.jerk,
         full.level,
     );
-    let age = (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6;
-    let delay = age + lights;
-    // The firmware credits the ego's build-up: the commands already issued (at zero in steady
-    // following) are known for the track's age and the dead time.
-    let dead_time = config.plant.actuator_dead_time_us as f32 * 1e-6;
+    let delay = (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6 + lights;
     let allows = |f: &ReactingFollower, time_gap: f32, v: f32| {
-        braking_a_follower_allows_built_up(&config, &model, f, delay, age + dead_time, time_gap, v)
+        braking_a_follower_allows(&config, &model, f, delay, time_gap, v)
     };
     let speeds = [10.0f32, 20.0, 30.0];
     let follower_gaps = [0.6f32, 1.0, 2.0];
@@ -616,46 +613,39 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     }
     // What would reach the targets at 30 m/s against a 9.8 m/s^2 leader: the follower
     // credited with its IDM's output until it reacts, the rear known exactly and at once, a
-    // faster brake (lag 0.1 s); and what the ego's build-up buys, in closed form (the
-    // firmware's) and by integration with the 12 m/s^3 ramp of its commands too.
+    // faster brake (lag 0.1 s), the ego's own build-up credited in the rear check.
     let v = 30.0f32;
     let exact = with_exact_sensors(config);
     let credited = crediting_its_idm(&config, &model, &argued, 1.0, v);
     let credited_exact = crediting_its_idm(&exact, &model, &argued, 1.0, v);
-    let built_up = |c: &firmware::Config, f: &ReactingFollower, delay: f32, known_for: f32| {
-        braking_a_follower_allows_built_up(c, &model, f, delay, known_for, 1.0, v)
-    };
     let declared_rear = allows(&argued, 1.0, v);
-    let at_once_rear = braking_a_follower_allows(&config, &model, &argued, delay, 1.0, v);
     let credited_rear = allows(&credited, 1.0, v);
-    // Known exactly and at once: no delay before the follower's reaction, the commands known
-    // for the dead time.
-    let exact_rear = built_up(&exact, &argued, 0.0, dead_time);
-    let both_rear = built_up(&exact, &credited_exact, 0.0, dead_time);
-    let mut faster_config = config;
-    faster_config.plant.actuator_lag_us = 100_000;
-    let faster_lights =
-        declared.lights_on_within(dead_time, 0.1, 0.0, 0.0, 0.0, full.jerk, full.level);
-    let faster_rear = built_up(
-        &faster_config,
-        &argued,
-        age + faster_lights,
-        age + dead_time,
-    );
-    let all_rear = built_up(
-        &with_exact_sensors(faster_config),
-        &credited_exact,
-        0.0,
-        dead_time,
-    );
+    let exact_rear = braking_a_follower_allows(&exact, &model, &argued, 0.0, 1.0, v);
+    let both_rear = braking_a_follower_allows(&exact, &model, &credited_exact, 0.0, 1.0, v);
     let actuator = EgoActuator::declared(&config);
     let through_rear =
         braking_a_follower_allows_through(&config, &model, &argued, actuator, delay, 1.0, v);
     // Known exactly and at once, but its reaction from when the actuator lights the brakes.
     let through_exact =
         braking_a_follower_allows_through(&exact, &model, &argued, actuator, lights, 1.0, v);
-    let built_up_exact = built_up(&exact, &argued, lights, dead_time);
-    let faster = firmware::Controller::new(bytes, faster_config);
+    // The closed form's credit: the commands already issued known for the track's age at the
+    // check (the delay less the lights' bound) and the dead time; with exact sensors, a fresh
+    // measurement (the dead time alone).
+    let dead_time = config.plant.actuator_dead_time_us as f32 * 1e-6;
+    let built_up_rear = braking_a_follower_allows_built_up(
+        &config,
+        &model,
+        &argued,
+        delay,
+        delay - lights + dead_time,
+        1.0,
+        v,
+    );
+    let built_up_exact =
+        braking_a_follower_allows_built_up(&exact, &model, &argued, lights, dead_time, 1.0, v);
+    let mut faster = config;
+    faster.plant.actuator_lag_us = 100_000;
+    let faster = firmware::Controller::new(bytes, faster);
     let at = |c: &firmware::Controller<'_>, b: Option<f32>| {
         b.map_or(f32::INFINITY, |level| {
             c.steady_gap_with(v, 9.8, firmware::Braking { level, ..full })
@@ -663,14 +653,9 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     };
     let levers = [
         (
-            "declared errors and delays (the firmware's argument, its build-up credited)",
+            "declared errors and delays (the firmware's argument)",
             declared_rear,
             at(&comfort, declared_rear),
-        ),
-        (
-            "without the build-up credited (the ego braking at the level at once)",
-            at_once_rear,
-            at(&comfort, at_once_rear),
         ),
         (
             "the follower credited with its IDM's output until it reacts",
@@ -689,22 +674,27 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
         ),
         (
             "a brake lag of 0.1 s (declared 0.3 s)",
-            faster_rear,
-            at(&faster, faster_rear),
+            declared_rear,
+            at(&faster, declared_rear),
         ),
-        ("all three", all_rear, at(&faster, all_rear)),
+        ("all three", both_rear, at(&faster, both_rear)),
         (
-            "known exactly and at once, its reaction from the lights",
+            "the ego's dead time and lag credited in the rear check, in closed form (rear_gap_built_up; not argued by the firmware: it needs an actuator no faster than declared)",
+            built_up_rear,
+            at(&comfort, built_up_rear),
+        ),
+        (
+            "that, and the follower known exactly and at once (its reaction from the lights)",
             built_up_exact,
             at(&comfort, built_up_exact),
         ),
         (
-            "the build-up by integration, with the 12 m/s^3 ramp of the commands too",
+            "the ego's build-up credited in the rear check, by integration (dead time, lag and its 12 m/s^3 ramp)",
             through_rear,
             at(&comfort, through_rear),
         ),
         (
-            "that, and known exactly and at once, its reaction from the lights",
+            "the build-up by integration, and the follower known exactly and at once (its reaction from the lights)",
             through_exact,
             at(&comfort, through_exact),
         ),

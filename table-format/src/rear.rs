@@ -69,6 +69,9 @@
 //! distance of an ego braking at `level` at once that starts `int g` faster and `int s g`
 //! further back ([`EgoBuildUp::credit`] derives it and the lag's `g`), so
 //! [`rear_gap_built_up`] is the closed form there (the larger of it and the value at once).
+//! A lower bound of the ego's acceleration needs an actuator no faster than the one argued
+//! with: a dead time and lag declared as the slowest the actuator may be (as the front needs)
+//! do not give one.
 
 use crate::front::{front_value, FrontModel};
 
@@ -169,8 +172,8 @@ pub fn rear_gap_after(
 /// [`rear_gap_built_up`]: a lower bound `a_lb(s)` of it (`s` seconds from the measurement)
 /// over the first `known_for` seconds, given by its integrals, after which the ego's
 /// acceleration is a first-order lag `lag` (s) of commands no harder than the braking level
-/// asked about. All in SI units. [`EgoBuildUp`] builds one for constant commands; the firmware
-/// sums its own commands' segments.
+/// asked about. All in SI units. [`EgoBuildUp`] builds one for constant commands; a record of
+/// the commands would sum one per command ([`lag_segment`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct KnownBraking {
@@ -249,74 +252,6 @@ impl KnownBraking {
     }
 }
 
-/// The part of a known lower bound of the ego's acceleration that is at least a braking
-/// level, for an ego that may have braked harder than that level elsewhere: its integrals
-/// over the pieces of time `P` (from the follower measurement's time, `s` seconds) where the
-/// bound is at least minus the level (between `least` and `most` there). All in SI units.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct GentlePart {
-    /// `int_P a_lb(s) ds`, m/s.
-    pub speed: f32,
-    /// `int_P s a_lb(s) ds`, m.
-    pub moment: f32,
-    /// `int_P ds`, s.
-    pub duration: f32,
-    /// `int_P s ds`, s^2.
-    pub duration_moment: f32,
-    /// The least of `a_lb` over `P`, m/s^2.
-    pub least: f32,
-    /// The largest of `a_lb` over `P`, m/s^2: at most zero for a credit.
-    pub most: f32,
-}
-
-impl GentlePart {
-    /// No piece.
-    pub const NOTHING: GentlePart = GentlePart {
-        speed: 0.0,
-        moment: 0.0,
-        duration: 0.0,
-        duration_moment: 0.0,
-        least: 0.0,
-        most: 0.0,
-    };
-
-    /// The ego that brakes at `level` at once which bounds one whose braking beyond `level`
-    /// costs it at most `debt` m/s of speed in all: `(behind, ego_speed)`, an ego starting
-    /// `behind` m further back at `ego_speed` (from the measured `ego_speed`), both at or
-    /// above zero. Without a credit (the part below `-level` or above zero, or NaN), the
-    /// debt taken at once: `(0, max(ego_speed - debt, 0))`.
-    ///
-    /// **Derivation.** Write the true acceleration as `-level + g` and the bound on `P` as
-    /// `-level + g_P` (`0 <= g_P <= g` there; `P` as returned, where the bound is at least
-    /// `-level`). Let `y` start at the ego's speed less `debt`, with acceleration `-level + g_P`
-    /// on `P` and `-level` elsewhere. While the real ego moves, its speed exceeds `y`'s by
-    /// `int_P (g - g_P) + int_rest g + debt >= 0` (the rest's `g` is at least minus the
-    /// braking beyond `level`, whose integral is at most `debt`), so it stays at or above `y`;
-    /// `y` stops no later and then falls (its acceleration is at most zero), so the real ego
-    /// stays at or above `y` held at its first stop. `y - z = int_(P, r > s) (r - s) g_P >= 0`
-    /// for `z = x_0 - M + (v_0 - debt + G) s - level s^2 / 2`, `G = int_P g_P = speed +
-    /// level duration`, `M = int_P s g_P = moment + level duration_moment`, and `y` held at
-    /// its stop is at or above `z` held at its stop as in [`KnownBraking::credit`]. A `z` that
-    /// starts below zero speed stands `M` back, which the real ego (never going back) passes.
-    pub fn with_debt(&self, level: f32, ego_speed: f32, debt: f32) -> (f32, f32) {
-        let at_once = (0.0, (ego_speed - debt).max(0.0));
-        // (NaN compares false: no credit.)
-        let bounded = self.least >= -level && self.most <= 0.0 && level > 0.0;
-        let finite = self.speed.is_finite()
-            && self.moment.is_finite()
-            && self.duration.is_finite()
-            && self.duration_moment.is_finite()
-            && level.is_finite();
-        if !(bounded && finite) || self.duration <= 0.0 {
-            return at_once;
-        }
-        let faster = self.speed + level * self.duration;
-        let behind = self.moment + level * self.duration_moment;
-        (behind, (ego_speed - debt + faster).max(0.0))
-    }
-}
-
 /// What the ego's actuator guarantees of its acceleration from the follower measurement's
 /// time on when its commands are known only by a bound: the ego's acceleration is a
 /// first-order lag `lag` (s) of the command in force (the commands reach it after the
@@ -374,8 +309,7 @@ impl EgoBuildUp {
 /// `a(s) = input + (start - input) e^(-s/lag)`, `E = e^(-duration/lag)`:
 /// `int a = input d + (start - input) lag (1 - E)` and
 /// `int s a = input d^2 / 2 + (start - input) lag^2 (1 - E (1 + d / lag))`. Without a lag the
-/// input at once. The pieces of [`KnownBraking`]: [`EgoBuildUp::known`] in one, the
-/// firmware's record of its commands one per command.
+/// input at once. The pieces of [`KnownBraking`]: [`EgoBuildUp::known`] in one.
 pub fn lag_segment(start: f32, input: f32, duration: f32, lag: f32) -> (f32, f32, f32) {
     let d = duration;
     if lag > 0.0 {
@@ -824,50 +758,6 @@ mod tests {
                 f64::from(tau),
                 f64::from(known_for),
                 &commands,
-                &late,
-                &f,
-            );
-            prop_assert!(brute >= f64::from(value) - 0.01, "{} vs {}", value, brute);
-        }
-
-        /// [`GentlePart::with_debt`] bounds the least gap of an ego that brakes gently, then
-        /// harder than the level for a while, then at most at the level, through its lag: the
-        /// gentle part credited, the harder braking's debt (its excess over the level, for its
-        /// time and the lag's, `(hard - level) (hard_for + tau)`) taken at once. Run once with
-        /// the debt dropped: it fails.
-        #[test]
-        fn a_gentle_part_credited_with_a_later_debt_bounds_the_gap(
-            gap in 0.0f32..120.0, ve in 0.0f32..35.0, vf in 0.0f32..35.0,
-            level in 3.5f32..8.0, harder in 0.0f32..4.0, rho in 0.0f32..2.0,
-            a_0 in -3.5f32..0.0, p in -3.5f32..0.0,
-            gentle_for in 0.0f32..0.5, hard_for in 0.0f32..0.5, tau in 0.0f32..0.5,
-        ) {
-            let f = follower(rho, 1.0, 7.59, 12.65);
-            let hard = level + harder;
-            let (speed, moment, _) = lag_segment(a_0, p, gentle_for, tau);
-            let part = GentlePart {
-                speed,
-                moment,
-                duration: gentle_for,
-                duration_moment: 0.5 * gentle_for * gentle_for,
-                least: a_0.min(p),
-                most: a_0.max(p),
-            };
-            // Commands, in 50 ms slices: `p` while gentle, `-hard` for `hard_for` rounded up
-            // to whole slices, then `-level`.
-            let hard_slices = (hard_for / 0.05).ceil() as usize;
-            let mut late = vec![-f64::from(hard); hard_slices];
-            late.push(-f64::from(level));
-            let debt = harder * (0.05 * hard_slices as f32 + tau);
-            let (behind, speed_then) = part.with_debt(level, ve, debt);
-            let value = rear_gap_after(gap - behind, speed_then, vf, level, 0.0, &f);
-            let gentle = vec![f64::from(p); ((gentle_for / 0.05).ceil() as usize).max(1)];
-            let brute = simulated_through(
-                (f64::from(gap), f64::from(ve), f64::from(vf)),
-                f64::from(a_0),
-                f64::from(tau),
-                f64::from(gentle_for),
-                &gentle,
                 &late,
                 &f,
             );

@@ -3,9 +3,7 @@
 //! band's floor at once cannot keep the leader's worst case off the car, no harder than the
 //! follower allows (the controller's module docs: emergencies).
 
-use table_format::rear::{
-    hardest_clearing, rear_gap_after, GentlePart, KnownBraking, ReactingFollower,
-};
+use table_format::rear::{hardest_clearing, rear_gap_after, ReactingFollower};
 
 use super::authorities::{reaction_at, LEVEL_RESOLUTION};
 use super::certificate::{profile, LeaderMemo, Model, Ramp, RearMemo, WorstCorner};
@@ -483,7 +481,6 @@ impl Controller<'_> {
         now: u64,
     ) -> RearCorner {
         let (owing_for, held, held_for) = self.owing(t_f, now);
-        let (known, gentle) = self.known_braking(t_f, now, model);
         RearCorner {
             gap,
             follower_speed,
@@ -492,8 +489,6 @@ impl Controller<'_> {
             owing_for,
             held,
             held_for,
-            known,
-            gentle,
         }
     }
 
@@ -518,9 +513,6 @@ impl Controller<'_> {
     }
 }
 
-/// Where a rear closed form starts: `(gap, ego_speed, braking)`, m, m/s and m/s^2 (positive).
-type Start = (f32, f32, f32);
-
 /// A rear state at a follower measurement's time `t_f` (the worst corner of its box:
 /// [`Controller::rear_corner`]; a true state: [`Controller::rear_state`]) and the ego's
 /// braking from `t_f` until now.
@@ -541,11 +533,6 @@ pub(super) struct RearCorner {
     held: f32,
     /// How long the hold lasts from now, s.
     held_for: f32,
-    /// What the record of the commands knows of the ego's acceleration from `t_f` on: the
-    /// build-up the held bound credits ([`RearCorner::gap_after`]).
-    known: KnownBraking,
-    /// Its part within the band: the build-up the debt's bound credits.
-    gentle: GentlePart,
 }
 
 impl RearCorner {
@@ -568,19 +555,9 @@ impl RearCorner {
     /// m/s^2, checked at 3.5 from a track 0.08 s old, costs 1.1 m/s of speed (0.48 s of the
     /// default lag, dead time and age at 2.25 m/s^2), where the first bound brakes at 5.75 to
     /// a standstill.
-    ///
-    /// Both bounds credit the ego's own build-up: what the record of the commands knows of its
-    /// acceleration from `t_f` on (`build_up`). The second with all of it
-    /// ([`KnownBraking::credit`]: the ego as far as one `faster` and `behind` braking at once;
-    /// every command from `t_f` on is at least `-since`); the first with its part within the
-    /// band, which is at least `-level` there, its debt counting the rest
-    /// ([`GentlePart::with_debt`]). Without the credit each is a bound too, and higher where
-    /// the least gap comes before the lag has settled (the credited ego starts `behind`); it
-    /// is not tried (a third closed form for every level a search tries: the two-authority
-    /// step's worst rose from 64,656 to 72,528 instructions on QEMU with it in the checks).
     pub(super) fn gap_after(&self, model: &Model, level: f32, clock: f32, dark: f32) -> f32 {
         let follower = self.follower(model, dark);
-        let at = |(gap, ego_speed, braking)| self.at(gap, ego_speed, braking, clock, &follower);
+        let at = |(ego_speed, braking)| self.at(ego_speed, braking, clock, &follower);
         let (owed, held) = self.bounds(level);
         match owed {
             Some(owed) => math::max(at(held), at(owed)),
@@ -599,40 +576,29 @@ impl RearCorner {
         margin: f32,
     ) -> bool {
         let follower = self.follower(model, dark);
-        let at = |(gap, ego_speed, braking)| self.at(gap, ego_speed, braking, clock, &follower);
+        let at = |(ego_speed, braking)| self.at(ego_speed, braking, clock, &follower);
         let (owed, held) = self.bounds(level);
         owed.is_some_and(|owed| at(owed) > margin) || at(held) > margin
     }
 
-    /// [`RearCorner::gap_after`]'s two bounds for `level`, as `(gap, ego_speed, braking)` from
-    /// this state, each with the build-up's credit where there is one: braking at `level` from
-    /// the speed less the debt, where `since` is harder than `level` (a NaN level is not); and
-    /// braking at `max(level, since)`.
-    fn bounds(&self, level: f32) -> (Option<Start>, Start) {
-        let hardest = math::max(level, self.since);
-        let (behind, faster) = self.known.credit(hardest);
-        let held = (self.gap - behind, self.ego_speed + faster, hardest);
+    /// [`RearCorner::gap_after`]'s two bounds for `level`, as `(ego_speed, braking)` from this
+    /// state: braking at `level` from the speed less the debt, where `since` is harder than
+    /// `level` (a NaN level is not); and braking at `max(level, since)`.
+    fn bounds(&self, level: f32) -> (Option<(f32, f32)>, (f32, f32)) {
+        let held = (self.ego_speed, math::max(level, self.since));
         let harder_before = self.since > level;
         let owed = harder_before.then(|| {
             let debt = debt_bound(self.since, level, self.owing_for, self.held, self.held_for);
-            let (behind, ego_speed) = self.gentle.with_debt(level, self.ego_speed, debt);
-            (self.gap - behind, ego_speed, level)
+            (math::max(self.ego_speed - debt, 0.0), level)
         });
         (owed, held)
     }
 
-    /// [`rear_gap_after`] from `gap` and this state's follower, the ego at `ego_speed` braking
+    /// [`rear_gap_after`] from this state's gap and follower, the ego at `ego_speed` braking
     /// at `braking`.
-    fn at(
-        &self,
-        gap: f32,
-        ego_speed: f32,
-        braking: f32,
-        clock: f32,
-        follower: &ReactingFollower,
-    ) -> f32 {
+    fn at(&self, ego_speed: f32, braking: f32, clock: f32, follower: &ReactingFollower) -> f32 {
         rear_gap_after(
-            gap,
+            self.gap,
             ego_speed,
             self.follower_speed,
             braking,
@@ -644,7 +610,7 @@ impl RearCorner {
     /// The corner `t` seconds on (s), the follower and the ego keeping the corner's speeds but
     /// for the ego's `acceleration` (m/s^2; its speed held at or above zero): a prediction of
     /// where a follower closing on the ego will be, for comfort ([`Controller::look_ahead`]),
-    /// not a bound (the follower may accelerate; the build-up's credit is the corner's own).
+    /// not a bound (the follower may accelerate).
     pub(super) fn ahead_by(&self, t: f32, acceleration: f32) -> RearCorner {
         let t = math::max(t, 0.0);
         let ego_speed = math::max(self.ego_speed + acceleration * t, 0.0);

@@ -87,10 +87,7 @@
 //! ego's brake lights are on for sure, then brakes at its clip's hardest (6 m/s^2 on the
 //! deployed table), the ego braking at most at that level from now on (harder braking since
 //! `t_f` taken as held for good, or as the speed it can cost beyond that level through the
-//! declared lag, whichever bounds better: `RearCorner::gap_after`), and the ego credited with
-//! its own build-up: what its actuator must still do before the level takes force, a lower
-//! bound of its acceleration followed through the declared dead time and lag from the
-//! commands issued (`build_up`, [`table_format::rear::KnownBraking`]). The
+//! declared lag, whichever bounds better: `RearCorner::gap_after`). The
 //! lights are on from [`table_format::rear::lights_on_within`] after a run of commands at or
 //! below the vehicle's declared lights' command began ([`EmergencyDeclaration::lights_command`],
 //! -1.5 m/s^2 by default; the lights are on for sure once the acceleration is below
@@ -137,10 +134,7 @@
 //! rear value of `B` against the follower that reacts `follower_reaction_time` after the brake
 //! lights (`table_format::rear::rear_gap_after` at the worst corner of the kept follower
 //! measurement's box at its time, the ego braking at most at `B`'s level, an earlier harder
-//! braking and the ego's own build-up counted as above) exceeds `rear_margin`, and the speed
-//! headroom is not negative. The build-up's credit keeps the rule's induction: a later check
-//! follows the lag through the same commands the earlier one knew, and through the braking's
-//! own, which are at least the level it argued with (`build_up`'s module docs). The rear table is not
+//! braking counted as above) exceeds `rear_margin`, and the speed headroom is not negative. The rear table is not
 //! used (the follower's model is the reacting one); its header gives the models.
 //! - **The look-ahead** of a command `u` is argued along the emergency authority's build-up at
 //!   the hardest level from `beta` to the emergency level that the follower allows when `u` is
@@ -320,7 +314,7 @@
 //!   computed once per follower measurement (below). The share of measured rear states that
 //!   pass with the declared error and with exact sensors is measured by `solver verify`
 //!   (docs/certificate.md); every passing measurement's box lies in cells the proof covers.
-//!   The worst control step's cost on the Cortex-M4F, against its budget of 24,000
+//!   The worst control step's cost on the Cortex-M4F, against its budget of 20,000
 //!   instructions, is measured on QEMU (docs/board.md).
 //! - **Aging**: a measurement is argued from its own time, so its age is inside the argument.
 //!   The last plausible leader measurement is kept with the interval of the ego's speed at its
@@ -413,7 +407,6 @@
 //! 1.4 mm (measured), inside [`CERTIFICATE_TOLERANCE`].
 
 mod authorities;
-mod build_up;
 mod certificate;
 mod command;
 mod emergency;
@@ -445,7 +438,6 @@ use crate::iso15622;
 use crate::math;
 use crate::sensing::TrackState;
 
-use build_up::ActuatorFloor;
 use certificate::{LeaderMemo, Ramp, RearMemo};
 use emergency::{EmergencyMemo, LightsHold};
 
@@ -489,22 +481,6 @@ pub struct Controller<'t> {
     /// was valid and fresh), kept as the commands are: before the controller's own commands
     /// bound the actuator, they do (`Controller::reported_since`).
     reported: IssuedCommands<REPORTS>,
-    /// The commands issued as the actuator receives them, with a lower bound of its
-    /// acceleration through each (`build_up`): the rear check credits the ego's own build-up.
-    actuator_floor: ActuatorFloor,
-    /// The last [`Controller::known_braking`] asked for, `(t_f, now, known)`: a step asks
-    /// for the same several times.
-    #[allow(clippy::type_complexity)]
-    known_memo: core::cell::Cell<
-        Option<(
-            u64,
-            u64,
-            (
-                table_format::rear::KnownBraking,
-                table_format::rear::GentlePart,
-            ),
-        )>,
-    >,
     /// The braking ramp under way (`None`: the last command passed the look-ahead): the
     /// commands follow it since its start, not only from now (module docs: the braking ramp).
     ramp: Option<Ramp>,
@@ -609,8 +585,6 @@ impl<'t> Controller<'t> {
             events: Deque::new(),
             issued: IssuedCommands::new(),
             reported: IssuedCommands::new(),
-            actuator_floor: ActuatorFloor::new(),
-            known_memo: core::cell::Cell::new(None),
             ramp: None,
             passed: false,
             in_force: None,
@@ -788,8 +762,6 @@ impl<'t> Controller<'t> {
         self.lights_hold = None;
         self.lights_way_down = false;
         self.issued.forget();
-        self.actuator_floor.forget();
-        self.known_memo.set(None);
         self.ramp = None;
         self.in_force = None;
         self.last_command = None;
@@ -939,7 +911,6 @@ impl<'t> Controller<'t> {
         // Every command goes to the actuator: the look-ahead of later steps must know it.
         let keep_from = self.keep_commands_from(now);
         self.issued.push(now, command.acceleration, keep_from);
-        self.record_for_build_up(now, command.acceleration, model.as_ref());
         // The ramp (module docs): a command at or below the ramp's floor follows a ramp. One under
         // way keeps its start and reference; a new one starts now through the command itself
         // (reference `c + j h`, the command being the ramp's first: below the committed ramp
