@@ -67,7 +67,7 @@
 //! dead time in which the commands already issued act, then a first-order lag. Any ego whose
 //! acceleration is at least `-level + g(s)` with `0 <= g <= level` covers at least the
 //! distance of an ego braking at `level` at once that starts `int g` faster and `int s g`
-//! further back ([`EgoBuildUp::credit`] derives it and the lag's `g`), so
+//! further back ([`KnownBraking::credit`] derives it, [`EgoBuildUp`] the lag's `g`), so
 //! [`rear_gap_built_up`] is the closed form there (the larger of it and the value at once).
 //! A lower bound of the ego's acceleration needs an actuator no faster than the one argued
 //! with: a dead time and lag declared as the slowest the actuator may be (as the front needs)
