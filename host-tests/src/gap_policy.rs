@@ -651,54 +651,20 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
             c.steady_gap_with(v, 9.8, firmware::Braking { level, ..full })
         })
     };
+    // Each lever: what changes, the braking it allows, and the firmware it is measured with.
     let levers = [
-        (
-            "declared errors and delays (the firmware's argument)",
-            declared_rear,
-            at(&comfort, declared_rear),
-        ),
-        (
-            "the follower credited with its IDM's output until it reacts",
-            credited_rear,
-            at(&comfort, credited_rear),
-        ),
-        (
-            "the follower known exactly and at once",
-            exact_rear,
-            at(&comfort, exact_rear),
-        ),
-        (
-            "known exactly and at once, and credited with its IDM's output",
-            both_rear,
-            at(&comfort, both_rear),
-        ),
-        (
-            "a brake lag of 0.1 s (declared 0.3 s)",
-            declared_rear,
-            at(&faster, declared_rear),
-        ),
-        ("all three", both_rear, at(&faster, both_rear)),
-        (
-            "the ego's dead time and lag credited in the rear check, in closed form (rear_gap_built_up; not argued by the firmware: it needs an actuator no faster than declared)",
-            built_up_rear,
-            at(&comfort, built_up_rear),
-        ),
-        (
-            "that, and the follower known exactly and at once (its reaction from the lights)",
-            built_up_exact,
-            at(&comfort, built_up_exact),
-        ),
-        (
-            "the ego's build-up credited in the rear check, by integration (dead time, lag and its 12 m/s^3 ramp)",
-            through_rear,
-            at(&comfort, through_rear),
-        ),
-        (
-            "the build-up by integration, and the follower known exactly and at once (its reaction from the lights)",
-            through_exact,
-            at(&comfort, through_exact),
-        ),
-    ];
+        ("declared errors and delays (the firmware's argument)", declared_rear, &comfort),
+        ("the follower credited with its IDM's output until it reacts", credited_rear, &comfort),
+        ("the follower known exactly and at once", exact_rear, &comfort),
+        ("known exactly and at once, and credited with its IDM's output", both_rear, &comfort),
+        ("a brake lag of 0.1 s (declared 0.3 s)", declared_rear, &faster),
+        ("all three", both_rear, &faster),
+        ("the ego's dead time and lag credited in the rear check, in closed form (rear_gap_built_up; not argued by the firmware: it needs an actuator no faster than declared)", built_up_rear, &comfort),
+        ("that, and the follower known exactly and at once (its reaction from the lights)", built_up_exact, &comfort),
+        ("the ego's build-up credited in the rear check, by integration (dead time, lag and its 12 m/s^3 ramp)", through_rear, &comfort),
+        ("the build-up by integration, and the follower known exactly and at once (its reaction from the lights)", through_exact, &comfort),
+    ]
+    .map(|(name, b, c)| (name, b, at(c, b)));
     println!();
     println!(
         "At 30 m/s against a 9.8 m/s^2 leader, the firmware's follower 1 s behind (up to the IDM's top for 1.15 s, then its clip at once):"
