@@ -151,6 +151,19 @@ struct CertificateArgs {
 }
 
 impl CertificateArgs {
+    /// These arguments as they are given on the command line (nothing for the defaults), for
+    /// a command that must run with the same certificate.
+    fn flags(&self) -> String {
+        let mut flags = String::new();
+        if self.authorities == AuthoritiesArg::Two {
+            flags.push_str(" --authorities two");
+        }
+        if let Some(b) = self.leader_braking {
+            flags.push_str(&format!(" --leader-braking {b}"));
+        }
+        flags
+    }
+
     /// The table's bytes with the leader declared, and the configuration.
     fn resolve(&self, bytes: &'static [u8]) -> Result<(&'static [u8], firmware::Config)> {
         let bytes = match self.leader_braking {
@@ -290,6 +303,12 @@ fn falsify(
     follower_reacts: bool,
 ) -> Result<()> {
     use host_tests::falsify::{search, Budget};
+    // The replay runs the certificate and table it is given, not the file's: the hint at the
+    // end carries the search's own (a finding of two authorities replayed in the band is
+    // clean).
+    let table_flag = table
+        .as_ref()
+        .map_or(String::new(), |t| format!(" --table {}", t.display()));
     positive_count("episodes", episodes)?;
     positive_seconds("seconds", seconds)?;
     anyhow::ensure!(
@@ -343,8 +362,9 @@ fn falsify(
     anyhow::ensure!(
         collisions == 0 && losses == 0,
         "the search broke the certificate: {collisions} collisions and {losses} certificate \
-         losses; replay them with `host-tests replay {} --finding K`",
-        path.display()
+         losses; replay them with `host-tests replay {} --finding K{}{table_flag}`",
+        path.display(),
+        certificate.flags()
     );
     Ok(())
 }
@@ -854,4 +874,31 @@ fn scenarios(
         "{failed_graded} runs of the graded policy failed (a collision, a loss, ISO 15622 in scope, or their own check)"
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The replay hint repeats the search's certificate: nothing for the defaults, the flags
+    /// as given otherwise (without them a two-authority finding replayed in the band).
+    #[test]
+    fn the_certificate_flags_are_the_command_lines() {
+        let band = CertificateArgs {
+            authorities: AuthoritiesArg::Band,
+            leader_braking: None,
+        };
+        assert_eq!(band.flags(), "");
+        let two = CertificateArgs {
+            authorities: AuthoritiesArg::Two,
+            leader_braking: Some(9.8),
+        };
+        assert_eq!(two.flags(), " --authorities two --leader-braking 9.8");
+        let parsed = Args::try_parse_from(
+            ["host-tests", "replay", "f.json", "--finding", "0"]
+                .into_iter()
+                .chain(two.flags().split_whitespace()),
+        );
+        assert!(parsed.is_ok(), "the flags parse back");
+    }
 }
