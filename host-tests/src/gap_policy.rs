@@ -86,7 +86,7 @@ pub fn braking_a_follower_allows_built_up(
         acceleration: 0.0,
         commands: 0.0,
         known_for,
-        lag: config.plant.actuator_lag_us as f32 * 1e-6,
+        lag: EgoActuator::declared(config).lag,
     };
     allowed_at_the_worst_corner(config, model, follower, delay, Some(build_up), time_gap, v)
 }
@@ -631,7 +631,7 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     // The closed form's credit: the commands already issued known for the track's age at the
     // check (the delay less the lights' bound) and the dead time; with exact sensors, a fresh
     // measurement (the dead time alone).
-    let dead_time = config.plant.actuator_dead_time_us as f32 * 1e-6;
+    let dead_time = actuator.dead_time;
     let built_up_rear = braking_a_follower_allows_built_up(
         &config,
         &model,
