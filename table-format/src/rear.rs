@@ -278,12 +278,15 @@ impl EgoBuildUp {
     /// `p` from `a_0` for `known_for` ([`lag_segment`]), between `a_0` and `p`.
     /// [`KnownBraking::NOTHING`] where an argument is NaN or not finite.
     pub fn known(&self) -> KnownBraking {
-        let (a_0, p) = (self.acceleration.min(0.0), self.commands.min(0.0));
-        let (t, tau) = (self.known_for.max(0.0), self.lag.max(0.0));
-        let finite = a_0.is_finite() && p.is_finite() && t.is_finite() && tau.is_finite();
+        // Checked before clamping: `min` and `max` drop a NaN, and a NaN bound is no bound.
+        let finite = [self.acceleration, self.commands, self.known_for, self.lag]
+            .iter()
+            .all(|x| x.is_finite());
         if !finite {
             return KnownBraking::NOTHING;
         }
+        let (a_0, p) = (self.acceleration.min(0.0), self.commands.min(0.0));
+        let (t, tau) = (self.known_for.max(0.0), self.lag.max(0.0));
         let (speed, moment, at_end) = lag_segment(a_0, p, t, tau);
         KnownBraking {
             known_for: t,
@@ -683,6 +686,38 @@ mod tests {
             a = next_a;
             mean
         })
+    }
+
+    /// A bound that is NaN or not finite earns no credit (clamping it at zero would have
+    /// credited an unknown acceleration as zero).
+    #[test]
+    fn a_bound_that_is_not_a_number_earns_no_credit() {
+        let known = EgoBuildUp {
+            acceleration: 0.0,
+            commands: 0.0,
+            known_for: 0.2,
+            lag: 0.3,
+        };
+        assert!(known.credit(5.0).1 > 0.0);
+        for bad in [f32::NAN, f32::NEG_INFINITY] {
+            for b in [
+                EgoBuildUp {
+                    acceleration: bad,
+                    ..known
+                },
+                EgoBuildUp {
+                    commands: bad,
+                    ..known
+                },
+                EgoBuildUp {
+                    known_for: bad,
+                    ..known
+                },
+                EgoBuildUp { lag: bad, ..known },
+            ] {
+                assert_eq!(b.credit(5.0), (0.0, 0.0), "{b:?}");
+            }
+        }
     }
 
     proptest! {
