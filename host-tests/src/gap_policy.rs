@@ -5,6 +5,7 @@
 use anyhow::{Context, Result};
 use table_format::rear::{allowed_braking, rear_gap_built_up, EgoBuildUp, ReactingFollower};
 
+use crate::floor::reacting_follower_acceleration;
 use crate::humans::HumanModel;
 use crate::sim::{lowest_gap, Actuator, ActuatorModel, Car};
 
@@ -236,18 +237,7 @@ fn least_rear_gap(
         };
         brake.request(k * STEP_US, command);
         let a_ego = brake.advance(k * STEP_US, STEP_US);
-        let a_follower = if t < reacts_at {
-            if behind.v >= top {
-                0.0
-            } else {
-                follower.reaction_acceleration
-            }
-        } else if follower.jerk.is_infinite() {
-            -follower.braking
-        } else {
-            (follower.reaction_acceleration - follower.jerk * (t - reacts_at))
-                .max(-follower.braking)
-        };
+        let a_follower = reacting_follower_acceleration(follower, t, reacts_at, behind.v, top);
         least = least.min(lowest_gap(ego, a_ego, behind, a_follower, h));
         ego.advance(a_ego, h);
         behind.advance(a_follower, h);
@@ -393,11 +383,13 @@ pub fn run(out: &std::path::Path) -> Result<()> {
     }
     let allowed = braking_at_exact_states(bytes)?;
     let authorities = gaps_with_two_authorities(bytes, out)?;
+    let floors = floors_under_every_certificate(bytes)?;
     let report = serde_json::json!({
         "by_speed": rows,
         "front_certified_share": shares,
         "braking_the_follower_allows": allowed,
         "two_authorities": authorities,
+        "floors": floors,
     });
     std::fs::write(
         out.join("gap-policy.json"),
@@ -651,6 +643,29 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
             c.steady_gap_with(v, 9.8, firmware::Braking { level, ..full })
         })
     };
+    // The follower where its IDM holds its speed behind the ego with the range's closest time
+    // gap (54.8 m at 30 m/s, not 2 m + 30 m: near its desired speed its free-road term slows
+    // it), the firmware's argument and the build-up by integration there.
+    let steady = idm_steady_gap(&model, model.parameter_range().0, v)
+        .ok_or_else(|| anyhow::anyhow!("the IDM has no steady state at {v} m/s"))?;
+    let table_format::FollowerModel::Idm { idm, .. } = model.follower;
+    let steady_time_gap = (steady - idm.jam_distance) / v;
+    let steady_rear = allows(&argued, steady_time_gap, v);
+    let steady_through = braking_a_follower_allows_through(
+        &config,
+        &model,
+        &argued,
+        actuator,
+        delay,
+        steady_time_gap,
+        v,
+    );
+    let at_steady_state = format!(
+        "the follower at its IDM's steady state ({steady:.1} m behind), the firmware's argument"
+    );
+    let at_steady_state_through = format!(
+        "the follower at its IDM's steady state ({steady:.1} m), the build-up by integration"
+    );
     // Each lever: what changes, the braking it allows, and the firmware it is measured with.
     let levers = [
         ("declared errors and delays (the firmware's argument)", declared_rear, &comfort),
@@ -663,6 +678,8 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
         ("that, and the follower known exactly and at once (its reaction from the lights)", built_up_exact, &comfort),
         ("the ego's build-up credited in the rear check, by integration (dead time, lag and its 12 m/s^3 ramp)", through_rear, &comfort),
         ("the build-up by integration, and the follower known exactly and at once (its reaction from the lights)", through_exact, &comfort),
+        (at_steady_state.as_str(), steady_rear, &comfort),
+        (at_steady_state_through.as_str(), steady_through, &comfort),
     ]
     .map(|(name, b, c)| (name, b, at(c, b)));
     println!();
@@ -758,4 +775,227 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     )?;
     println!("{}", file.display());
     Ok(serde_json::Value::Array(rows))
+}
+
+/// The gap at which the follower's IDM, at its time gap `time_gap`, holds its speed behind an
+/// ego at its own speed `v`: its steady state, m (bisection to 1 mm); `None` where none is
+/// within 1 km (at or above its desired speed).
+pub fn idm_steady_gap(model: &HumanModel, time_gap: f32, v: f32) -> Option<f32> {
+    let accelerates = |gap: f32| model.follower_acceleration(v, v, gap, time_gap) > 0.0;
+    let (mut lo, mut hi) = (0.0f32, 1000.0f32);
+    if !accelerates(hi) {
+        return None;
+    }
+    while hi - lo > 1e-3 {
+        let mid = 0.5 * (lo + hi);
+        if accelerates(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    Some(hi)
+}
+
+/// One row of [`floor_rows`]: a steady-following scene, the floor under every certificate there
+/// and the firmware's certified steady gap.
+#[derive(Debug, Clone)]
+pub struct FloorRow {
+    /// The leader's hardest braking, m/s^2.
+    pub leader_braking: f32,
+    /// Every car's speed, m/s.
+    pub speed: f32,
+    /// Which follower, where.
+    pub follower: String,
+    /// The true gap from the follower to the ego, m.
+    pub follower_gap: f32,
+    /// The floor ([`crate::floor::floor`]), true gaps.
+    pub floor: crate::floor::Floor,
+    /// The floor as the least measured gap whose error box clears it, m.
+    pub floor_measured: f32,
+    /// The firmware's certified steady gap (a measured gap) with the braking the follower
+    /// allows by its argument ([`braking_a_follower_allows`]), m; `None` where it allows none.
+    pub certified: Option<f32>,
+}
+
+/// The floor under every certificate of the model ([`crate::floor`]) beside the firmware's
+/// certified steady gap, for each leader's braking in `leaders` and speed in `speeds`: the
+/// firmware's follower 0.6, 1 and 2 s behind (plus the IDM's jam distance) and at its IDM's
+/// steady state with the range's closest time gap ([`idm_steady_gap`]; where it has one), and
+/// R157's careful driver 1 s behind. The leader's braking is learnt the rear track's age and a
+/// period late, the worst the declaration allows; the default configuration and `bytes`' model.
+pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<FloorRow>> {
+    use crate::floor::{floor, Scene};
+    let table = table_format::Table::parse(bytes)?;
+    let model = crate::humans::HumanModel::of(&table)
+        .ok_or_else(|| anyhow::anyhow!("the default table is not a split table"))?;
+    let config = firmware::Config::default();
+    let declared = config.certificate.emergency;
+    let full = declared.braking;
+    let comfort = firmware::Controller::new(bytes, config);
+    let argued = comfort
+        .certifier()
+        .map(|c| c.reacting_follower())
+        .ok_or_else(|| anyhow::anyhow!("the default table is refused"))?;
+    let careful = ReactingFollower::careful_driver(model.max_speed);
+    let table_format::FollowerModel::Idm { idm, .. } = model.follower;
+    let closest = model.parameter_range().0;
+    let sensors = config.sensors;
+    let know = (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6;
+    let actuator = EgoActuator::declared(&config);
+    let delay = know
+        + declared.lights_on_within(
+            actuator.dead_time,
+            actuator.lag,
+            0.0,
+            0.0,
+            0.0,
+            full.jerk,
+            full.level,
+        );
+    let mut rows = Vec::new();
+    for &leader in leaders {
+        for &v in speeds {
+            let mut cases: Vec<(String, ReactingFollower, f32)> = [0.6f32, 1.0, 2.0]
+                .iter()
+                .map(|&t| {
+                    (
+                        format!("the firmware's, {t} s behind"),
+                        argued,
+                        idm.jam_distance + t * v,
+                    )
+                })
+                .collect();
+            if let Some(g) = idm_steady_gap(&model, closest, v) {
+                cases.push((
+                    format!("the firmware's, at its IDM's steady state ({closest} s)"),
+                    argued,
+                    g,
+                ));
+            }
+            cases.push((
+                "R157's careful driver, 1 s behind".to_string(),
+                careful,
+                idm.jam_distance + v,
+            ));
+            for (name, follower, follower_gap) in cases {
+                let scene = Scene {
+                    speed: v,
+                    leader_braking: leader,
+                    follower_gap,
+                    follower,
+                    lights_deceleration: declared.lights_deceleration,
+                    front_margin: config.certificate.front_margin,
+                    rear_margin: config.certificate.rear_margin,
+                };
+                let floor = floor(&scene, actuator, know, full.level);
+                let time_gap = (follower_gap - idm.jam_distance) / v;
+                let certified = braking_a_follower_allows(
+                    &config, &model, &follower, delay, time_gap, v,
+                )
+                .map(|level| {
+                    comfort.steady_gap_with(v, leader, firmware::Braking { level, ..full })
+                });
+                rows.push(FloorRow {
+                    leader_braking: leader,
+                    speed: v,
+                    follower: name,
+                    follower_gap,
+                    floor,
+                    floor_measured: floor.gap * (1.0 + sensors.error.range_relative)
+                        + sensors.error.range,
+                    certified,
+                });
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// [`floor_rows`] at leaders braking at 6 and 9.8 m/s^2 and 10, 20 and 30 m/s, and at 30 m/s
+/// against 9.8 m/s^2 with the firmware's follower 1 s behind the best braking of
+/// [`crate::floor::best_gentle_then_hard`]'s scan. Printed and returned for the report.
+fn floors_under_every_certificate(bytes: &[u8]) -> Result<serde_json::Value> {
+    use crate::floor::{best_gentle_then_hard, Scene};
+    let config = firmware::Config::default();
+    let declared = config.certificate.emergency;
+    let full = declared.braking;
+    let actuator = EgoActuator::declared(&config);
+    let sensors = config.sensors;
+    let know = (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6;
+    let rows = floor_rows(bytes, &[6.0, 9.8], &[10.0, 20.0, 30.0])?;
+    let lights = rows.first().map_or(f32::NAN, |r| r.floor.lights_at);
+    let cell = |g: Option<f32>| g.map_or("-".to_string(), |g| format!("{g:.1}"));
+    println!();
+    println!(
+        "The floor under every certificate of the model (host_tests::floor): the least true steady gap to the leader any braking of the ego keeps: the larger of the gap its hardest, earliest braking keeps alone and the gap for stopping behind the leader's stop and ahead of the follower's, the truth known, the leader's braking learnt {know:.2} s late (the rear track's age and a period), the lights at the earliest ({lights:.3} s: the ramp at {:.0} m/s^3 through the declared dead time and lag); as a measured gap (the range's error over it); beside the firmware's certified steady gap:",
+        actuator.jerk
+    );
+    println!("| leader [m/s^2] | speed [m/s] | follower | its gap [m] | floor, true gap [m] | floor as a measured gap [m] | the firmware's certified steady gap [m] |");
+    println!("|---|---|---|---|---|---|---|");
+    let mut json = Vec::new();
+    for r in &rows {
+        println!(
+            "| {} | {:.0} | {} | {:.1} | {:.1} | {:.1} | {} |",
+            r.leader_braking,
+            r.speed,
+            r.follower,
+            r.follower_gap,
+            r.floor.gap,
+            r.floor_measured,
+            cell(r.certified)
+        );
+        json.push(serde_json::json!({
+            "leader_braking_m_s2": r.leader_braking,
+            "speed_m_s": r.speed,
+            "follower": r.follower,
+            "follower_gap_m": r.follower_gap,
+            "floor_true_gap_m": r.floor.gap,
+            "floor_behind_the_follower_m": r.floor.behind_the_follower,
+            "floor_alone_m": r.floor.alone,
+            "floor_measured_gap_m": r.floor_measured,
+            "certified_steady_gap_m": r.certified,
+        }));
+    }
+    let v = 30.0f32;
+    let at = rows.iter().find(|r| {
+        r.leader_braking == 9.8
+            && r.speed == v
+            && r.follower.ends_with(", 1 s behind")
+            && r.follower.starts_with("the firmware's")
+    });
+    let argued = firmware::Controller::new(bytes, config)
+        .certifier()
+        .map(|c| c.reacting_follower())
+        .ok_or_else(|| anyhow::anyhow!("the default table is refused"))?;
+    let scene = Scene {
+        speed: v,
+        leader_braking: 9.8,
+        follower_gap: at.map_or(f32::NAN, |r| r.follower_gap),
+        follower: argued,
+        lights_deceleration: declared.lights_deceleration,
+        front_margin: config.certificate.front_margin,
+        rear_margin: config.certificate.rear_margin,
+    };
+    let reaching = best_gentle_then_hard(&scene, actuator, know, full.level);
+    if let (Some(r), Some((gap, b))) = (at, reaching) {
+        println!(
+            "At {v:.0} m/s against 9.8 m/s^2, the firmware's follower 1 s behind: floor {:.1} m ({:.1} m measured). A braking reaches it (brute force): lights at the earliest, {:.1} m/s^2 until {:.2} s, then {:.2} m/s^2 keeps {gap:.1} m. At this speed 1.8 s + 4 m is {:.1} m.",
+            r.floor.gap,
+            r.floor_measured,
+            b.hold,
+            b.switch_at,
+            b.level,
+            1.8 * v + 4.0
+        );
+    }
+    json.push(serde_json::json!({
+        "reaching_the_floor_at_30_m_s_leader_9_8_firmware_follower_1_s": reaching.map(|(gap, b)| serde_json::json!({
+            "gap_kept_m": gap,
+            "hold_m_s2": b.hold,
+            "switch_at_s": b.switch_at,
+            "level_m_s2": b.level,
+        })),
+    }));
+    Ok(serde_json::Value::Array(json))
 }

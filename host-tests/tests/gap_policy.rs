@@ -3,7 +3,8 @@
 use firmware::Config;
 use host_tests::gap_policy::{
     braking_a_follower_allows, braking_a_follower_allows_built_up,
-    braking_a_follower_allows_through, crediting_its_idm, with_exact_sensors, EgoActuator,
+    braking_a_follower_allows_through, crediting_its_idm, floor_rows, with_exact_sensors,
+    EgoActuator,
 };
 use host_tests::humans::HumanModel;
 use table_format::rear::ReactingFollower;
@@ -146,5 +147,27 @@ fn the_closed_form_build_up_credit_is_below_the_integration_and_close() {
                 .expect("a braking is allowed");
         assert!(closed <= brute + 2e-3, "{closed} above {brute}");
         assert!(closed > brute - 0.01, "{closed} far below {brute}");
+    }
+}
+
+/// The firmware never certifies a steady gap below the floor under every certificate of its
+/// model (`host_tests::floor`): were it to, one of the two would be wrong. Leaders at 6 and
+/// 9.8 m/s^2, 2.5 to 35 m/s, every follower of `floor_rows`.
+#[test]
+fn the_firmware_never_certifies_below_the_floor() {
+    let speeds: Vec<f32> = (1..=14).map(|k| k as f32 * 2.5).collect();
+    let rows = floor_rows(firmware::DEFAULT_TABLE, &[6.0, 9.8], &speeds).expect("the rows");
+    assert!(rows.len() >= 2 * 14 * 4);
+    for r in rows {
+        if let Some(certified) = r.certified {
+            assert!(
+                certified >= r.floor_measured,
+                "{} m/s^2, {} m/s, {}: certified {certified} below the floor {}",
+                r.leader_braking,
+                r.speed,
+                r.follower,
+                r.floor_measured
+            );
+        }
     }
 }
