@@ -10,7 +10,8 @@
 //! adversarial search ([`host_tests::falsify`]), prints its figures per method, writes
 //! `DIR/findings.json`, and exits non-zero on any collision or certificate loss.
 //! `replay FINDINGS (--worst METHOD | --finding K) [--out DIR]` replays one case of a findings
-//! file to `DIR/trace.json` and `DIR/trace.png`.
+//! file to `DIR/trace.json` and `DIR/trace.png`, with the certificate and table the search
+//! recorded in the file unless given others.
 
 use std::path::PathBuf;
 
@@ -129,7 +130,10 @@ fn table_bytes(table: &Option<PathBuf>) -> Result<&'static [u8]> {
 }
 
 /// Which brakings the firmware's certificate argues with ([`firmware::Authorities`]).
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "snake_case")]
 enum AuthoritiesArg {
     /// The comfort band alone, the rear half the table's (the default configuration).
     Band,
@@ -137,12 +141,22 @@ enum AuthoritiesArg {
     Two,
 }
 
+impl AuthoritiesArg {
+    /// As the command line spells it.
+    fn flag(self) -> &'static str {
+        match self {
+            AuthoritiesArg::Band => "band",
+            AuthoritiesArg::Two => "two",
+        }
+    }
+}
+
 /// The certificate's configuration and the leader it is run against.
-#[derive(clap::Args)]
+#[derive(clap::Args, Clone, Debug, PartialEq)]
 struct CertificateArgs {
-    /// Which brakings the certificate argues with.
-    #[arg(long, value_enum, default_value_t = AuthoritiesArg::Band)]
-    authorities: AuthoritiesArg,
+    /// Which brakings the certificate argues with [default: band; `replay`: the search's].
+    #[arg(long, value_enum)]
+    authorities: Option<AuthoritiesArg>,
     /// The leader's hardest braking, m/s^2 (positive): the table's leader declared anew
     /// (`table_format::with_leader`; the rear table does not depend on it). The table's own
     /// without it.
@@ -151,11 +165,16 @@ struct CertificateArgs {
 }
 
 impl CertificateArgs {
+    /// The authorities, the comfort band unless given.
+    fn authorities(&self) -> AuthoritiesArg {
+        self.authorities.unwrap_or(AuthoritiesArg::Band)
+    }
+
     /// These arguments as they are given on the command line (nothing for the defaults), for
     /// a command that must run with the same certificate.
     fn flags(&self) -> String {
         let mut flags = String::new();
-        if self.authorities == AuthoritiesArg::Two {
+        if self.authorities() == AuthoritiesArg::Two {
             flags.push_str(" --authorities two");
         }
         if let Some(b) = self.leader_braking {
@@ -190,7 +209,7 @@ impl CertificateArgs {
             None => bytes,
         };
         let mut config = firmware::Config::default();
-        config.certificate.authorities = match self.authorities {
+        config.certificate.authorities = match self.authorities() {
             AuthoritiesArg::Band => firmware::Authorities::ComfortBand,
             AuthoritiesArg::Two => firmware::Authorities::Two,
         };
@@ -312,10 +331,15 @@ fn falsify(
     positive_count("episodes", episodes)?;
     positive_seconds("seconds", seconds)?;
     anyhow::ensure!(
-        !follower_reacts || certificate.authorities == AuthoritiesArg::Two,
+        !follower_reacts || certificate.authorities() == AuthoritiesArg::Two,
         "--follower-reacts needs --authorities two: the comfort band's rear half argues with \
          the table's IDM, which sees the ego at once"
     );
+    let searched = Searched {
+        authorities: certificate.authorities(),
+        leader_braking: certificate.leader_braking,
+        table: table.clone(),
+    };
     let (bytes, config) = certificate.resolve(table_bytes(table)?)?;
     let (table, model) = split_table(bytes)?;
     let setting = search_setting(bytes, &table, model, config, follower_reacts)?;
@@ -356,7 +380,9 @@ fn falsify(
     );
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let path = out.join("findings.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&report)?)
+    let mut written = serde_json::to_value(&report)?;
+    written["certificate"] = serde_json::to_value(&searched)?;
+    std::fs::write(&path, serde_json::to_string_pretty(&written)?)
         .with_context(|| format!("writing {}", path.display()))?;
     println!("wrote {}", path.display());
     anyhow::ensure!(
@@ -367,6 +393,73 @@ fn falsify(
         certificate.flags()
     );
     Ok(())
+}
+
+/// The certificate and table a search ran with, as `falsify` records them in its findings
+/// file, so that `replay` runs the same ones: a finding replayed with another certificate is
+/// another episode (one of two authorities replayed in the band came out clean).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+struct Searched {
+    /// `--authorities`.
+    authorities: AuthoritiesArg,
+    /// `--leader-braking`, m/s^2 (`None`: the table's own).
+    leader_braking: Option<f32>,
+    /// `--table` (`None`: the firmware's default table).
+    table: Option<PathBuf>,
+}
+
+impl Searched {
+    /// What `replay` runs: each of the certificate's flags and the table as given on its
+    /// command line, or else as the search recorded it (the defaults where the file records
+    /// nothing), with a note for each given flag that differs from the record and for a file
+    /// that records nothing.
+    fn replayed(
+        recorded: Option<Searched>,
+        given: &CertificateArgs,
+        table: &Option<PathBuf>,
+    ) -> (CertificateArgs, Option<PathBuf>, Vec<String>) {
+        let mut notes = Vec::new();
+        let Some(r) = recorded else {
+            notes.push(
+                "the findings file does not record the search's certificate (written before \
+                 falsify recorded it): replaying the one given"
+                    .to_string(),
+            );
+            return (given.clone(), table.clone(), notes);
+        };
+        let authorities = given.authorities.unwrap_or(r.authorities);
+        if authorities != r.authorities {
+            notes.push(format!(
+                "replaying with --authorities {} where the search ran {}",
+                authorities.flag(),
+                r.authorities.flag()
+            ));
+        }
+        let leader_braking = given.leader_braking.or(r.leader_braking);
+        if leader_braking != r.leader_braking {
+            notes.push(format!(
+                "replaying with the leader braking at {leader_braking:?} m/s^2 where the search \
+                 ran {:?} (None: the table's own)",
+                r.leader_braking
+            ));
+        }
+        let table = table.clone().or(r.table.clone());
+        if table != r.table {
+            notes.push(format!(
+                "replaying with the table {table:?} where the search ran {:?} (None: the \
+                 firmware's default)",
+                r.table
+            ));
+        }
+        (
+            CertificateArgs {
+                authorities: Some(authorities),
+                leader_braking,
+            },
+            table,
+            notes,
+        )
+    }
 }
 
 fn replay(
@@ -399,7 +492,16 @@ fn replay(
     };
     let case: Case = serde_json::from_value(entry["case"].clone())
         .context("the entry's case does not decode")?;
-    let (bytes, config) = certificate.resolve(table_bytes(table)?)?;
+    let recorded = json
+        .get("certificate")
+        .map(|c| serde_json::from_value::<Searched>(c.clone()))
+        .transpose()
+        .with_context(|| format!("{}: its `certificate` does not decode", findings.display()))?;
+    let (certificate, table, notes) = Searched::replayed(recorded, certificate, table);
+    for note in notes {
+        println!("note: {note}");
+    }
+    let (bytes, config) = certificate.resolve(table_bytes(&table)?)?;
     let (table, model) = split_table(bytes)?;
     let setting = search_setting(bytes, &table, model, config, case.follower_reacts)?;
     let mut trace = Trace::new();
@@ -885,12 +987,12 @@ mod tests {
     #[test]
     fn the_certificate_flags_are_the_command_lines() {
         let band = CertificateArgs {
-            authorities: AuthoritiesArg::Band,
+            authorities: None,
             leader_braking: None,
         };
         assert_eq!(band.flags(), "");
         let two = CertificateArgs {
-            authorities: AuthoritiesArg::Two,
+            authorities: Some(AuthoritiesArg::Two),
             leader_braking: Some(9.8),
         };
         assert_eq!(two.flags(), " --authorities two --leader-braking 9.8");
@@ -900,5 +1002,41 @@ mod tests {
                 .chain(two.flags().split_whitespace()),
         );
         assert!(parsed.is_ok(), "the flags parse back");
+    }
+
+    /// `replay` runs the certificate and table the search recorded, unless its command line
+    /// says otherwise (with a note for each difference), and says so where the file records
+    /// none; the record is what `falsify` writes and decodes back.
+    #[test]
+    fn a_replay_runs_the_searchs_certificate() {
+        let searched = Searched {
+            authorities: AuthoritiesArg::Two,
+            leader_braking: Some(9.8),
+            table: Some(PathBuf::from("t.bin")),
+        };
+        let written = serde_json::to_value(&searched).unwrap();
+        assert_eq!(written["authorities"], "two");
+        let recorded: Searched = serde_json::from_value(written).unwrap();
+        assert_eq!(recorded, searched);
+        let nothing = CertificateArgs {
+            authorities: None,
+            leader_braking: None,
+        };
+        let (c, t, notes) = Searched::replayed(Some(searched.clone()), &nothing, &None);
+        assert_eq!(c.authorities(), AuthoritiesArg::Two);
+        assert_eq!(c.leader_braking, Some(9.8));
+        assert_eq!(t, searched.table);
+        assert!(notes.is_empty(), "{notes:?}");
+        let band = CertificateArgs {
+            authorities: Some(AuthoritiesArg::Band),
+            leader_braking: None,
+        };
+        let (c, _, notes) = Searched::replayed(Some(searched.clone()), &band, &None);
+        assert_eq!(c.authorities(), AuthoritiesArg::Band);
+        assert_eq!(c.leader_braking, Some(9.8));
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        let (c, t, notes) = Searched::replayed(None, &nothing, &None);
+        assert_eq!((c, t), (nothing, None));
+        assert_eq!(notes.len(), 1, "{notes:?}");
     }
 }
