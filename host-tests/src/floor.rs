@@ -341,6 +341,33 @@ pub fn best_gentle_then_hard(
     best
 }
 
+/// The best braking of the firmware's form in `scene`, driven as [`best_gentle_then_hard`]
+/// drives its own: one level, ramped to at the build-up from the moment the ego learns of the
+/// leader's braking and held, the hardest from 0.2 m/s^2 past the lights' deceleration up to
+/// `full` the rear allows ([`hardest_clearing`], to 0.01 m/s^2). The least true gap to the
+/// leader it keeps, m, and the level; `None` where not even the least clears the rear. Beside the floor it is what the form costs with
+/// the truth known.
+pub fn best_level(
+    scene: &Scene,
+    actuator: EgoActuator,
+    know: f32,
+    full: f32,
+) -> Option<(f32, f32)> {
+    let held = |level: f32| GentleThenHard {
+        hold: level,
+        switch_at: 0.0,
+        level,
+    };
+    let clears =
+        |level: f32| drive(scene, actuator, know, full, held(level)).rear_least - scene.rear_margin;
+    // No braking leaves the lights off and the follower gaining for ever: the least level
+    // tried is one that lights them for sure.
+    let least = scene.lights_deceleration + 0.2;
+    let level = hardest_clearing(clears, least, full, 0.01)?;
+    let gap = drive(scene, actuator, know, full, held(level)).front_excess + scene.front_margin;
+    Some((gap, level))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -409,6 +436,11 @@ mod tests {
                 let floor = floor(&s, ACTUATOR, know, 8.0).gap;
                 let (best, braking) =
                     best_gentle_then_hard(&s, ACTUATOR, know, 8.0).expect("a braking clears");
+                let (held, level) = best_level(&s, ACTUATOR, know, 8.0).expect("a level clears");
+                assert!(
+                    held >= best - 0.05,
+                    "a level {level} keeps {held}, below {best}"
+                );
                 assert!(
                     best >= floor - 0.05 && best <= floor + 1.5,
                     "{v} m/s, {follower:?}, known after {know} s: floor {floor}, best {best} ({braking:?})"

@@ -617,6 +617,9 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     let actuator = EgoActuator::declared(&config);
     let through_rear =
         braking_a_follower_allows_through(&config, &model, &argued, actuator, delay, 1.0, v);
+    // Known exactly, with the declared delays: what the measurement's errors cost.
+    let through_known =
+        braking_a_follower_allows_through(&exact, &model, &argued, actuator, delay, 1.0, v);
     // Known exactly and at once, but its reaction from when the actuator lights the brakes.
     let through_exact =
         braking_a_follower_allows_through(&exact, &model, &argued, actuator, lights, 1.0, v);
@@ -677,6 +680,7 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
         ("the ego's dead time and lag credited in the rear check, in closed form (rear_gap_built_up; not argued by the firmware: it needs an actuator no faster than declared)", built_up_rear, &comfort),
         ("that, and the follower known exactly and at once (its reaction from the lights)", built_up_exact, &comfort),
         ("the ego's build-up credited in the rear check, by integration (dead time, lag and its 12 m/s^3 ramp)", through_rear, &comfort),
+        ("the build-up by integration, and the follower known exactly (the declared delays)", through_known, &comfort),
         ("the build-up by integration, and the follower known exactly and at once (its reaction from the lights)", through_exact, &comfort),
         (at_steady_state.as_str(), steady_rear, &comfort),
         (at_steady_state_through.as_str(), steady_through, &comfort),
@@ -916,7 +920,7 @@ pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<F
 /// against 9.8 m/s^2 with the firmware's follower 1 s behind the best braking of
 /// [`crate::floor::best_gentle_then_hard`]'s scan. Printed and returned for the report.
 fn floors_under_every_certificate(bytes: &[u8]) -> Result<serde_json::Value> {
-    use crate::floor::{best_gentle_then_hard, Scene};
+    use crate::floor::{best_gentle_then_hard, best_level, Scene};
     let config = firmware::Config::default();
     let declared = config.certificate.emergency;
     let full = declared.braking;
@@ -978,6 +982,12 @@ fn floors_under_every_certificate(bytes: &[u8]) -> Result<serde_json::Value> {
         rear_margin: config.certificate.rear_margin,
     };
     let reaching = best_gentle_then_hard(&scene, actuator, know, full.level);
+    let held = best_level(&scene, actuator, know, full.level);
+    if let Some((gap, level)) = held {
+        println!(
+            "The firmware's form there (one level from the leader's braking on, the truth known, by brute force): {level:.2} m/s^2 keeps {gap:.1} m."
+        );
+    }
     if let (Some(r), Some((gap, b))) = (at, reaching) {
         println!(
             "At {v:.0} m/s against 9.8 m/s^2, the firmware's follower 1 s behind: floor {:.1} m ({:.1} m measured). A braking reaches it (brute force): lights at the earliest, {:.1} m/s^2 until {:.2} s, then {:.2} m/s^2 keeps {gap:.1} m. At this speed 1.8 s + 4 m is {:.1} m.",
@@ -990,6 +1000,10 @@ fn floors_under_every_certificate(bytes: &[u8]) -> Result<serde_json::Value> {
         );
     }
     json.push(serde_json::json!({
+        "one_level_at_30_m_s_leader_9_8_firmware_follower_1_s": held.map(|(gap, level)| serde_json::json!({
+            "gap_kept_m": gap,
+            "level_m_s2": level,
+        })),
         "reaching_the_floor_at_30_m_s_leader_9_8_firmware_follower_1_s": reaching.map(|(gap, b)| serde_json::json!({
             "gap_kept_m": gap,
             "hold_m_s2": b.hold,
