@@ -721,6 +721,9 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     let speeds: Vec<f32> = (0..=70).map(|k| k as f32 * 0.5).collect();
     let mut panels = Vec::new();
     let argued_follower = followers[1].1;
+    let know = learnt_after(&config);
+    let table_format::FollowerModel::Idm { idm, .. } = model.follower;
+    let jam = idm.jam_distance;
     for leader in [6.0f32, 9.8] {
         let columns = [None, Some(0.6f32), Some(1.0), Some(2.0)];
         for behind in columns {
@@ -759,6 +762,15 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
                     (t, gaps)
                 })
                 .collect();
+            let floor = speeds
+                .iter()
+                .map(|&v| {
+                    let follower_gap = behind.map_or(f32::INFINITY, |t| jam + t * v);
+                    let scene = floor_scene(&config, leader, v, argued_follower, follower_gap);
+                    let f = crate::floor::floor(&scene, actuator, know, full.level);
+                    (v, if behind.is_some() { f.gap } else { f.alone })
+                })
+                .collect();
             panels.push(crate::plots::GapPanel {
                 title: match behind {
                     None => format!("leader {leader} m/s^2, no follower"),
@@ -767,6 +779,7 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
                 certified,
                 comfort_only,
                 policies,
+                floor,
             });
         }
     }
@@ -801,6 +814,33 @@ pub fn idm_steady_gap(model: &HumanModel, time_gap: f32, v: f32) -> Option<f32> 
     Some(hi)
 }
 
+/// How late the ego learns of the leader's braking at the worst, s: a track as old as the
+/// sensors declare (`latency + cycle`) and a control period.
+fn learnt_after(config: &firmware::Config) -> f32 {
+    let sensors = config.sensors;
+    (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6
+}
+
+/// The floor's scene ([`crate::floor::Scene`]) with `config`'s margins and lights: every car at
+/// `v`, the leader braking at up to `leader_braking`, `follower` `follower_gap` behind.
+fn floor_scene(
+    config: &firmware::Config,
+    leader_braking: f32,
+    v: f32,
+    follower: ReactingFollower,
+    follower_gap: f32,
+) -> crate::floor::Scene {
+    crate::floor::Scene {
+        speed: v,
+        leader_braking,
+        follower_gap,
+        follower,
+        lights_deceleration: config.certificate.emergency.lights_deceleration,
+        front_margin: config.certificate.front_margin,
+        rear_margin: config.certificate.rear_margin,
+    }
+}
+
 /// One row of [`floor_rows`]: a steady-following scene, the floor under every certificate there
 /// and the firmware's certified steady gap.
 #[derive(Debug, Clone)]
@@ -829,7 +869,7 @@ pub struct FloorRow {
 /// R157's careful driver 1 s behind. The leader's braking is learnt the rear track's age and a
 /// period late, the worst the declaration allows; the default configuration and `bytes`' model.
 pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<FloorRow>> {
-    use crate::floor::{floor, Scene};
+    use crate::floor::floor;
     let table = table_format::Table::parse(bytes)?;
     let model = crate::humans::HumanModel::of(&table)
         .ok_or_else(|| anyhow::anyhow!("the default table is not a split table"))?;
@@ -845,7 +885,7 @@ pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<F
     let table_format::FollowerModel::Idm { idm, .. } = model.follower;
     let closest = model.parameter_range().0;
     let sensors = config.sensors;
-    let know = (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6;
+    let know = learnt_after(&config);
     let actuator = EgoActuator::declared(&config);
     let delay = know
         + declared.lights_on_within(
@@ -883,15 +923,7 @@ pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<F
                 idm.jam_distance + v,
             ));
             for (name, follower, follower_gap) in cases {
-                let scene = Scene {
-                    speed: v,
-                    leader_braking: leader,
-                    follower_gap,
-                    follower,
-                    lights_deceleration: declared.lights_deceleration,
-                    front_margin: config.certificate.front_margin,
-                    rear_margin: config.certificate.rear_margin,
-                };
+                let scene = floor_scene(&config, leader, v, follower, follower_gap);
                 let floor = floor(&scene, actuator, know, full.level);
                 let time_gap = (follower_gap - idm.jam_distance) / v;
                 let certified = braking_a_follower_allows(
@@ -920,13 +952,12 @@ pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<F
 /// against 9.8 m/s^2 with the firmware's follower 1 s behind the best braking of
 /// [`crate::floor::best_gentle_then_hard`]'s scan. Printed and returned for the report.
 fn floors_under_every_certificate(bytes: &[u8]) -> Result<serde_json::Value> {
-    use crate::floor::{best_gentle_then_hard, best_level, Scene};
+    use crate::floor::{best_gentle_then_hard, best_level};
     let config = firmware::Config::default();
     let declared = config.certificate.emergency;
     let full = declared.braking;
     let actuator = EgoActuator::declared(&config);
-    let sensors = config.sensors;
-    let know = (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6;
+    let know = learnt_after(&config);
     let rows = floor_rows(bytes, &[6.0, 9.8], &[10.0, 20.0, 30.0])?;
     let lights = rows.first().map_or(f32::NAN, |r| r.floor.lights_at);
     let cell = |g: Option<f32>| g.map_or("-".to_string(), |g| format!("{g:.1}"));
@@ -972,15 +1003,13 @@ fn floors_under_every_certificate(bytes: &[u8]) -> Result<serde_json::Value> {
         .certifier()
         .map(|c| c.reacting_follower())
         .ok_or_else(|| anyhow::anyhow!("the default table is refused"))?;
-    let scene = Scene {
-        speed: v,
-        leader_braking: 9.8,
-        follower_gap: at.map_or(f32::NAN, |r| r.follower_gap),
-        follower: argued,
-        lights_deceleration: declared.lights_deceleration,
-        front_margin: config.certificate.front_margin,
-        rear_margin: config.certificate.rear_margin,
-    };
+    let scene = floor_scene(
+        &config,
+        9.8,
+        v,
+        argued,
+        at.map_or(f32::NAN, |r| r.follower_gap),
+    );
     let reaching = best_gentle_then_hard(&scene, actuator, know, full.level);
     let held = best_level(&scene, actuator, know, full.level);
     if let Some((gap, level)) = held {

@@ -226,6 +226,9 @@ pub struct GapPanel {
     pub comfort_only: Vec<(f32, f32)>,
     /// The gap policy at each setting: its time gap, s, and its gaps by speed, m.
     pub policies: Vec<(f32, Vec<(f32, f32)>)>,
+    /// The floor under every certificate of the model by speed (true gap), m
+    /// ([`crate::floor`]).
+    pub floor: Vec<(f32, f32)>,
 }
 
 /// Draws `panels` in a grid of `rows` rows to `file`, under `title`, on one gap scale.
@@ -275,6 +278,15 @@ pub fn gap_policy_panels(file: &Path, title: &str, rows: usize, panels: &[GapPan
             .legend(|(x, y)| {
                 PathElement::new(vec![(x, y), (x + 14, y)], VERMILLION.stroke_width(3))
             });
+        chart
+            .draw_series(DashedLineSeries::new(
+                finite(&panel.floor),
+                6,
+                4,
+                BLACK.stroke_width(2),
+            ))?
+            .label("floor under every certificate (true gap)")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], BLACK.stroke_width(2)));
         for ((time_gap, points), colour) in panel.policies.iter().zip(policy_colours) {
             chart
                 .draw_series(LineSeries::new(finite(points), colour.stroke_width(1)))?
