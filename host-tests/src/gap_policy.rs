@@ -716,6 +716,59 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
         .collect();
     rows.push(serde_json::json!({"levers_at_30_m_s_leader_9_8_idm_follower_1_s": levers_json}));
 
+    // The build-up credited soundly: the declaration bounds the actuator from the slow side
+    // only, and the rear needs the fast one. The ego's braking through the fastest actuator a
+    // vehicle might declare (the lowest acceleration at every instant, for commands that only
+    // fall) with the follower's reaction from the slowest's lights (the latest).
+    println!();
+    println!(
+        "The build-up credited soundly, at {v:.0} m/s against 9.8 m/s^2: the ego braking through the fastest actuator declared, the follower reacting from the slowest's lights ({:.2} s after the measurement), at 2 m + 1 s of speed and at its IDM's steady state ({steady:.1} m):",
+        delay
+    );
+    println!("| fastest actuator declared: dead time / lag [s] | braking allowed, 1 s behind [m/s^2] | certified steady gap [m] | at the IDM's steady state [m/s^2] | certified steady gap [m] |");
+    println!("|---|---|---|---|---|");
+    let mut sound = Vec::new();
+    for (dead_time, lag) in [
+        (0.0f32, 0.0f32),
+        (0.05, 0.1),
+        (0.05, 0.2),
+        (actuator.dead_time, actuator.lag),
+    ] {
+        let fastest = EgoActuator {
+            dead_time,
+            lag,
+            ..actuator
+        };
+        let behind =
+            braking_a_follower_allows_through(&config, &model, &argued, fastest, delay, 1.0, v);
+        let at_steady = braking_a_follower_allows_through(
+            &config,
+            &model,
+            &argued,
+            fastest,
+            delay,
+            steady_time_gap,
+            v,
+        );
+        let level = |b: Option<f32>| b.map_or("-".to_string(), |b| format!("{b:.2}"));
+        println!(
+            "| {dead_time} / {lag} | {} | {} | {} | {} |",
+            level(behind),
+            cell(at(&comfort, behind)),
+            level(at_steady),
+            cell(at(&comfort, at_steady))
+        );
+        sound.push(serde_json::json!({
+            "fastest_dead_time_s": dead_time,
+            "fastest_lag_s": lag,
+            "allowed_braking_1_s_behind_m_s2": behind,
+            "certified_steady_gap_1_s_behind_m": behind.map(|b| at(&comfort, Some(b))),
+            "allowed_braking_at_the_idm_steady_state_m_s2": at_steady,
+            "certified_steady_gap_at_the_idm_steady_state_m": at_steady.map(|b| at(&comfort, Some(b))),
+        }));
+    }
+    rows.push(serde_json::json!({"sound_build_up_at_30_m_s_leader_9_8": sound}));
+
     // The plot: leaders at 6 and 9.8 m/s^2 in rows; no follower, then the IDM follower that
     // reacts after 1.15 s at 0.6, 1 and 2 s behind, in columns.
     let speeds: Vec<f32> = (0..=70).map(|k| k as f32 * 0.5).collect();
@@ -866,7 +919,7 @@ pub struct FloorRow {
 /// certified steady gap, for each leader's braking in `leaders` and speed in `speeds`: the
 /// firmware's follower 0.6, 1 and 2 s behind (plus the IDM's jam distance) and at its IDM's
 /// steady state with the range's closest time gap ([`idm_steady_gap`]; where it has one), and
-/// R157's careful driver 1 s behind. The leader's braking is learnt the rear track's age and a
+/// R157's careful driver 1 s behind. The leader's braking is learnt a track's age and a
 /// period late, the worst the declaration allows; the default configuration and `bytes`' model.
 pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<FloorRow>> {
     use crate::floor::floor;
@@ -950,7 +1003,8 @@ pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<F
 
 /// [`floor_rows`] at leaders braking at 6 and 9.8 m/s^2 and 10, 20 and 30 m/s, and at 30 m/s
 /// against 9.8 m/s^2 with the firmware's follower 1 s behind the best braking of
-/// [`crate::floor::best_gentle_then_hard`]'s scan. Printed and returned for the report.
+/// [`crate::floor::best_gentle_then_hard`]'s scan and the best single level
+/// ([`crate::floor::best_level`]). Printed and returned for the report.
 fn floors_under_every_certificate(bytes: &[u8]) -> Result<serde_json::Value> {
     use crate::floor::{best_gentle_then_hard, best_level};
     let config = firmware::Config::default();
@@ -963,7 +1017,7 @@ fn floors_under_every_certificate(bytes: &[u8]) -> Result<serde_json::Value> {
     let cell = |g: Option<f32>| g.map_or("-".to_string(), |g| format!("{g:.1}"));
     println!();
     println!(
-        "The floor under every certificate of the model (host_tests::floor): the least true steady gap to the leader any braking of the ego keeps: the larger of the gap its hardest, earliest braking keeps alone and the gap for stopping behind the leader's stop and ahead of the follower's, the truth known, the leader's braking learnt {know:.2} s late (the rear track's age and a period), the lights at the earliest ({lights:.3} s: the ramp at {:.0} m/s^3 through the declared dead time and lag); as a measured gap (the range's error over it); beside the firmware's certified steady gap:",
+        "The floor under every certificate of the model (host_tests::floor): the least true steady gap to the leader any braking of the ego keeps: the larger of the gap its hardest, earliest braking keeps alone and the gap for stopping behind the leader's stop and ahead of the follower's, the truth known, the leader's braking learnt {know:.2} s late (a track's age and a period), the lights at the earliest ({lights:.3} s: the ramp at {:.0} m/s^3 through the declared dead time and lag); as a measured gap (the range's error over it); beside the firmware's certified steady gap:",
         actuator.jerk
     );
     println!("| leader [m/s^2] | speed [m/s] | follower | its gap [m] | floor, true gap [m] | floor as a measured gap [m] | the firmware's certified steady gap [m] |");
