@@ -97,8 +97,16 @@ enum Behind {
     /// None (a follower too far back to matter).
     Nobody,
     /// A driver keeping the IDM's jam distance plus `time_gap` times its speed, matching the
-    /// ego's speed (accelerating at most at the IDM's 1 m/s^2): the IDM's closest following.
+    /// ego's speed (accelerating at most at the IDM's 1 m/s^2): the IDM's desired gap, closer
+    /// than the IDM itself follows at speed (its steady state with a 1 s time gap is 54.8 m
+    /// behind an ego at 30 m/s, [`Behind::Idm`]).
     At {
+        /// s.
+        time_gap: f32,
+    },
+    /// The table's IDM with this time gap, from its steady state behind the ego
+    /// ([`host_tests::gap_policy::idm_steady_gap`]).
+    Idm {
         /// s.
         time_gap: f32,
     },
@@ -107,12 +115,15 @@ enum Behind {
 /// The ego at `speed` behind a leader holding that speed 150 m ahead, the set speed 3 m/s
 /// above it, the follower `behind`; 120 s.
 fn follow(bytes: &'static [u8], config: Config, speed: f32, behind: Behind) -> Following {
+    let table = Table::parse(bytes).unwrap();
+    let model = HumanModel::of(&table).unwrap();
     let follower_gap = match behind {
         Behind::Nobody => 1e4,
         Behind::At { time_gap } => 2.0 + time_gap * speed,
+        Behind::Idm { time_gap } => {
+            host_tests::gap_policy::idm_steady_gap(&model, time_gap, speed).unwrap()
+        }
     };
-    let table = Table::parse(bytes).unwrap();
-    let model = HumanModel::of(&table).unwrap();
     let start = Start {
         cars: [
             Car { x: 150.0, v: speed },
@@ -144,6 +155,9 @@ fn follow(bytes: &'static [u8], config: Config, speed: f32, behind: Behind) -> F
             Behind::At { time_gap } => {
                 let want = 2.0 + time_gap * follower.v;
                 (0.5 * (ego.x - follower.x - want) + (ego.v - follower.v)).clamp(-6.0, 1.0)
+            }
+            Behind::Idm { time_gap } => {
+                model.follower_acceleration(follower.v, ego.v, ego.x - follower.x, time_gap)
             }
         };
         if !world.step(0.0, a_follower, None) {
@@ -213,8 +227,8 @@ fn the_car_follows_at_the_drivers_time_gap() {
     assert!(band.settled_gap > 100.0, "{band:?}");
 }
 
-/// The follower sells the braking: a follower at the IDM's closest (its jam distance plus 1 s
-/// behind) allows less of it than the full 8 m/s^2, and the car keeps the room ahead that the
+/// The follower sells the braking: a follower at the IDM's desired gap with its closest time
+/// gap (its jam distance plus 1 s behind) allows less of it than the full 8 m/s^2, and the car keeps the room ahead that the
 /// braking it allows needs (30 m/s, the 1.0 s setting), within 2 m of the law's desired gap
 /// for the gentlest level of the last seconds (the level moves with the measurement noise),
 /// with no emergency period, against leaders braking at 6 and at 9.8 m/s^2.
@@ -236,6 +250,33 @@ fn a_close_follower_makes_the_car_keep_more_room_ahead() {
         assert!(
             (behind.settled_gap - behind.desired).abs() <= 2.0,
             "{behind:?}"
+        );
+    }
+}
+
+/// The follower's own steady state: the table's IDM at its closest time gap (1 s) holds its
+/// speed 54.8 m behind an ego at 30 m/s (its desired speed, 33.3 m/s, is near), not at its
+/// jam distance plus 1 s (32 m). Driven from there, it stays within a metre of it, and the car
+/// keeps within 2 m of the law's desired gap for the braking it allows, with no emergency
+/// period, closer than behind the follower at 32 m (`gap-policy`: 73.0 m certified against
+/// 9.8 m/s^2, 96.7 m there), against leaders braking at 6 and at 9.8 m/s^2.
+#[test]
+fn the_car_follows_closer_ahead_of_an_idm_follower_at_its_steady_state() {
+    for leader_braking in [6.0, 9.8] {
+        let bytes = table_bytes(leader_braking);
+        let table = Table::parse(bytes).unwrap();
+        let model = HumanModel::of(&table).unwrap();
+        let steady = host_tests::gap_policy::idm_steady_gap(&model, 1.0, 30.0).unwrap();
+        let idm = follow(bytes, two(0), 30.0, Behind::Idm { time_gap: 1.0 });
+        let close = follow(bytes, two(0), 30.0, Behind::At { time_gap: 1.0 });
+        println!("leader {leader_braking}: IDM follower {idm:?}\n  held at 32 m {close:?}");
+        assert!(!idm.lost && !idm.collided, "{idm:?}");
+        assert_eq!(idm.emergencies, 0, "{idm:?}");
+        assert!((idm.follower_gap - steady).abs() < 1.0, "{steady} {idm:?}");
+        assert!((idm.settled_gap - idm.desired).abs() <= 2.0, "{idm:?}");
+        assert!(
+            idm.settled_gap < close.settled_gap - 10.0,
+            "{idm:?} {close:?}"
         );
     }
 }
