@@ -50,7 +50,7 @@
 use table_format::rear::{hardest_clearing, ReactingFollower, LIGHTS_RESOLUTION};
 
 use crate::gap_policy::EgoActuator;
-use crate::sim::{lowest_gap, Actuator, ActuatorModel, Car};
+use crate::sim::{lowest_gap, Actuator, Car};
 
 /// A steady-following scene the floor is taken in. SI units.
 #[derive(Debug, Clone, Copy)]
@@ -225,10 +225,7 @@ pub fn drive(
 ) -> Drive {
     const STEP_US: u64 = 2_000;
     let h = STEP_US as f32 * 1e-6;
-    let mut brake = Actuator::new(ActuatorModel {
-        dead_time: actuator.dead_time,
-        lag: actuator.lag,
-    });
+    let mut brake = Actuator::new(actuator.model());
     let top = scene.follower.max_speed.max(scene.speed);
     let threshold = -scene.lights_deceleration;
     let ramp = actuator.jerk * h;

@@ -153,6 +153,14 @@ pub struct EgoActuator {
 }
 
 impl EgoActuator {
+    /// Its dead time and lag, as the plant's [`Actuator`] takes them.
+    pub fn model(&self) -> ActuatorModel {
+        ActuatorModel {
+            dead_time: self.dead_time,
+            lag: self.lag,
+        }
+    }
+
     /// The one `config` declares, with the emergency authority's build-up.
     pub fn declared(config: &firmware::Config) -> Self {
         EgoActuator {
@@ -208,10 +216,7 @@ fn least_rear_gap(
 ) -> f32 {
     const STEP_US: u64 = 1_000;
     let h = STEP_US as f32 * 1e-6;
-    let mut brake = Actuator::new(ActuatorModel {
-        dead_time: actuator.dead_time,
-        lag: actuator.lag,
-    });
+    let mut brake = Actuator::new(actuator.model());
     let reacts_at = follower.reaction_time + delay;
     let top = follower.max_speed.max(follower_speed);
     let mut ego = Car {
@@ -479,17 +484,14 @@ fn braking_at_exact_states(bytes: &[u8]) -> Result<serde_json::Value> {
 /// credited in the rear ([`braking_a_follower_allows_through`]). Printed, drawn to `gap-policy-authorities.png`
 /// and returned for the report.
 fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serde_json::Value> {
-    let table = table_format::Table::parse(bytes)?;
-    let model = crate::humans::HumanModel::of(&table)
-        .ok_or_else(|| anyhow::anyhow!("the default table is not a split table"))?;
-    let config = firmware::Config::default();
+    let Deployed {
+        model,
+        config,
+        comfort,
+        argued,
+    } = Deployed::on(bytes)?;
     let declared = config.certificate.emergency;
     let full = declared.braking;
-    let comfort = firmware::Controller::new(bytes, config);
-    let argued = comfort
-        .certifier()
-        .map(|c| c.reacting_follower())
-        .ok_or_else(|| anyhow::anyhow!("the default table is refused"))?;
     let followers = [
         (
             "instant (the paper's IDM at its clip)",
@@ -867,6 +869,35 @@ pub fn idm_steady_gap(model: &HumanModel, time_gap: f32, v: f32) -> Option<f32> 
     Some(hi)
 }
 
+/// The deployed table's humans, the default configuration, the firmware on it and the follower
+/// its two-authority argument takes ([`firmware::Certifier::reacting_follower`]).
+struct Deployed<'t> {
+    model: HumanModel,
+    config: firmware::Config,
+    comfort: firmware::Controller<'t>,
+    argued: ReactingFollower,
+}
+
+impl<'t> Deployed<'t> {
+    fn on(bytes: &'t [u8]) -> Result<Self> {
+        let table = table_format::Table::parse(bytes)?;
+        let model = HumanModel::of(&table)
+            .ok_or_else(|| anyhow::anyhow!("the default table is not a split table"))?;
+        let config = firmware::Config::default();
+        let comfort = firmware::Controller::new(bytes, config);
+        let argued = comfort
+            .certifier()
+            .map(|c| c.reacting_follower())
+            .ok_or_else(|| anyhow::anyhow!("the default table is refused"))?;
+        Ok(Deployed {
+            model,
+            config,
+            comfort,
+            argued,
+        })
+    }
+}
+
 /// How late the ego learns of the leader's braking at the worst, s: a track as old as the
 /// sensors declare (`latency + cycle`) and a control period.
 fn learnt_after(config: &firmware::Config) -> f32 {
@@ -923,17 +954,14 @@ pub struct FloorRow {
 /// period late, the worst the declaration allows; the default configuration and `bytes`' model.
 pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<FloorRow>> {
     use crate::floor::floor;
-    let table = table_format::Table::parse(bytes)?;
-    let model = crate::humans::HumanModel::of(&table)
-        .ok_or_else(|| anyhow::anyhow!("the default table is not a split table"))?;
-    let config = firmware::Config::default();
+    let Deployed {
+        model,
+        config,
+        comfort,
+        argued,
+    } = Deployed::on(bytes)?;
     let declared = config.certificate.emergency;
     let full = declared.braking;
-    let comfort = firmware::Controller::new(bytes, config);
-    let argued = comfort
-        .certifier()
-        .map(|c| c.reacting_follower())
-        .ok_or_else(|| anyhow::anyhow!("the default table is refused"))?;
     let careful = ReactingFollower::careful_driver(model.max_speed);
     let table_format::FollowerModel::Idm { idm, .. } = model.follower;
     let closest = model.parameter_range().0;
@@ -1007,7 +1035,7 @@ pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<F
 /// ([`crate::floor::best_level`]). Printed and returned for the report.
 fn floors_under_every_certificate(bytes: &[u8]) -> Result<serde_json::Value> {
     use crate::floor::{best_gentle_then_hard, best_level};
-    let config = firmware::Config::default();
+    let Deployed { config, argued, .. } = Deployed::on(bytes)?;
     let declared = config.certificate.emergency;
     let full = declared.braking;
     let actuator = EgoActuator::declared(&config);
@@ -1053,10 +1081,6 @@ fn floors_under_every_certificate(bytes: &[u8]) -> Result<serde_json::Value> {
             && r.follower.ends_with(", 1 s behind")
             && r.follower.starts_with("the firmware's")
     });
-    let argued = firmware::Controller::new(bytes, config)
-        .certifier()
-        .map(|c| c.reacting_follower())
-        .ok_or_else(|| anyhow::anyhow!("the default table is refused"))?;
     let scene = floor_scene(
         &config,
         9.8,
