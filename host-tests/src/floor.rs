@@ -9,17 +9,17 @@
 //! the model's own humans and the declared actuator leave to *any* ego.
 //!
 //! # The argument (stopping positions)
-//! Steady following at `v`: the leader `g` ahead, the follower `s` behind, all three at `v`, the
-//! ego's acceleration and the commands in its pipeline at zero. Two admissible humans:
+//! Steady following: the leader `g` ahead at `v_L`, the follower `s` behind, the ego's
+//! acceleration and the commands in its pipeline at zero. Two admissible humans:
 //! - the leader brakes at its hardest, `b_L`, at once from `t = 0`: it stops
-//!   `v^2 / (2 b_L)` further on;
+//!   `v_L^2 / (2 b_L)` further on;
 //! - the follower keeps its reaction's acceleration (up to the speed cap) until `t_r` =
 //!   the moment the ego's lights come on plus its reaction time, then brakes as its model
 //!   says, to standstill.
 //!
 //! Both cars stop. The ego must stop at least the front margin behind the leader's stop and at
 //! least the rear margin ahead of the follower's, so
-//! `g >= x_F(stop) + m_rear + m_front - v^2 / (2 b_L)`, with `x_F(stop)` the follower's stop
+//! `g >= x_F(stop) + m_rear + m_front - v_L^2 / (2 b_L)`, with `x_F(stop)` the follower's stop
 //! counted from the ego's start. That is a necessary condition only: any ego, however it
 //! brakes, needs at least that gap (the gaps along the way can ask for more).
 //!
@@ -32,9 +32,13 @@
 //! crosses the lights' deceleration first: `t_L = know + lights_on_within(ramp)`
 //! (`table_format::rear::lights_on_within`, less its resolution).
 //!
-//! The floor is the true gap, with the follower and the ego's speed known exactly: a sensor's
-//! error box only adds to it. A measured gap certifies only if its box's least true gap clears
-//! it: `(g (1 + r) + e)` with the range's relative and absolute errors.
+//! The floor is the true gap, with the follower and the ego's speed known exactly. A measured
+//! gap certifies only if its box's least true gap clears it: `(g (1 + r) + e)` with the range's
+//! relative and absolute errors. A measurement's error box can only raise it: a certificate
+//! picks its braking knowing the measurement, not the state, so it needs at least the floor of
+//! the worst state the box holds (`gap_policy::floor_rows` takes the one state that is worst
+//! for both conditions: the ego at its fastest, the leader slower and the follower faster by
+//! the range rate's error, the follower's gap short by the range's).
 //!
 //! # A braking that attains it
 //! [`GentleThenHard`]: the ramp at the build-up until the lights are on, then a gentle braking
@@ -52,11 +56,16 @@ use table_format::rear::{hardest_clearing, ReactingFollower, LIGHTS_RESOLUTION};
 use crate::gap_policy::EgoActuator;
 use crate::sim::{lowest_gap, Actuator, Car};
 
-/// A steady-following scene the floor is taken in. SI units.
+/// A scene the floor is taken in: steady following, or the worst state a measurement of it
+/// leaves. SI units.
 #[derive(Debug, Clone, Copy)]
 pub struct Scene {
-    /// Every car's speed, m/s.
-    pub speed: f32,
+    /// The leader's speed, m/s.
+    pub leader_speed: f32,
+    /// The ego's speed, m/s (its acceleration and the commands in its pipeline at zero).
+    pub ego_speed: f32,
+    /// The follower's speed, m/s.
+    pub follower_speed: f32,
     /// The leader's hardest braking, m/s^2 (positive).
     pub leader_braking: f32,
     /// The true gap from the follower to the ego, m.
@@ -99,10 +108,10 @@ pub fn reacting_follower_acceleration(
 /// (s): integrated in 1 ms steps, each with the acceleration at its middle.
 pub fn follower_stops_at(scene: &Scene, reacts_at: f32) -> f32 {
     const H: f32 = 1e-3;
-    let top = scene.follower.max_speed.max(scene.speed);
+    let top = scene.follower.max_speed.max(scene.follower_speed);
     let mut car = Car {
         x: -scene.follower_gap,
-        v: scene.speed,
+        v: scene.follower_speed,
     };
     // 120 s: any car stops from 70 m/s within it.
     for k in 0..120_000u32 {
@@ -165,7 +174,7 @@ pub fn floor(scene: &Scene, actuator: EgoActuator, know: f32, full: f32) -> Floo
     let reacts_at = lights_at + scene.follower.reaction_time;
     let behind_the_follower =
         follower_stops_at(scene, reacts_at) + scene.rear_margin + scene.front_margin
-            - scene.speed * scene.speed / (2.0 * scene.leader_braking);
+            - scene.leader_speed * scene.leader_speed / (2.0 * scene.leader_braking);
     let hardest = GentleThenHard {
         hold: full,
         switch_at: 0.0,
@@ -226,17 +235,20 @@ pub fn drive(
     const STEP_US: u64 = 2_000;
     let h = STEP_US as f32 * 1e-6;
     let mut brake = Actuator::new(actuator.model());
-    let top = scene.follower.max_speed.max(scene.speed);
+    let top = scene.follower.max_speed.max(scene.follower_speed);
     let threshold = -scene.lights_deceleration;
     let ramp = actuator.jerk * h;
     let mut leader = Car {
         x: 0.0,
-        v: scene.speed,
+        v: scene.leader_speed,
     };
-    let mut ego = leader;
+    let mut ego = Car {
+        x: 0.0,
+        v: scene.ego_speed,
+    };
     let mut behind = Car {
         x: -scene.follower_gap,
-        v: scene.speed,
+        v: scene.follower_speed,
     };
     let (mut front_excess, mut rear_least) = (f32::NEG_INFINITY, scene.follower_gap);
     let mut lights_at = f32::INFINITY;
@@ -376,7 +388,9 @@ mod tests {
     /// behind at `v`, a 9.8 m/s^2 leader, the default declaration's margins and lights.
     fn scene(v: f32, follower_gap: f32, follower: ReactingFollower) -> Scene {
         Scene {
-            speed: v,
+            leader_speed: v,
+            ego_speed: v,
+            follower_speed: v,
             leader_braking: 9.8,
             follower_gap,
             follower,

@@ -915,13 +915,34 @@ fn floor_scene(
     follower_gap: f32,
 ) -> crate::floor::Scene {
     crate::floor::Scene {
-        speed: v,
+        leader_speed: v,
+        ego_speed: v,
+        follower_speed: v,
         leader_braking,
         follower_gap,
         follower,
         lights_deceleration: config.certificate.emergency.lights_deceleration,
         front_margin: config.certificate.front_margin,
         rear_margin: config.certificate.rear_margin,
+    }
+}
+
+/// The worst state the declared errors leave for a measurement of `scene` (every car at the
+/// ego's measured speed, the follower's gap measured at its true one): the ego at the top of
+/// its speed's interval, the leader slower and the follower faster than it by the range rate's
+/// error, the follower's gap at the bottom of its range's interval. Both of the floor's
+/// conditions grow with each of these (the follower's stop moves further than the leader's
+/// when both start faster: it brakes at less), so it is the worst for both at once.
+fn worst_measured(config: &firmware::Config, scene: crate::floor::Scene) -> crate::floor::Scene {
+    let error = config.sensors.error;
+    let ego = error.ego_speed(scene.ego_speed).1;
+    let (rate_lo, rate_hi) = error.range_rate(0.0);
+    crate::floor::Scene {
+        leader_speed: (ego + rate_lo).max(0.0),
+        ego_speed: ego,
+        follower_speed: ego + rate_hi,
+        follower_gap: error.range(scene.follower_gap).0,
+        ..scene
     }
 }
 
@@ -941,6 +962,10 @@ pub struct FloorRow {
     pub floor: crate::floor::Floor,
     /// The floor as the least measured gap whose error box clears it, m.
     pub floor_measured: f32,
+    /// The floor at the worst state the declared errors leave for a measurement of the scene
+    /// (`worst_measured`), as a measured gap, m: what any certificate with these sensors needs
+    /// at least.
+    pub floor_with_errors: f32,
     /// The firmware's certified steady gap (a measured gap) with the braking the follower
     /// allows by its argument ([`braking_a_follower_allows`]), m; `None` where it allows none.
     pub certified: Option<f32>,
@@ -978,6 +1003,7 @@ pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<F
             full.jerk,
             full.level,
         );
+    let as_measured = |g: f32| g * (1.0 + sensors.error.range_relative) + sensors.error.range;
     let mut rows = Vec::new();
     for &leader in leaders {
         for &v in speeds {
@@ -1005,6 +1031,7 @@ pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<F
             ));
             for (name, follower, follower_gap) in cases {
                 let scene = floor_scene(&config, leader, v, follower, follower_gap);
+                let worst = floor(&worst_measured(&config, scene), actuator, know, full.level);
                 let floor = floor(&scene, actuator, know, full.level);
                 let time_gap = (follower_gap - idm.jam_distance) / v;
                 let certified = braking_a_follower_allows(
@@ -1019,8 +1046,8 @@ pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<F
                     follower: name,
                     follower_gap,
                     floor,
-                    floor_measured: floor.gap * (1.0 + sensors.error.range_relative)
-                        + sensors.error.range,
+                    floor_measured: as_measured(floor.gap),
+                    floor_with_errors: as_measured(worst.gap),
                     certified,
                 });
             }
@@ -1048,18 +1075,19 @@ fn floors_under_every_certificate(bytes: &[u8]) -> Result<serde_json::Value> {
         "The floor under every certificate of the model (host_tests::floor): the least true steady gap to the leader any braking of the ego keeps: the larger of the gap its hardest, earliest braking keeps alone and the gap for stopping behind the leader's stop and ahead of the follower's, the truth known, the leader's braking learnt {know:.2} s late (a track's age and a period), the lights at the earliest ({lights:.3} s: the ramp at {:.0} m/s^3 through the declared dead time and lag); as a measured gap (the range's error over it); beside the firmware's certified steady gap:",
         actuator.jerk
     );
-    println!("| leader [m/s^2] | speed [m/s] | follower | its gap [m] | floor, true gap [m] | floor as a measured gap [m] | the firmware's certified steady gap [m] |");
-    println!("|---|---|---|---|---|---|---|");
+    println!("| leader [m/s^2] | speed [m/s] | follower | its gap [m] | floor, true gap [m] | floor as a measured gap [m] | with the declared errors [m] | the firmware's certified steady gap [m] |");
+    println!("|---|---|---|---|---|---|---|---|");
     let mut json = Vec::new();
     for r in &rows {
         println!(
-            "| {} | {:.0} | {} | {:.1} | {:.1} | {:.1} | {} |",
+            "| {} | {:.0} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {} |",
             r.leader_braking,
             r.speed,
             r.follower,
             r.follower_gap,
             r.floor.gap,
             r.floor_measured,
+            r.floor_with_errors,
             cell(r.certified)
         );
         json.push(serde_json::json!({
@@ -1071,6 +1099,7 @@ fn floors_under_every_certificate(bytes: &[u8]) -> Result<serde_json::Value> {
             "floor_behind_the_follower_m": r.floor.behind_the_follower,
             "floor_alone_m": r.floor.alone,
             "floor_measured_gap_m": r.floor_measured,
+            "floor_with_the_declared_errors_m": r.floor_with_errors,
             "certified_steady_gap_m": r.certified,
         }));
     }
@@ -1119,4 +1148,64 @@ fn floors_under_every_certificate(bytes: &[u8]) -> Result<serde_json::Value> {
         })),
     }));
     Ok(serde_json::Value::Array(json))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The worst state of a measurement's box is worse than the measured scene in each of its
+    /// four coordinates for both of the floor's conditions: putting any one back where the
+    /// measurement has it (the ego's speed with the others' relative to it, the leader's or the
+    /// follower's speed to the ego's, the follower's gap) raises neither (the claim
+    /// `worst_measured` rests on). At 10, 20 and 30 m/s, the follower 1 s and 1.8 s behind.
+    #[test]
+    fn the_worst_measured_state_is_worst_in_every_coordinate() {
+        let deployed = Deployed::on(firmware::DEFAULT_TABLE).unwrap();
+        let config = deployed.config;
+        let actuator = EgoActuator::declared(&config);
+        let (know, full) = (
+            learnt_after(&config),
+            config.certificate.emergency.braking.level,
+        );
+        let floor = |s: &crate::floor::Scene| crate::floor::floor(s, actuator, know, full);
+        for v in [10.0f32, 20.0, 30.0] {
+            for gap in [2.0 + v, 2.0 + 1.8 * v] {
+                let scene = floor_scene(&config, 9.8, v, deployed.argued, gap);
+                let worst = worst_measured(&config, scene);
+                assert!(worst.ego_speed > v && worst.leader_speed < worst.ego_speed);
+                assert!(worst.follower_speed > worst.ego_speed && worst.follower_gap < gap);
+                let at_worst = floor(&worst);
+                let slower = worst.ego_speed - v;
+                let back = [
+                    crate::floor::Scene {
+                        ego_speed: v,
+                        leader_speed: worst.leader_speed - slower,
+                        follower_speed: worst.follower_speed - slower,
+                        ..worst
+                    },
+                    crate::floor::Scene {
+                        leader_speed: worst.ego_speed,
+                        ..worst
+                    },
+                    crate::floor::Scene {
+                        follower_speed: worst.ego_speed,
+                        ..worst
+                    },
+                    crate::floor::Scene {
+                        follower_gap: gap,
+                        ..worst
+                    },
+                ];
+                for b in back {
+                    let f = floor(&b);
+                    assert!(
+                        f.alone <= at_worst.alone + 1e-3
+                            && f.behind_the_follower <= at_worst.behind_the_follower + 1e-3,
+                        "{v} m/s, follower {gap} m: {b:?} gives {f:?}, the worst {at_worst:?}"
+                    );
+                }
+            }
+        }
+    }
 }
