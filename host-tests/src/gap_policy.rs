@@ -23,9 +23,14 @@ struct RearBox {
 
 impl RearBox {
     fn around(config: &firmware::Config, model: &HumanModel, time_gap: f32, v: f32) -> Self {
-        let error = config.sensors.error;
         let table_format::FollowerModel::Idm { idm, .. } = model.follower;
-        let gap = idm.jam_distance + time_gap * v;
+        RearBox::around_gap(config, idm.jam_distance + time_gap * v, v)
+    }
+
+    /// The box around the worst measurement of a follower `gap` behind an ego at `v`, both
+    /// at `v`.
+    fn around_gap(config: &firmware::Config, gap: f32, v: f32) -> Self {
+        let error = config.sensors.error;
         let measured = gap - (error.range + error.range_relative * gap);
         let ego_measured = v - (error.ego_speed + error.ego_speed_relative * v);
         let ego_low = error.ego_speed(ego_measured).0;
@@ -927,21 +932,23 @@ fn floor_scene(
     }
 }
 
-/// The worst state the declared errors leave for a measurement of `scene` (every car at the
-/// ego's measured speed, the follower's gap measured at its true one): the ego at the top of
-/// its speed's interval, the leader slower and the follower faster than it by the range rate's
-/// error, the follower's gap at the bottom of its range's interval. Both of the floor's
-/// conditions grow with each of these (the follower's stop moves further than the leader's
-/// when both start faster: it brakes at less), so it is the worst for both at once.
+/// The worst state the declared errors leave over the measurements of `scene` (every car at
+/// the ego's speed), as `gap-policy` takes the firmware's argument: a measurement that errs
+/// against the certificate, then the worst state within its box ([`RearBox`]). The ego at the
+/// top of its speed's interval, the follower faster and the leader slower than it by the range
+/// rate's error on each of two readings, the follower's gap at the bottom of its range's
+/// interval. Both of the floor's conditions grow with each of these (the follower's stop moves
+/// further than the leader's when both start faster: it brakes at less), so it is the worst
+/// for both at once.
 fn worst_measured(config: &firmware::Config, scene: crate::floor::Scene) -> crate::floor::Scene {
-    let error = config.sensors.error;
-    let ego = error.ego_speed(scene.ego_speed).1;
-    let (rate_lo, rate_hi) = error.range_rate(0.0);
+    let rear = RearBox::around_gap(config, scene.follower_gap, scene.ego_speed);
+    let ego = rear.ego.1;
+    let slower = rear.follower.1 - ego;
     crate::floor::Scene {
-        leader_speed: (ego + rate_lo).max(0.0),
+        leader_speed: (ego - slower).max(0.0),
         ego_speed: ego,
-        follower_speed: ego + rate_hi,
-        follower_gap: error.range(scene.follower_gap).0,
+        follower_speed: rear.follower.1,
+        follower_gap: rear.gap.0,
         ..scene
     }
 }
