@@ -782,8 +782,6 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     let mut panels = Vec::new();
     let argued_follower = followers[1].1;
     let know = learnt_after(&config);
-    let table_format::FollowerModel::Idm { idm, .. } = model.follower;
-    let jam = idm.jam_distance;
     for leader in [6.0f32, 9.8] {
         let columns = [None, Some(0.6f32), Some(1.0), Some(2.0)];
         for behind in columns {
@@ -825,7 +823,7 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
             let floor = speeds
                 .iter()
                 .map(|&v| {
-                    let follower_gap = behind.map_or(f32::INFINITY, |t| jam + t * v);
+                    let follower_gap = behind.map_or(f32::INFINITY, |t| idm.jam_distance + t * v);
                     let scene = floor_scene(&config, leader, v, argued_follower, follower_gap);
                     let f = crate::floor::floor(&scene, actuator, know, full.level);
                     (v, if behind.is_some() { f.gap } else { f.alone })
