@@ -45,8 +45,8 @@
 //! that keeps them on until the follower has reacted, then a ramp to the hardest level the rear
 //! allows. It is driven by brute force ([`drive`]: the plant's actuator and cars, 2 ms steps,
 //! the least gaps within each step), and the best of a scan ([`best_gentle_then_hard`]) keeps
-//! within 2 cm of the floor in every case the tests drive, and never less. So does one level
-//! ramped to and held from the moment the ego learns of the leader's braking
+//! within 2 cm of the floor in every case the tests drive, and none of it keeps less. So does
+//! one level ramped to and held from the moment the ego learns of the leader's braking
 //! ([`best_level`]), the form the firmware argues with: what separates the firmware's figure
 //! from the floor is what its argument leaves out or must allow for (the ego's build-up in its
 //! rear check, the measurement's errors, the follower's track age), not its form.
