@@ -108,10 +108,11 @@ impl Controller<'_> {
 
     /// The vehicle's declared lights' command ([`EmergencyDeclaration::lights_command`]): one at
     /// or below it keeps a run of braking commands going, and so the brake lights on once
-    /// [`lights_on_within`](table_format::EmergencyDeclaration::lights_on_within) of the run's start has passed; one above it ends the run (the
+    /// [`lights_on_within`] of the run's start has passed; one above it ends the run (the
     /// follower's reaction starts again at the next one).
     ///
     /// [`EmergencyDeclaration::lights_command`]: crate::EmergencyDeclaration::lights_command
+    /// [`lights_on_within`]: table_format::EmergencyDeclaration::lights_on_within
     pub(super) fn lights_command(&self) -> f32 {
         self.config.certificate.emergency.lights_command
     }
@@ -132,8 +133,10 @@ impl Controller<'_> {
 
     /// From when the brake lights are on for sure if this period's command is at or below
     /// the lights' command (microseconds): the run's, if one is under way, else a run's that
-    /// starts now, from what the actuator may be doing ([`lights_on_within`](table_format::EmergencyDeclaration::lights_on_within), every command of
+    /// starts now, from what the actuator may be doing ([`lights_on_within`], every command of
     /// the run at or below the lights' command). `None` if the bound is not finite.
+    ///
+    /// [`lights_on_within`]: table_format::EmergencyDeclaration::lights_on_within
     pub(super) fn lights_on_from(&self, now: u64, model: &Model) -> Option<u64> {
         if let Some(on) = self.lights_on_us {
             return Some(on);

@@ -542,7 +542,7 @@ pub struct Controller<'t> {
     lights_hold: Option<LightsHold>,
     /// With two authorities: the last look-ahead sent the command down the comfortable way to
     /// the lights' command (`Controller::look_ahead`), which a proposal leaves only with
-    /// [`LIGHTS_WAY_RELEASE_S`] to spare.
+    /// [`LIGHTS_WAY_RELEASE_S`](authorities::LIGHTS_WAY_RELEASE_S) to spare.
     lights_way_down: bool,
     /// The certificate of the state measured in the last standby period (reset whenever a
     /// step is engaged): what an engagement is judged by.
