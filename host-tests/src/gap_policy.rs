@@ -776,16 +776,39 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     }
     rows.push(serde_json::json!({"sound_build_up_at_30_m_s_leader_9_8": sound}));
 
-    // The plot: leaders at 6 and 9.8 m/s^2 in rows; no follower, then the IDM follower that
-    // reacts after 1.15 s at 0.6, 1 and 2 s behind, in columns.
+    // The plot: leaders at 6 and 9.8 m/s^2 in rows; no follower, then the firmware's follower
+    // 0.6, 1 and 2 s behind, then at its IDM's steady state with the closest time gap, in
+    // columns.
     let speeds: Vec<f32> = (0..=70).map(|k| k as f32 * 0.5).collect();
     let mut panels = Vec::new();
     let argued_follower = followers[1].1;
     let know = learnt_after(&config);
+    let closest = model.parameter_range().0;
+    /// Where a panel's follower is.
+    #[derive(Clone, Copy)]
+    enum Behind {
+        Nobody,
+        At(f32),
+        IdmSteady,
+    }
+    // The follower's time gap behind the ego at `v` (`Some(None)`: no follower; `None`: none
+    // that holds its speed there, the IDM at or above its desired speed).
+    let time_gap_at = |behind: Behind, v: f32| match behind {
+        Behind::Nobody => Some(None),
+        Behind::At(t) => Some(Some(t)),
+        Behind::IdmSteady => idm_steady_gap(&model, closest, v)
+            .map(|g| Some((g - idm.jam_distance) / v.max(f32::MIN_POSITIVE))),
+    };
     for leader in [6.0f32, 9.8] {
-        let columns = [None, Some(0.6f32), Some(1.0), Some(2.0)];
+        let columns = [
+            Behind::Nobody,
+            Behind::At(0.6),
+            Behind::At(1.0),
+            Behind::At(2.0),
+            Behind::IdmSteady,
+        ];
         for behind in columns {
-            let braking_at = |v: f32| match behind {
+            let braking_at = |v: f32| match time_gap_at(behind, v)? {
                 None => Some(full),
                 Some(t) => {
                     allows(&argued_follower, t, v).map(|level| firmware::Braking { level, ..full })
@@ -823,16 +846,25 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
             let floor = speeds
                 .iter()
                 .map(|&v| {
-                    let follower_gap = behind.map_or(f32::INFINITY, |t| idm.jam_distance + t * v);
-                    let scene = floor_scene(&config, leader, v, argued_follower, follower_gap);
-                    let f = crate::floor::floor(&scene, actuator, know, full.level);
-                    (v, if behind.is_some() { f.gap } else { f.alone })
+                    let f = |follower_gap: f32| {
+                        let scene = floor_scene(&config, leader, v, argued_follower, follower_gap);
+                        crate::floor::floor(&scene, actuator, know, full.level)
+                    };
+                    let g = match time_gap_at(behind, v) {
+                        None => f32::INFINITY,
+                        Some(None) => f(f32::INFINITY).alone,
+                        Some(Some(t)) => f(idm.jam_distance + t * v).gap,
+                    };
+                    (v, g)
                 })
                 .collect();
             panels.push(crate::plots::GapPanel {
                 title: match behind {
-                    None => format!("leader {leader} m/s^2, no follower"),
-                    Some(t) => format!("leader {leader} m/s^2, follower {t} s behind"),
+                    Behind::Nobody => format!("leader {leader} m/s^2, no follower"),
+                    Behind::At(t) => format!("leader {leader} m/s^2, follower {t} s behind"),
+                    Behind::IdmSteady => {
+                        format!("leader {leader} m/s^2, follower's IDM steady ({closest} s)")
+                    }
                 },
                 certified,
                 comfort_only,
