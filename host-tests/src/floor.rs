@@ -212,8 +212,6 @@ pub struct Drive {
     pub front_excess: f32,
     /// The least gap to the follower, m.
     pub rear_least: f32,
-    /// When the lights came on for the follower's reaction, s (`inf`: never).
-    pub lights_at: f32,
 }
 
 /// Drives `braking` in `scene` by brute force: the leader braking at its hardest at once from
@@ -309,7 +307,6 @@ pub fn drive(
     Drive {
         front_excess,
         rear_least,
-        lights_at,
     }
 }
 

@@ -518,20 +518,8 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
         level: -model.band_min,
         jerk: config.certificate.brake_jerk,
     };
-    let sensors = config.sensors;
-    // Before the ego's braking shows: the rear track's age, a period, and until the actuator
-    // lights the brakes (`table_format::rear::lights_on_within`: from steady following, its
-    // acceleration and commands at zero, braking along the emergency ramp).
-    let lights = declared.lights_on_within(
-        config.plant.actuator_dead_time_us as f32 * 1e-6,
-        config.plant.actuator_lag_us as f32 * 1e-6,
-        0.0,
-        0.0,
-        0.0,
-        full.jerk,
-        full.level,
-    );
-    let delay = (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6 + lights;
+    let lights = lights_from_steady_following(&config);
+    let delay = learnt_after(&config) + lights;
     let allows = |f: &ReactingFollower, time_gap: f32, v: f32| {
         braking_a_follower_allows(&config, &model, f, delay, time_gap, v)
     };
@@ -940,6 +928,24 @@ fn learnt_after(config: &firmware::Config) -> f32 {
     (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6
 }
 
+/// How long after a measurement the firmware's argument takes the brake lights to come on
+/// for sure, s, on top of [`learnt_after`]: from steady following (the actuator's
+/// acceleration and commands at zero), braking along the emergency ramp through the declared
+/// dead time and lag (`table_format::rear::lights_on_within`).
+fn lights_from_steady_following(config: &firmware::Config) -> f32 {
+    let actuator = EgoActuator::declared(config);
+    let full = config.certificate.emergency.braking;
+    config.certificate.emergency.lights_on_within(
+        actuator.dead_time,
+        actuator.lag,
+        0.0,
+        0.0,
+        0.0,
+        full.jerk,
+        full.level,
+    )
+}
+
 /// The floor's scene ([`crate::floor::Scene`]) with `config`'s margins and lights: every car at
 /// `v`, the leader braking at up to `leader_braking`, `follower` `follower_gap` behind.
 fn floor_scene(
@@ -1030,16 +1036,7 @@ pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<F
     let sensors = config.sensors;
     let know = learnt_after(&config);
     let actuator = EgoActuator::declared(&config);
-    let delay = know
-        + declared.lights_on_within(
-            actuator.dead_time,
-            actuator.lag,
-            0.0,
-            0.0,
-            0.0,
-            full.jerk,
-            full.level,
-        );
+    let delay = know + lights_from_steady_following(&config);
     let as_measured = |g: f32| g * (1.0 + sensors.error.range_relative) + sensors.error.range;
     let mut rows = Vec::new();
     for &leader in leaders {
