@@ -1039,6 +1039,21 @@ impl<'t> Controller<'t> {
             }
             (lo, true)
         };
+        // The speed's ramp (module docs: the ego's speed): after a step whose command kept the
+        // ego's true speed in the domain, every command at most the last less `speed_jerk h`
+        // keeps it there, whatever the ego speed's error does to the box's corner. So the cap
+        // never asks for a faster drop than that ramp's (with two authorities the braking in
+        // force's ramp may be the emergency authority's 12 m/s^3, past ISO 15622's jerk limit).
+        let speed_ramp = self.last_command_or_unknown(model) - speed_jerk * seconds(h_us);
+        let (speed_cap, room) =
+            if self.speed_chain && best_headroom >= 0.0 && (!room || speed_cap < speed_ramp) {
+                (math::min(proposal, speed_ramp), true)
+            } else {
+                (speed_cap, room)
+            };
+        // The largest command that keeps the truth's speed in the domain: a command at or
+        // below it continues the speed's chain.
+        let speed_up_to = if room { speed_cap } else { f32::NEG_INFINITY };
         // The follower caps the command as the speed does: the look-ahead holds up to `up_to`
         // (without a look-ahead nothing passes, and the cap is moot).
         let capped = math::min(proposal, speed_cap);
@@ -1162,6 +1177,7 @@ impl<'t> Controller<'t> {
             headroom,
             jumped,
             passed,
+            speed_up_to,
         }
     }
 }
@@ -1232,6 +1248,10 @@ pub(super) struct FrontCheck {
     pub(super) passed: bool,
     /// The braking the passed look-ahead certified the next state with.
     pub(super) named: Option<Braking>,
+    /// The largest command that keeps the ego's true speed in the domain (the speed cap where
+    /// it fits at the box's worst corner, else the speed's ramp after a step that kept it;
+    /// `-inf`: none known): the step's command at or below it continues the speed's chain.
+    pub(super) speed_up_to: f32,
 }
 
 /// The rear value over a box of rear states: the intervals of `gap_follower`, the follower's
