@@ -15,10 +15,10 @@
 //! binaries put it on the hardware: `stm32f407` (stm32f4xx-hal, bxcan, defmt over RTT) and
 //! `netduino-check`, the board-independent part on QEMU's `netduinoplus2` (an STM32F405).
 //!
-//! Why stm32f4xx-hal and not embassy-stm32 (measured side by side, docs/board.md, "On a real board"):
-//! its bxCAN driver implements `embedded_can::nb::Can`, which the firmware's CAN driver is
-//! written against, where embassy's would need an adapter; the loop is a plain periodic loop
-//! with no async executor to reason about; and its binary is the smaller of the two.
+//! Why stm32f4xx-hal and not embassy-stm32 (measured side by side, docs/board.md, "On a real
+//! board"): its bxCAN driver implements `embedded_can::nb::Can`, which the firmware's CAN driver is
+//! written against, where embassy's would need an adapter; the loop is a plain periodic loop with
+//! no async executor to reason about; and its binary is the smaller of the two.
 #![cfg_attr(not(test), no_std)]
 #![warn(missing_docs)]
 #![cfg_attr(
@@ -35,9 +35,9 @@
 
 /// Defines the core's HardFault handler: it first moves the stack pointer back to the top of the
 /// stack region (`_stack_start`, `memory.x`), then branches to `$handler`, an
-/// `extern "C" fn(u32) -> !` that gets the stack pointer the fault left. A stack overflow faults with the stack pointer below RAM, where a
-/// handler with a prologue would fault again and lock the core up; on a fresh stack it runs.
-/// The faulting context is discarded: the handler never returns.
+/// `extern "C" fn(u32) -> !` that gets the stack pointer the fault left. A stack overflow faults
+/// with the stack pointer below RAM, where a handler with a prologue would fault again and lock the
+/// core up; on a fresh stack it runs. The faulting context is discarded: the handler never returns.
 #[macro_export]
 macro_rules! hard_fault_on_fresh_stack {
     ($handler:path) => {

@@ -174,8 +174,9 @@ pub enum OverridePolicy {
 /// The vehicle's envelope: what the firmware may command and the speeds it may certify, set by
 /// the integrator for the car, not by the table. Every command, in every mode, is clamped into
 /// it, and a table whose band does not fit inside it is refused at load
-/// ([`Fault::TableOutsideEnvelope`](crate::Fault::TableOutsideEnvelope)): clamping the table's braking level instead would void
-/// the certificate, which assumes the ego brakes at `beta` when told to.
+/// ([`Fault::TableOutsideEnvelope`](crate::Fault::TableOutsideEnvelope)): clamping the table's
+/// braking level instead would void the certificate, which assumes the ego brakes at `beta` when
+/// told to.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Envelope {

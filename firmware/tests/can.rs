@@ -400,8 +400,8 @@ fn malformed_frames_are_counted_and_a_bus_error_means_minimum_risk() {
     );
 }
 
-/// The driver-interface frames: the actuator's state (0x131) reaches the inputs with its age, and the
-/// driver's requests (0x140) are delivered one per period, in order; a request code that does
+/// The driver-interface frames: the actuator's state (0x131) reaches the inputs with its age, and
+/// the driver's requests (0x140) are delivered one per period, in order; a request code that does
 /// not exist is a malformed frame, counted and not used.
 #[test]
 fn the_actuator_state_and_the_drivers_requests_arrive() {

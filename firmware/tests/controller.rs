@@ -1443,8 +1443,9 @@ fn a_speed_kept_in_the_domain_keeps_the_rear_box_in_it() {
 
 /// The speed cap counts what the lag still passes on from older commands: the next step's
 /// `pending` is the command plus that tail, so a command capped without it left the next
-/// step's speed headroom negative within 0.3 m/s of the domain's top. Along a run held at 34.8 m/s with a set speed above the domain, once the
-/// commands are known, the headroom never goes below zero.
+/// step's speed headroom negative within 0.3 m/s of the domain's top. Along a run held at 34.8 m/s
+/// with a set speed above the domain, once the commands are known, the headroom never goes below
+/// zero.
 #[test]
 fn the_speed_cap_counts_what_the_lag_still_passes_on() {
     let config = Config {

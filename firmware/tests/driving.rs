@@ -1,7 +1,7 @@
-//! The driving interface on the controller alone: engagement from the actuator's reported state, the
-//! driver's controls at run time, stop and go, and the gap policy against the certificate.
-//! Each plant here is ideal (the command is the acceleration) and the sensors exact, so that
-//! what is checked is the controller's own behaviour.
+//! The driving interface on the controller alone: engagement from the actuator's reported state,
+//! the driver's controls at run time, stop and go, and the gap policy against the certificate. Each
+//! plant here is ideal (the command is the acceleration) and the sensors exact, so that what is
+//! checked is the controller's own behaviour.
 
 use firmware::{
     CertificateConfig, Config, Controller, DriverError, DriverRequest, Event, Inputs, LawConfig,

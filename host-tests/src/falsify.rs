@@ -5,8 +5,8 @@
 //! draw. The campaign samples starts and humans; this module *searches*:
 //! - **Starts** ([`StartKind`]): on and near the certified boundary (either half's margin in
 //!   `[0, 0.2]` m, found by bisection on its gap), at the domain's edges (each speed near 0 and
-//!   near `max_speed`, a follower or a leader at exactly `max_speed`), engaged at any acceleration in the
-//!   band, and at standstill. Every start is certified at the true state, with the engaged
+//!   near `max_speed`, a follower or a leader at exactly `max_speed`), engaged at any acceleration
+//!   in the band, and at standstill. Every start is certified at the true state, with the engaged
 //!   acceleration held through the actuator's dead time and lag.
 //! - **Humans** ([`Method`]), every input within the model (the leader's acceleration in its
 //!   bounds, the follower an IDM whose time gap is anywhere in its range at every instant):

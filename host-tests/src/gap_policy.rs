@@ -486,8 +486,8 @@ fn braking_at_exact_states(bytes: &[u8]) -> Result<serde_json::Value> {
 /// ([`firmware::Certifier::reacting_follower`]), the same reacting at once, and R157's careful
 /// driver (who holds its speed until it reacts); the levers at 30 m/s add the firmware's
 /// follower credited with its IDM's output ([`crediting_its_idm`]) and the ego's build-up
-/// credited in the rear ([`braking_a_follower_allows_through`]). Printed, drawn to `gap-policy-authorities.png`
-/// and returned for the report.
+/// credited in the rear ([`braking_a_follower_allows_through`]). Printed, drawn to
+/// `gap-policy-authorities.png` and returned for the report.
 fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serde_json::Value> {
     let Deployed {
         model,

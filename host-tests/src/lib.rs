@@ -12,8 +12,8 @@
 //! certified boundary and at the domain's edges, humans chosen by cross-entropy, hill climbing
 //! and greedy rollouts within the model; [`gap_policy`] tells what the gap policy and two braking
 //! authorities cost in distance, and [`floor`] the least gap any certificate of the model can
-//! give; [`plots`] draws a trace and the gap policy. The ego is `firmware::Controller` itself, on the same
-//! table bytes the target runs.
+//! give; [`plots`] draws a trace and the gap policy. The ego is `firmware::Controller` itself, on
+//! the same table bytes the target runs.
 #![warn(missing_docs)]
 
 pub mod campaign;

@@ -541,8 +541,8 @@ enum SensorsArg {
     /// Exact measurements, `--latency` periods old.
     Exact,
     /// The datasheets' radars at the firmware's declared error bounds, drawn per episode:
-    /// uniform, corner or corner-switching noise, 50-80 ms cycles, 40-100 ms latency with jitter, 10% of
-    /// refreshes lost and bursts of losses up to the covered track age.
+    /// uniform, corner or corner-switching noise, 50-80 ms cycles, 40-100 ms latency with jitter,
+    /// 10% of refreshes lost and bursts of losses up to the covered track age.
     Datasheet,
 }
 

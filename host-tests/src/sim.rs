@@ -229,8 +229,8 @@ pub enum Noise {
     /// read opening, the ego's speed reads low.
     WorstCorner,
     /// [`Noise::WorstCorner`] for the tracks, with the ego speed's error switching between its
-    /// two ends every `period_us` (low first, as at the worst corner): every switch moves the measured speed,
-    /// and every box built on it, by twice the error at once.
+    /// two ends every `period_us` (low first, as at the worst corner): every switch moves the
+    /// measured speed, and every box built on it, by twice the error at once.
     EgoSpeedFlipping {
         /// How long the ego speed's error keeps one end, microseconds.
         period_us: u32,
@@ -311,13 +311,13 @@ impl SensorModel {
         m
     }
 
-    /// The radars of the datasheets (`table_format::sensing`), drawn for one episode: the error inside
-    /// `bounds` (uniform a third of the time; else, in equal shares, the worst corner, random
-    /// corners, the ego speed's error or every error switching corners every 20-500 ms: the
-    /// noise that moves the error box's corners the most), radar cycles of 50-80 ms,
-    /// latencies of 40-100 ms with up to 30 ms of jitter per channel, 10% of the refreshes lost
-    /// at random and bursts of losses (one every 20 s on average) up to `burst_max_us`; the
-    /// ego's speed every 20 ms, 0-20 ms old, never lost.
+    /// The radars of the datasheets (`table_format::sensing`), drawn for one episode: the error
+    /// inside `bounds` (uniform a third of the time; else, in equal shares, the worst corner,
+    /// random corners, the ego speed's error or every error switching corners every 20-500 ms: the
+    /// noise that moves the error box's corners the most), radar cycles of 50-80 ms, latencies of
+    /// 40-100 ms with up to 30 ms of jitter per channel, 10% of the refreshes lost at random and
+    /// bursts of losses (one every 20 s on average) up to `burst_max_us`; the ego's speed every 20
+    /// ms, 0-20 ms old, never lost.
     pub fn datasheet(bounds: SensorBounds, burst_max_us: u32, rng: &mut impl Rng) -> Self {
         let period_us = rng.random_range(20_000..=500_000);
         let noise = match rng.random_range(0..6) {

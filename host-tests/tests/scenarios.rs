@@ -1,11 +1,10 @@
-//! The drivable ACC's acceptance, as a test: the scenario suite ([`host_tests::scenarios`]) with the
-//! default configuration passes every scenario with and without a follower (no collision, no
-//! loss of the certificate, ISO 15622's limits in every scenario whose leader brakes no harder
-//! than the comfort braking, and each scenario's own criterion: steady following without the
-//! override within 1 m of the gap policy, the set speed held on grades, a stop from 1 m/s in
-//! under 3 s at the standstill gap, set-speed changes without the override). The paper's
-//! bang-bang policy is run too: no collision and no loss, but it breaks the jerk limit, which is
-//! why it is not the default.
+//! The drivable ACC's acceptance, as a test: the scenario suite ([`host_tests::scenarios`]) with
+//! the default configuration passes every scenario with and without a follower (no collision, no
+//! loss of the certificate, ISO 15622's limits in every scenario whose leader brakes no harder than
+//! the comfort braking, and each scenario's own criterion: steady following without the override
+//! within 1 m of the gap policy, the set speed held on grades, a stop from 1 m/s in under 3 s at
+//! the standstill gap, set-speed changes without the override). The paper's bang-bang policy is run
+//! too: no collision and no loss, but it breaks the jerk limit, which is why it is not the default.
 
 use firmware::Config;
 use host_tests::scenarios::{run, suite, ScenarioResult};

@@ -228,10 +228,10 @@ fn the_car_follows_at_the_drivers_time_gap() {
 }
 
 /// The follower sells the braking: a follower at the IDM's desired gap with its closest time
-/// gap (its jam distance plus 1 s behind) allows less of it than the full 8 m/s^2, and the car keeps the room ahead that the
-/// braking it allows needs (30 m/s, the 1.0 s setting), within 2 m of the law's desired gap
-/// for the gentlest level of the last seconds (the level moves with the measurement noise),
-/// with no emergency period, against leaders braking at 6 and at 9.8 m/s^2.
+/// gap (its jam distance plus 1 s behind) allows less of it than the full 8 m/s^2, and the car
+/// keeps the room ahead that the braking it allows needs (30 m/s, the 1.0 s setting), within 2 m of
+/// the law's desired gap for the gentlest level of the last seconds (the level moves with the
+/// measurement noise), with no emergency period, against leaders braking at 6 and at 9.8 m/s^2.
 #[test]
 fn a_close_follower_makes_the_car_keep_more_room_ahead() {
     for leader_braking in [6.0, 9.8] {

@@ -1,7 +1,7 @@
 //! The solver's speed and memory on hj_reachability's reference problem (docs/numerics.md quotes
-//! both side by side; `bash solver/benches/compare_hj_reachability.sh` measures them): the paper's 4-D baseline, u2 in [-2, 2], u1, u3 in
-//! [-1.5, 1.5], l = min(x1, x2), x in [-5, 45] m, v in [-10, 10] m/s, T = 3 s, WENO5 + TVD-RK3,
-//! CFL 0.75, global Lax-Friedrichs, extrapolating boundary.
+//! both side by side; `bash solver/benches/compare_hj_reachability.sh` measures them): the paper's
+//! 4-D baseline, u2 in [-2, 2], u1, u3 in [-1.5, 1.5], l = min(x1, x2), x in [-5, 45] m, v in [-10,
+//! 10] m/s, T = 3 s, WENO5 + TVD-RK3, CFL 0.75, global Lax-Friedrichs, extrapolating boundary.
 //!
 //! `cargo bench -p solver --bench solve -- [POINTS ...] [--repeat N]` (default: 21 31, 3 repeats).
 //! Prints, per grid, the median wall time of the solve, the steps, the share of nodes with

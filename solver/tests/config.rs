@@ -187,8 +187,9 @@ fn unknown_keys_and_syntax_errors_are_refused_with_a_location() {
     assert_eq!(refused_field(&missing), "game.time_gap");
 }
 
-/// A value that parses but is refused by the checks after parsing is located like a parse error: the line and the column of its key, or of
-/// the element of an array; a required field left out is located at the table that lacks it.
+/// A value that parses but is refused by the checks after parsing is located like a parse error:
+/// the line and the column of its key, or of the element of an array; a required field left out is
+/// located at the table that lacks it.
 #[test]
 fn refusals_after_parsing_carry_the_line_and_the_column() {
     let line_of =

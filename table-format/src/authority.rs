@@ -40,10 +40,11 @@
 //! rear above its margin (with the follower's reaction `clock` under way for a braking command
 //! `u < -theta`, which keeps the lights on or turns them on, `b` at least `-u`; with it
 //! starting `h + (u + theta) / jerk` from now for any other: the lights may go off, and come
-//! on for sure only where the ramp from `u` crosses `-theta`), and `u` held for a period `h`, then the emergency authority's ramp
-//! from `u` to `b`, keeps the front above its margin. The level is the hardest the follower
-//! allows so ([`TwoAuthorities::look_ahead`]), and a passed look-ahead names it: the braking
-//! the next state is certified with. [`TwoAuthorities::decide`] takes, in this order:
+//! on for sure only where the ramp from `u` crosses `-theta`), and `u` held for a period `h`, then
+//! the emergency authority's ramp from `u` to `b`, keeps the front above its margin. The level is
+//! the hardest the follower allows so ([`TwoAuthorities::look_ahead`]), and a passed look-ahead
+//! names it: the braking the next state is certified with. [`TwoAuthorities::decide`] takes, in
+//! this order:
 //! - the law's proposal, if it passes the look-ahead;
 //! - a braking between the comfort level and the proposal that passes it, close to the
 //!   gentlest (a comfort response where comfort suffices);
@@ -67,10 +68,10 @@
 //!   most at `b` from now on (a held `u` at or above `-b` covers more distance); with the
 //!   lights on, the clock's invariance (`table_format::rear`'s module docs) carries the value a
 //!   period on; with them off, a follower that sees them only where the ramp crosses `-theta`
-//!   has not reacted for `h + (u + theta) / jerk` plus its reaction from now, and the value a period on with
-//!   the lights off is that same extremal seen from later, no lower. The level is fixed between
-//!   the look-ahead and the next period: what the follower allows a period on may be less
-//!   (it drew closer), but `b` is still certified there, and braking under it is what comes
+//!   has not reacted for `h + (u + theta) / jerk` plus its reaction from now, and the value a
+//!   period on with the lights off is that same extremal seen from later, no lower. The level is
+//!   fixed between the look-ahead and the next period: what the follower allows a period on may be
+//!   less (it drew closer), but `b` is still certified there, and braking under it is what comes
 //!   next if nothing passes;
 //! - *braking under `B`*, `C(B, clock)` stays true along `B`'s ramp: the front value never
 //!   decreases along the ego's own braking ([`crate::front`]), and the rear value with the
@@ -247,11 +248,11 @@ impl TwoAuthorities {
     }
 
     /// The hardest level in `[least, emergency.level]` (`least` at least a resolution above
-    /// the lights' deceleration, which a gentler braking need not cross) at which the rear value (the lights on
-    /// for `clock` seconds, the follower's reaction taken `dark` longer) clears the rear
-    /// margin, m/s^2, to within [`LEVEL_RESOLUTION`]: the braking the follower allows
-    /// ([`crate::rear::hardest_clearing`]). The emergency level if it clears; `None` where not
-    /// even `least` does (or NaN). Every level returned clears.
+    /// the lights' deceleration, which a gentler braking need not cross) at which the rear value
+    /// (the lights on for `clock` seconds, the follower's reaction taken `dark` longer) clears the
+    /// rear margin, m/s^2, to within [`LEVEL_RESOLUTION`]: the braking the follower allows
+    /// ([`crate::rear::hardest_clearing`]). The emergency level if it clears; `None` where not even
+    /// `least` does (or NaN). Every level returned clears.
     pub fn allowed_level(&self, s: &State, clock: f32, dark: f32, least: f32) -> Option<f32> {
         let margin = self.rear_margin;
         let slack = |level: f32| self.rear(s, level, clock, dark) - margin;
@@ -300,8 +301,8 @@ impl TwoAuthorities {
     /// certifies the next state with. A braking command below `-lights_deceleration` keeps the
     /// lights on (or turns them on), so the follower's reaction goes on, and the level is at
     /// least the command's; otherwise they come on for sure at the latest where the ramp from
-    /// `u` crosses `-lights_deceleration` after the hold. `-inf` for a command below the emergency level, where the follower allows no
-    /// level, or NaN (outside the model).
+    /// `u` crosses `-lights_deceleration` after the hold. `-inf` for a command below the emergency
+    /// level, where the follower allows no level, or NaN (outside the model).
     pub fn look_ahead(&self, s: &State, u: f32, h: f32, lights: f32) -> (f32, Braking) {
         let braking_level = self
             .lights(u)
@@ -458,12 +459,12 @@ mod tests {
     /// [`TwoAuthorities::certified_braking`] gives). The leader: a new acceleration in
     /// `[-b_L, 2]` every second from `leader`, and, when `brake_on_switch`, its hardest
     /// braking (until it stops) from the first period at which the rule changes its decision
-    /// (between driving and braking, or the level in force by half a m/s^2). The follower at its model's bound: its speed held while
-    /// it has not reacted (or a braking of up to 1 m/s^2 where `follower` draws one), its
-    /// braking at its level once it has. The law's proposal: a new draw in `[-3.5, 2]` every
-    /// second from `law`, none above zero beyond 34 m/s. Returns the least gaps ahead and
-    /// behind, the least of the certified margins over the periods (the braking in force's:
-    /// the one under way, or the one the last passed look-ahead certified), and how many
+    /// (between driving and braking, or the level in force by half a m/s^2). The follower at its
+    /// model's bound: its speed held while it has not reacted (or a braking of up to 1 m/s^2 where
+    /// `follower` draws one), its braking at its level once it has. The law's proposal: a new draw
+    /// in `[-3.5, 2]` every second from `law`, none above zero beyond 34 m/s. Returns the least
+    /// gaps ahead and behind, the least of the certified margins over the periods (the braking in
+    /// force's: the one under way, or the one the last passed look-ahead certified), and how many
     /// periods braked under the braking in force.
     #[allow(clippy::too_many_arguments)]
     fn episode(
@@ -691,11 +692,11 @@ mod tests {
     /// Emergency braking only where it must: following at 30 m/s 10% beyond the least gap
     /// certified against a 9.8 m/s^2 leader, with a follower that reacts after 1.15 s 62 m
     /// behind (it allows the full 8 m/s^2; the least gap is 20.7 m) and 32 m behind (it allows
-    /// 5.77 m/s^2, and the least gap is 39.7 m). A leader that brakes at 3.5 m/s^2 to standstill, with a law that brakes with
-    /// it, passes the look-ahead throughout: no period of braking under either authority. A
-    /// law that holds its speed a second longer gets a braking that passes: none either. A
-    /// leader that brakes at 9.8 m/s^2 gets a braking beyond the comfort authority. None
-    /// collides.
+    /// 5.77 m/s^2, and the least gap is 39.7 m). A leader that brakes at 3.5 m/s^2 to standstill,
+    /// with a law that brakes with it, passes the look-ahead throughout: no period of braking under
+    /// either authority. A law that holds its speed a second longer gets a braking that passes:
+    /// none either. A leader that brakes at 9.8 m/s^2 gets a braking beyond the comfort authority.
+    /// None collides.
     #[test]
     fn a_comfortable_leader_gets_a_comfort_response_and_a_hard_one_the_emergency_authority() {
         let m = with_follower(9.8, 1.15, 0.0, false);

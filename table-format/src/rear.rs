@@ -56,11 +56,12 @@
 //! while the ego's actual acceleration is below `-threshold` (the declared lights' deceleration,
 //! [`crate::EmergencyDeclaration::lights_deceleration`]: UN R13-H requires the signal only
 //! above 1.3 m/s^2 of deceleration where the service brake's pedal is not used); through a dead
-//! time and a lag that is later than the command. [`lights_on_within`] bounds it from what the controller knows (the actuator's
-//! acceleration, the commands in its dead time, the braking ramp from now), in closed form
-//! along the lag's response to a ramp, checked against a brute-force actuator; the follower's
-//! reaction is then taken that much longer. The property test `a_release_restarts_the_clock` checks that the restarted
-//! clock still bounds the gap from below after a release in which the follower accelerated.
+//! time and a lag that is later than the command. [`lights_on_within`] bounds it from what the
+//! controller knows (the actuator's acceleration, the commands in its dead time, the braking ramp
+//! from now), in closed form along the lag's response to a ramp, checked against a brute-force
+//! actuator; the follower's reaction is then taken that much longer. The property test
+//! `a_release_restarts_the_clock` checks that the restarted clock still bounds the gap from below
+//! after a release in which the follower accelerated.
 //!
 //! # The ego's build-up
 //! [`rear_gap`] brakes the ego at its level at once. A real ego brakes through its actuator: a

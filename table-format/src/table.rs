@@ -103,8 +103,9 @@ impl<'a> Table<'a> {
     /// The checks, in order: the preamble is there and starts with [`MAGIC`]; the version is
     /// [`FORMAT_VERSION`]; the buffer holds the header length it announces and a trailer; the
     /// CRC-32 trailer matches (when it does not, and the header declares a longer table than
-    /// the buffer, the error is [`Error::Truncated`]: a cut file, not a corrupt one); the header decodes, uses all its announced bytes and passes
-    /// [`Header::validate`]; the payload has exactly the size the grid calls for.
+    /// the buffer, the error is [`Error::Truncated`]: a cut file, not a corrupt one); the header
+    /// decodes, uses all its announced bytes and passes [`Header::validate`]; the payload has
+    /// exactly the size the grid calls for.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, Error> {
         let minimum = PREAMBLE_LEN + CRC_LEN;
         if bytes.len() < minimum {

@@ -10,11 +10,11 @@
 //! control step runs: nominal, override (braking at the certificate's level), the aging track
 //! and the certified fallback; then a car cuts in 12 m ahead, 5 m/s slower, and brakes at
 //! 6 m/s^2 for 1 s, so that the emergency answer runs too (below the band, the follower's
-//! check included), and the release after it. The instruction counter's worst case covers them all. Prints a summary over
-//! semihosting and exits with status 0 when no gap closed, each of the three modes ran, the
-//! minimum-risk manoeuvre ran exactly when the track was past its covered age, the
-//! certificate's margin never fell below `-CERTIFICATE_TOLERANCE` before the cut-in, and the
-//! cut-in was braked below the band; 1 otherwise.
+//! check included), and the release after it. The instruction counter's worst case covers them all.
+//! Prints a summary over semihosting and exits with status 0 when no gap closed, each of the three
+//! modes ran, the minimum-risk manoeuvre ran exactly when the track was past its covered age, the
+//! certificate's margin never fell below `-CERTIFICATE_TOLERANCE` before the cut-in, and the cut-in
+//! was braked below the band; 1 otherwise.
 //!
 //! It also measures the stack one control step uses (the stack below the caller is painted
 //! before the first step and scanned after the last), and brackets every step with two marker

@@ -8,7 +8,8 @@
 pub enum Fault {
     /// The table did not pass `Table::parse`.
     Table(table_format::Error),
-    /// The table is not a split three-car table ([`Game::ThreeCarSplit`](table_format::Game::ThreeCarSplit)).
+    /// The table is not a split three-car table
+    /// ([`Game::ThreeCarSplit`](table_format::Game::ThreeCarSplit)).
     WrongGame,
     /// The leader track is flagged invalid, non-finite or impossible.
     LeaderInvalid,
@@ -27,20 +28,22 @@ pub enum Fault {
     /// The state is outside the table's domain on this axis of the rear table (0:
     /// gap_follower below the grid, 1: follower_speed above `max_speed`, 2: ego_speed above
     /// `max_speed`). Not a sensor fault: the controller runs the nominal law uncertified
-    /// ([`Mode::Uncertified`](super::Mode::Uncertified)), as a conventional ACC would outside its certified range,
-    /// rather than braking hard into the follower.
+    /// ([`Mode::Uncertified`](super::Mode::Uncertified)), as a conventional ACC would outside its
+    /// certified range, rather than braking hard into the follower.
     OutsideDomain {
         /// The axis.
         axis: u8,
     },
     /// The measurements' times are so far apart that the box of rear states they leave holds
     /// more than [`table_format::BOX_INTERIOR`] of the table's breakpoints on this axis: the
-    /// step does not evaluate the rear half ([`Mode::Uncertified`](super::Mode::Uncertified), the front still enforced).
+    /// step does not evaluate the rear half ([`Mode::Uncertified`](super::Mode::Uncertified), the
+    /// front still enforced).
     RearBoxTooWide {
         /// The axis.
         axis: u8,
     },
-    /// The clock went backwards. Recovers after [`CLOCK_RECOVERY_PERIODS`](super::CLOCK_RECOVERY_PERIODS) good periods.
+    /// The clock went backwards. Recovers after
+    /// [`CLOCK_RECOVERY_PERIODS`](super::CLOCK_RECOVERY_PERIODS) good periods.
     ClockWentBackwards,
     /// The configuration is outside the limits the certificate is argued for (period, stale
     /// limit, dead time or lag above their limits, a negative or non-finite value, an envelope
@@ -53,8 +56,9 @@ pub enum Fault {
     /// ([`CertificateConfig::emergency`](crate::CertificateConfig)): it certifies for another
     /// vehicle or another follower.
     EmergencyDeclarationDiffers,
-    /// The clock jumped forward by more than [`MAX_STEP_GAP_PERIODS`](super::MAX_STEP_GAP_PERIODS) periods since the last
-    /// step. Recovers after [`CLOCK_RECOVERY_PERIODS`](super::CLOCK_RECOVERY_PERIODS) good periods.
+    /// The clock jumped forward by more than [`MAX_STEP_GAP_PERIODS`](super::MAX_STEP_GAP_PERIODS)
+    /// periods since the last step. Recovers after
+    /// [`CLOCK_RECOVERY_PERIODS`](super::CLOCK_RECOVERY_PERIODS) good periods.
     ClockJumped,
     /// The table carries no record of `solver verify`, a record of a proof that left cells
     /// unproven, one for another `rear_margin` than the configuration's (a proof at one level
@@ -74,7 +78,8 @@ pub enum Fault {
     AfterEmergencyBraking,
     /// The board restarted after a fault of its own: the watchdog expired, or a HardFault
     /// (a stack overflow among them) or a panic ended the last run. The minimum-risk manoeuvre
-    /// until the next power-on reset (see [`Controller::latch_minimum_risk`](super::Controller::latch_minimum_risk)).
+    /// until the next power-on reset (see
+    /// [`Controller::latch_minimum_risk`](super::Controller::latch_minimum_risk)).
     RestartedAfterFault,
 }
 

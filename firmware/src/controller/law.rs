@@ -21,9 +21,9 @@
 //!   `sqrt(2 b e)`, the closing speed a braking at `b = stop_deceleration` takes back over the
 //!   error (before, 150 m behind a car 19 m/s slower the linear law still accelerated at
 //!   2 m/s^2, and the override had to brake hard). Closing on a leader it accelerates at
-//!   1 m/s^2 at most, and not at all while the leader brakes harder than 1 m/s^2. The leader's acceleration is estimated from
-//!   its speed (ego speed plus range rate), filtered twice (0.3 s on the speed, 0.5 s on its
-//!   derivative).
+//!   1 m/s^2 at most, and not at all while the leader brakes harder than 1 m/s^2. The leader's
+//!   acceleration is estimated from its speed (ego speed plus range rate), filtered twice (0.3 s on
+//!   the speed, 0.5 s on its derivative).
 //! - **Speed**: `speed_gain (set_speed - v) + I`, the integral `I` of `speed_integral_gain
 //!   (set_speed - v)` updated only in periods whose command is the speed law's own, unclipped
 //!   (conditional integration: no windup behind a leader, under the override, or at a limit),
@@ -36,8 +36,9 @@
 //!   car brakes at exactly `b` and stops at the standstill gap, from 1 m/s in `1 / b` seconds,
 //!   with no crawl (a proportional law converges exponentially: 9 s below 1 m/s before). The
 //!   distance is taken less what the actuator's dead time and lag cover at the present speed,
-//!   and the law accelerates towards a stopped car at 1 m/s^2 at most. Stopped, the car holds at -1 m/s^2; it moves off when the leader does, within
-//!   `auto_resume_us` of the stop by itself, later on the driver's resume.
+//!   and the law accelerates towards a stopped car at 1 m/s^2 at most. Stopped, the car holds at -1
+//!   m/s^2; it moves off when the leader does, within `auto_resume_us` of the stop by itself, later
+//!   on the driver's resume.
 //! - **Comfort**: the command is held within ISO 15622's acceleration and deceleration limits at
 //!   the ego's speed, and moves from the last command by at most ISO 15622's jerk limit per
 //!   period, both ways ([`crate::iso15622`]), the limit taken at the highest speed the last

@@ -1,9 +1,9 @@
 //! The control step: one set of inputs in, one acceleration command out.
 //!
 //! # The certificate: a split of the three-car game at one braking level
-//! The table is a [`Game::ThreeCarSplit`](table_format::Game::ThreeCarSplit) table. For the ego's braking level `beta` (the
-//! table's `-ego.min`) a state `(gap_leader, leader_speed, gap_follower, follower_speed,
-//! ego_speed)` is **certified** when
+//! The table is a [`Game::ThreeCarSplit`](table_format::Game::ThreeCarSplit) table. For the ego's
+//! braking level `beta` (the table's `-ego.min`) a state `(gap_leader, leader_speed, gap_follower,
+//! follower_speed, ego_speed)` is **certified** when
 //! - the *front value* `F(z) = front_value(gap_leader, leader_speed, ego_speed)`, the smallest
 //!   gap to a leader braking as hard as its model allows while the ego brakes at `beta`, in
 //!   closed form ([`table_format::front`]), exceeds `front_margin`, and
@@ -15,19 +15,20 @@
 //!
 //! # The law, and why it keeps a certified state certified
 //! Every command is in the band `[-beta, a_max]`, in every mode (the emergency authority's
-//! answers to an uncertified front aside, below), so the rear half needs no decision: it is a property of the band, proven for the table itself, cell by cell, by
-//! `solver verify` (below). The front half decides the command. The nominal ACC law
-//! (the `law` module, which knows nothing of the certificate but its steady-following gap) proposes `u`;
-//! the look-ahead computes `front_value` for `u` held one period `h`, then the **braking
-//! ramp** from `u` down to `beta` (plus the delays, see below). That is the smallest front gap
-//! over every leader behaviour, the period included, and every state the period can reach has
-//! a front value at least as large (the reached state's worst case is one of the behaviours the
-//! look-ahead took the minimum over). So if the look-ahead exceeds `front_margin` the law's
-//! command is applied ([`Mode::Nominal`]); otherwise ([`Mode::Override`]) the gentlest braking
-//! between the ramp's floor and the refused command that the look-ahead passes (a secant step,
-//! `table_format::front::least_braking`), or, when none does, the ramp itself. Either way a
-//! certified state's front value stays above `front_margin`. No monotonicity of the table is
-//! used: the rear value is a property of the band, and the front value is exact.
+//! answers to an uncertified front aside, below), so the rear half needs no decision: it is a
+//! property of the band, proven for the table itself, cell by cell, by `solver verify` (below). The
+//! front half decides the command. The nominal ACC law (the `law` module, which knows nothing of
+//! the certificate but its steady-following gap) proposes `u`; the look-ahead computes
+//! `front_value` for `u` held one period `h`, then the **braking ramp** from `u` down to `beta`
+//! (plus the delays, see below). That is the smallest front gap over every leader behaviour, the
+//! period included, and every state the period can reach has a front value at least as large (the
+//! reached state's worst case is one of the behaviours the look-ahead took the minimum over). So if
+//! the look-ahead exceeds `front_margin` the law's command is applied ([`Mode::Nominal`]);
+//! otherwise ([`Mode::Override`]) the gentlest braking between the ramp's floor and the refused
+//! command that the look-ahead passes (a secant step, `table_format::front::least_braking`), or,
+//! when none does, the ramp itself. Either way a certified state's front value stays above
+//! `front_margin`. No monotonicity of the table is used: the rear value is a property of the band,
+//! and the front value is exact.
 //!
 //! # The braking ramp: the jerk limit inside the certificate
 //! ISO 15622 limits an ACC's braking jerk (2.5 m/s^3 at and above 20 m/s, [`crate::iso15622`]).
@@ -42,8 +43,8 @@
 //! command's look-ahead said it would (at `now`, from the last command) and it keeps its start
 //! and reference while it runs, so that the argument below holds; a command that passes ends it.
 //! The price: the certificate's steady-following gap grows by about `v (u + beta) / (2 j)`, at
-//! 30 m/s from 76 m to 97 m (`host-tests gap-policy`, docs/closed-loop.md); the override starts earlier, not
-//! harder. `Config::bang_bang()` is the paper's policy instead: no ramp (`brake_jerk =
+//! 30 m/s from 76 m to 97 m (`host-tests gap-policy`, docs/closed-loop.md); the override starts
+//! earlier, not harder. `Config::bang_bang()` is the paper's policy instead: no ramp (`brake_jerk =
 //! f32::INFINITY`) and braking at `beta` whenever the look-ahead refuses.
 //!
 //! **Emergencies.** A state whose front value or speed headroom is not certified at the error
@@ -52,22 +53,21 @@
 //! ego following the ramp's commands at once, still is (a certified measurement or a passed
 //! look-ahead certifies the true state, and the ramp keeps it certified: measurement noise
 //! moves the corner, not the truth; the best corner bounds the true value from above, so where
-//! it fails the truth is not certified); otherwise (an engagement into an uncertified state, a cut-in, a leader
-//! beyond its model) the command is the emergency answer: a braking at once as hard as the
-//! leader's worst case needs. Where `beta` at once keeps that worst case (at the error box's
-//! worst corner, through the dead time and the lag) above the front margin, it is the gentlest
-//! level between the committed ramp's command and `beta` that does (a secant in `1 / level`,
-//! checked; at least the brake lights' command): a cut-in 55 m ahead at the ego's 20 m/s gets
-//! about 2.8 m/s^2, not 3.5. Where `beta` does not, it is harder, under the emergency authority
-//! (below). With no ramp under way the step starts one through the answer: the next step's
-//! front value has the same hold, then the continuous ramp the certificate argues with, which
-//! starts `brake_jerk h` (0.05 m/s^2) gentler than the answer and brakes harder from its first
-//! period on, so it is the answer's less a few micrometres, or more. With a ramp under way the
-//! answer is at or below its command, and the ramp is kept. Either way the next step judges
-//! the state again. Every period of it
-//! is flagged in [`Command::emergency`] with the takeover request, as is any command that
-//! drops faster than ISO 15622's jerk limit while the car may be moving (not where its
-//! measured speed's error box reaches zero: a harder hold moves a car at rest nothing).
+//! it fails the truth is not certified); otherwise (an engagement into an uncertified state, a
+//! cut-in, a leader beyond its model) the command is the emergency answer: a braking at once as
+//! hard as the leader's worst case needs. Where `beta` at once keeps that worst case (at the error
+//! box's worst corner, through the dead time and the lag) above the front margin, it is the
+//! gentlest level between the committed ramp's command and `beta` that does (a secant in `1 /
+//! level`, checked; at least the brake lights' command): a cut-in 55 m ahead at the ego's 20 m/s
+//! gets about 2.8 m/s^2, not 3.5. Where `beta` does not, it is harder, under the emergency
+//! authority (below). With no ramp under way the step starts one through the answer: the next
+//! step's front value has the same hold, then the continuous ramp the certificate argues with,
+//! which starts `brake_jerk h` (0.05 m/s^2) gentler than the answer and brakes harder from its
+//! first period on, so it is the answer's less a few micrometres, or more. With a ramp under way
+//! the answer is at or below its command, and the ramp is kept. Either way the next step judges the
+//! state again. Every period of it is flagged in [`Command::emergency`] with the takeover request,
+//! as is any command that drops faster than ISO 15622's jerk limit while the car may be moving (not
+//! where its measured speed's error box reaches zero: a harder hold moves a car at rest nothing).
 //!
 //! # Emergencies: the emergency authority, bought from the follower
 //! The vehicle declares a second braking, its full one ([`CertificateConfig::emergency`]:
@@ -134,8 +134,8 @@
 //! rear value of `B` against the follower that reacts `follower_reaction_time` after the brake
 //! lights (`table_format::rear::rear_gap_after` at the worst corner of the kept follower
 //! measurement's box at its time, the ego braking at most at `B`'s level, an earlier harder
-//! braking counted as above) exceeds `rear_margin`, and the speed headroom is not negative. The rear table is not
-//! used (the follower's model is the reacting one); its header gives the models.
+//! braking counted as above) exceeds `rear_margin`, and the speed headroom is not negative. The
+//! rear table is not used (the follower's model is the reacting one); its header gives the models.
 //! - **The look-ahead** of a command `u` is argued along the emergency authority's build-up at
 //!   the hardest level from `beta` to the emergency level that the follower allows when `u` is
 //!   held a period and that ramp from `u` lights the brakes
@@ -231,12 +231,13 @@
 //! at the state of `t_m` through the committed ramp: the one under way, or one starting now from
 //! the last command. The **look-ahead** of a command `u` is the ramp from `u` starting at `now +
 //! h`, with a hold of `max(pending, u + tail)`, `tail` the lag's `e^-5` of the band's width (the
-//! next step's `pending` is `u + tail` when `u` is the largest command). Why it is invariant: at the next step the certified value's ramp is the one the
-//! look-ahead assumed (a new ramp from `u` at `now + h`), or the same ramp under way, with a
-//! `pending` no larger, from a later state that one of the behaviours the look-ahead took the
-//! minimum over has reached; so it is at least the look-ahead's value. The step is assumed to
-//! come every period: a late step holds a command longer than the look-ahead assumed (within
-//! [`MAX_STEP_GAP_PERIODS`] it is not a fault; a board's timer interrupt keeps the period).
+//! next step's `pending` is `u + tail` when `u` is the largest command). Why it is invariant: at
+//! the next step the certified value's ramp is the one the look-ahead assumed (a new ramp from `u`
+//! at `now + h`), or the same ramp under way, with a `pending` no larger, from a later state that
+//! one of the behaviours the look-ahead took the minimum over has reached; so it is at least the
+//! look-ahead's value. The step is assumed to come every period: a late step holds a command longer
+//! than the look-ahead assumed (within [`MAX_STEP_GAP_PERIODS`] it is not a fault; a board's timer
+//! interrupt keeps the period).
 //!
 //! # The ego's speed: kept in the domain, not assumed
 //! The rear value is the rear game's value over speeds in `[0, max_speed]`, so a certified
@@ -294,9 +295,9 @@
 //! accelerations possible in between: `[ego - pending dt, ego + beta dt]` for an older track,
 //! `[ego - beta dt, ego + pending dt]` for a newer one. So the rear value is the table's least
 //! value over the box of those ego speeds and the follower speeds that go with them, held in
-//! the human's `[0, max_speed]` ([`Table::least_over_box`]: exact for the multilinear interpolation, one
-//! lookup when the times agree, at most `8^3` points with [`table_format::BOX_INTERIOR`] breakpoints
-//! inside).
+//! the human's `[0, max_speed]` ([`Table::least_over_box`]: exact for the multilinear
+//! interpolation, one lookup when the times agree, at most `8^3` points with
+//! [`table_format::BOX_INTERIOR`] breakpoints inside).
 //!
 //! An ego or follower faster than `max_speed` at that time, or a follower gap below the grid,
 //! is outside the domain: [`Fault::OutsideDomain`], [`Mode::Uncertified`]. Only the rear half
@@ -314,10 +315,11 @@
 //! - **Front**: the front value is evaluated at the box's worst corner: the least gap, the
 //!   slowest leader (the ego's lowest speed at `t_m` plus the least range rate) and the fastest
 //!   ego. It is non-decreasing in the gap and the leader's speed and non-increasing in the ego's
-//!   speed ([`table_format::front`]'s property test `the_error_boxs_worst_corner_is_its_least_value`),
-//!   so that corner is the least value over the box; the leader's speed is `ego + range_rate`,
-//!   and taking each at its own worst end covers the pair (conservative by the ego's error
-//!   twice). The speed headroom and cap take the ego at its highest.
+//!   speed ([`table_format::front`]'s property test
+//!   `the_error_boxs_worst_corner_is_its_least_value`), so that corner is the least value over the
+//!   box; the leader's speed is `ego + range_rate`, and taking each at its own worst end covers the
+//!   pair (conservative by the ego's error twice). The speed headroom and cap take the ego at its
+//!   highest.
 //! - **Rear**: the table's exact least value over the box (gap interval, the ego's speed at
 //!   `t_f` within its error and its possible change since, the follower's with it and the
 //!   range-rate error), [`Table::least_over_box`], the multilinear interpolant's minimum over the
@@ -415,10 +417,10 @@
 //! beta when told to (and, for the emergency answer, at the emergency level, built up no slower
 //! than declared); its reported state ([`Inputs::ego_acceleration`]) bounds what it
 //! delivers before the controller's commands are known, within `sensors.acceleration_error`;
-//! the control step comes every period. Nothing is assumed of the ego's speed: the firmware keeps it in the
-//! domain (above). The front value is exact, and its look-ahead over the
-//! delays is argued above and checked by property tests; its `f32` evaluation is within about
-//! 1.4 mm (measured), inside [`CERTIFICATE_TOLERANCE`].
+//! the control step comes every period. Nothing is assumed of the ego's speed: the firmware keeps
+//! it in the domain (above). The front value is exact, and its look-ahead over the delays is argued
+//! above and checked by property tests; its `f32` evaluation is within about 1.4 mm (measured),
+//! inside [`CERTIFICATE_TOLERANCE`].
 
 mod authorities;
 mod certificate;

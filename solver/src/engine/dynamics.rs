@@ -20,17 +20,17 @@ pub trait Dynamics: Sync {
     /// dissipation.
     fn dissipation(&self, z: &Vector, alpha: &mut Vector);
     /// Whether `V` is non-decreasing along `axis`, so that the pessimistic and optimistic ghost
-    /// values of [`crate::engine::hji::Boundary`] bound the true ones there. Axes where it is not (or
-    /// where nothing leaves the grid) take extrapolated ghosts. Default: every axis.
+    /// values of [`crate::engine::hji::Boundary`] bound the true ones there. Axes where it is not
+    /// (or where nothing leaves the grid) take extrapolated ghosts. Default: every axis.
     fn monotone_axis(&self, _axis: usize) -> bool {
         true
     }
 
-    /// The Lax-Friedrichs numerical Hamiltonian `H(z, pbar) + sum_k alpha_k(z) half_jump_k` along a row
-    /// of the last axis: `z` holds the row's fixed coordinates, `last[c]` the last one, and
+    /// The Lax-Friedrichs numerical Hamiltonian `H(z, pbar) + sum_k alpha_k(z) half_jump_k` along a
+    /// row of the last axis: `z` holds the row's fixed coordinates, `last[c]` the last one, and
     /// `pbar[k][c]`, `half_jump[k][c]` the central gradient and `(p+ - p-)/2`. `alpha` is the
-    /// global dissipation, used unless `local`. The games override it with straight-line code
-    /// that the compiler vectorises; this default is the scalar reference.
+    /// global dissipation, used unless `local`. The games override it with straight-line code that
+    /// the compiler vectorises; this default is the scalar reference.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn lax_friedrichs_row(

@@ -29,8 +29,9 @@
 //! ToolboxLS's choice; it is optimistic where worst-case trajectories leave the grid (the value
 //! is concave across the low-speed faces, so a line overestimates it). [`Boundary::Pessimistic`]
 //! and [`Boundary::Optimistic`] put lower and upper bounds of the true ghost values there
-//! instead (see the `ghost` function); the two solves bracket the true value, [`crate::proof::trusted`] keeps the
-//! box where the bracket is tight, and tables are compiled from the pessimistic solve.
+//! instead (see the `ghost` function); the two solves bracket the true value,
+//! [`crate::proof::trusted`] keeps the box where the bracket is tight, and tables are compiled from
+//! the pessimistic solve.
 //!
 //! # The obstacle
 //! [`Obstacle::Freeze`] (the default) is the `min(0, .)` above. For values solved to

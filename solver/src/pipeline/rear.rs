@@ -3,7 +3,8 @@
 //! summary and the verify report.
 //!
 //! One responsibility: turn a rear config into files. The game is [`crate::games::RearGame`],
-//! the scheme [`crate::engine::semi_lagrangian`]; why the split and why that scheme is written there.
+//! the scheme [`crate::engine::semi_lagrangian`]; why the split and why that scheme is written
+//! there.
 //!
 //! # The table is the solver's value, not an approximation of it
 //! The sampled-data iteration defines its value between nodes by multilinear interpolation, and

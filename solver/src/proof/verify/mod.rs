@@ -2,9 +2,9 @@
 //! guarantees over one period, decided by computation over every state and every admissible
 //! input, not by sampling.
 //!
-//! One responsibility: take a [`table_format::Game::ThreeCarSplit`] table's bytes and the firmware's rear
-//! level, and prove or refute, for every cell the firmware may certify, that the certificate
-//! survives one period.
+//! One responsibility: take a [`table_format::Game::ThreeCarSplit`] table's bytes and the
+//! firmware's rear level, and prove or refute, for every cell the firmware may certify, that the
+//! certificate survives one period.
 //!
 //! # What is checked
 //! The firmware calls the rear half of a state `x = (gap_follower, follower_speed, ego_speed)`
