@@ -20,6 +20,7 @@ import struct
 import sys
 import tempfile
 import unittest
+import zlib
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "python"))
@@ -106,6 +107,25 @@ class TableAgainstPurePython(unittest.TestCase):
             self.assertEqual(bits(native.node_value(node)), bits(python.node_value(node)))
         self.assertTrue(native.contains([10.0, 0.0, 0.0]) and python.contains([10.0, 0.0, 0.0]))
         self.assertFalse(native.contains([1e6, 0.0, 0.0]) or python.contains([1e6, 0.0, 0.0]))
+
+    def test_an_infinite_declaration_reads_the_same(self):
+        # A vehicle may declare its emergency braking at once (an infinite jerk). The native
+        # reader's header went through JSON, which has no infinity: it read None where the pure
+        # reader read inf. The default table's declaration (8 m/s^2 at 12 m/s^3, the follower's
+        # 1.15 s, the lights' 1.3 and -1.5 m/s^2) with the jerk made infinite, the CRC redone.
+        with open(DEFAULT_TABLE, "rb") as f:
+            data = bytearray(f.read())
+        declared = struct.pack("<5f", 8.0, 12.0, 1.15, 1.3, -1.5)
+        at = data.find(declared)
+        self.assertGreater(at, 0)
+        self.assertEqual(data.find(declared, at + 1), -1)
+        data[at + 4 : at + 8] = struct.pack("<f", math.inf)
+        data[-4:] = struct.pack("<I", zlib.crc32(bytes(data[:-4])) & 0xFFFFFFFF)
+        native, python = hjacc.Table(bytes(data)), PyTable(bytes(data))
+        jerk = native.header["game"]["emergency"]["braking"]["jerk"]
+        self.assertEqual(jerk, math.inf)
+        self.assertEqual(python.header["game"]["emergency"]["braking"]["jerk"], math.inf)
+        self.assertEqual(native.header, python.header)
 
     def test_corrupt_tables_and_bad_states_raise(self):
         with open(DEFAULT_TABLE, "rb") as f:

@@ -75,10 +75,14 @@ impl Table {
         Self::from_bytes(bytes)
     }
 
-    /// The header as the Rust reader holds it (serde's JSON form).
+    /// The header as the Rust reader holds it, in serde's form (dicts, lists, strings), each
+    /// `f32` widened to a Python float as the pure-Python reader reads it: an infinite
+    /// declaration stays `inf` (JSON, which the other doors go through, has no infinity).
     #[getter]
     fn header(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-        json_to_python(py, self.reader().header())
+        Ok(pythonize::pythonize(py, self.reader().header())
+            .map_err(value_error)?
+            .unbind())
     }
 
     /// The table's error bound (quantization plus interpolation, added as the firmware adds
