@@ -1045,12 +1045,14 @@ impl<'t> Controller<'t> {
         // never asks for a faster drop than that ramp's (with two authorities the braking in
         // force's ramp may be the emergency authority's 12 m/s^3, past ISO 15622's jerk limit).
         let speed_ramp = self.last_command_or_unknown(model) - speed_jerk * seconds(h_us);
-        let (speed_cap, room) =
-            if self.speed_chain && best_headroom >= 0.0 && (!room || speed_cap < speed_ramp) {
-                (math::min(proposal, speed_ramp), true)
-            } else {
-                (speed_cap, room)
-            };
+        // (Not filtered by the best corner's headroom: its rise is the worst corner's bound, not
+        // the truth's, so it can read below zero while the truth keeps room; the chain needs no
+        // measurement.)
+        let (speed_cap, room) = if self.speed_chain && (!room || speed_cap < speed_ramp) {
+            (math::min(proposal, speed_ramp), true)
+        } else {
+            (speed_cap, room)
+        };
         // The largest command that keeps the truth's speed in the domain: a command at or
         // below it continues the speed's chain.
         let speed_up_to = if room { speed_cap } else { f32::NEG_INFINITY };

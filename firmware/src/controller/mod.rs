@@ -261,12 +261,12 @@
 //! commands, so it keeps the true speed in the domain too, whatever the ego speed's error does
 //! to the box's corner from one measurement to the next (twice the error: 0.55 m/s at
 //! 34 m/s). This is the **speed's chain** (`speed_chain`: a command above the cap it was
-//! issued under ends it, as do standby, a cancel, a clock jump and a best corner whose
-//! headroom is negative). Along it the cap is never below the last command less `j h`: the
+//! issued under ends it, as do standby, a cancel and a clock jump; no measurement does, and
+//! none is needed). Along it the cap is never below the last command less `j h`: the
 //! speed never asks for a faster drop than ISO 15622's jerk limit. (With two authorities the
 //! braking in force's ramp may be the emergency authority's 12 m/s^3, 0.24 m/s^2 a period; a
 //! measured speed that jumped by twice its error made that ramp the answer, an emergency.)
-
+//!
 //! # The driver's controls
 //! Set speed, time-gap setting, engage (SET), cancel and resume arrive through
 //! [`Controller::request`] or [`Inputs::driver`] (CAN frame `0x140`, [`crate::can`]). They change
