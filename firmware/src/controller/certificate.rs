@@ -1039,30 +1039,6 @@ impl<'t> Controller<'t> {
             }
             (lo, true)
         };
-        // The speed's ramp (module docs: the ego's speed): after a step whose command kept the
-        // ego's true speed in the domain, every command at most the last less the ramp's step
-        // (at the jerk that step's cap argued with) keeps it there, whatever the ego speed's
-        // error does to the box's corner. So the cap never asks for a faster drop than that
-        // ramp's (with two authorities the braking in force's ramp may be the emergency
-        // authority's 12 m/s^3, past ISO 15622's jerk limit). Not filtered by the best
-        // corner's headroom: its rise is the worst corner's bound, not the truth's, so it can
-        // read below zero while the truth keeps room; the chain needs no measurement.
-        let speed_ramp = self
-            .speed_chain
-            .map(|j| self.last_command_or_unknown(model) - j * seconds(h_us))
-            .filter(|r| math::is_finite(*r));
-        let (speed_cap, room, chain_jerk) = match (speed_ramp, self.speed_chain) {
-            (Some(ramp), Some(j)) if !room || speed_cap < ramp => {
-                (math::min(proposal, ramp), true, j)
-            }
-            _ => (speed_cap, room, speed_jerk),
-        };
-        // The largest command that keeps the truth's speed in the domain, and the jerk of the
-        // ramp that keeps it there after: a command at or below it continues the chain.
-        let speed_kept = room.then_some(SpeedKept {
-            up_to: speed_cap,
-            jerk: chain_jerk,
-        });
         // The follower caps the command as the speed does: the look-ahead holds up to `up_to`
         // (without a look-ahead nothing passes, and the cap is moot).
         let capped = math::min(proposal, speed_cap);
@@ -1186,7 +1162,6 @@ impl<'t> Controller<'t> {
             headroom,
             jumped,
             passed,
-            speed_kept,
         }
     }
 }
@@ -1257,20 +1232,6 @@ pub(super) struct FrontCheck {
     pub(super) passed: bool,
     /// The braking the passed look-ahead certified the next state with.
     pub(super) named: Option<Braking>,
-    /// What keeps the ego's true speed in the domain (`None`: nothing known).
-    pub(super) speed_kept: Option<SpeedKept>,
-}
-
-/// The speed's chain (module docs: the ego's speed): a command at or below `up_to` keeps the
-/// ego's true speed in the domain for it held a period, then a ramp at `jerk` from it (the
-/// speed cap where it fits at the box's worst corner, else the speed's ramp after a command
-/// that kept it).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct SpeedKept {
-    /// The largest such command, m/s^2.
-    pub(super) up_to: f32,
-    /// The ramp's jerk, m/s^3.
-    pub(super) jerk: f32,
 }
 
 /// The rear value over a box of rear states: the intervals of `gap_follower`, the follower's

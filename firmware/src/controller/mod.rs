@@ -253,22 +253,6 @@
 //! below the domain's top by the ego speed's error and 0.5 m/s, so that cruising never leans on
 //! the cap.
 //!
-//! **The speed's ramp.** The cap argues with the slower of the ramps (`brake_jerk`, 2.5 m/s^3
-//! by default). A command `u_0` at or below the cap that fits at the error box's worst corner
-//! keeps the true peak within `max_ego_speed` for `u_0` held a period, then `u_0 - j (t - h)`;
-//! every later command at most the last less `j h` lies below that profile at every instant
-//! (the staircase under the continuous ramp, by induction), and the actuator is monotone in its
-//! commands, so it keeps the true speed in the domain too, whatever the ego speed's error does
-//! to the box's corner from one measurement to the next (twice the error: 0.55 m/s at
-//! 34 m/s). This is the **speed's chain** (`speed_chain`, which keeps the `j` its first
-//! command's cap argued with, since a vehicle may declare an emergency build-up slower than
-//! `brake_jerk`: a command above the cap it was issued under ends it, as do standby, a cancel
-//! and a clock jump; no measurement does, and none is needed). Along it the cap is never below
-//! the last command less `j h`: the
-//! speed never asks for a faster drop than ISO 15622's jerk limit. (With two authorities the
-//! braking in force's ramp may be the emergency authority's 12 m/s^3, 0.24 m/s^2 a period; a
-//! measured speed that jumped by twice its error made that ramp the answer, an emergency.)
-//!
 //! # The driver's controls
 //! Set speed, time-gap setting, engage (SET), cancel and resume arrive through
 //! [`Controller::request`] or [`Inputs::driver`] (CAN frame `0x140`, [`crate::can`]). They change
@@ -456,7 +440,7 @@ use crate::iso15622;
 use crate::math;
 use crate::sensing::TrackState;
 
-use certificate::{LeaderMemo, Ramp, RearMemo, SpeedKept};
+use certificate::{LeaderMemo, Ramp, RearMemo};
 use emergency::{EmergencyMemo, LightsHold};
 
 /// How long [`Mode::Override`] is still reported after the look-ahead's last trim of the law's
@@ -530,13 +514,6 @@ pub struct Controller<'t> {
     /// state is certified while the ramp is followed, whatever the measurement noise does to
     /// the error box's corner.
     front_chain: bool,
-    /// The last command kept the ego's true speed in the domain (at or below the speed cap
-    /// that fitted at the error box's worst corner, or along the speed's ramp after such a
-    /// command): the speed's ramp from it, at this jerk (m/s^3), keeps it there (module docs:
-    /// the ego's speed). `None`: not known.
-    speed_chain: Option<f32>,
-    /// This step's speed's chain (`FrontCheck::speed_kept`).
-    speed_kept: Option<SpeedKept>,
     /// The last plausible leader measurement, with the ego's speed interval at its time.
     leader: Option<LeaderMemo>,
     /// Since when (the ego measurement's time of the first of an unbroken run of steps) every
@@ -620,8 +597,6 @@ impl<'t> Controller<'t> {
             driver: DriverState::new(&config),
             law: Law::new(),
             front_chain: false,
-            speed_chain: None,
-            speed_kept: None,
             overridden_at_us: None,
             leader: None,
             speed_kept_from_us: None,
@@ -781,7 +756,6 @@ impl<'t> Controller<'t> {
     /// Forgets what the actuator was told: from here on it is what its reported state says.
     fn forget_commands(&mut self) {
         self.front_chain = false;
-        self.speed_chain = None;
         // The lights' run ends with the commands it was argued from.
         self.lights_on_us = None;
         self.lights_run_own_us = None;
@@ -866,7 +840,6 @@ impl<'t> Controller<'t> {
         let model = self.certifier.as_ref().ok().map(|c| c.model);
         let floor = model.map(|m| self.ramp_floor(now, &m));
         self.passed = false;
-        self.speed_kept = None;
         let command = if !self.driver.engaged {
             self.standby(inputs)
         } else if let Some(fault) = jump {
@@ -934,7 +907,6 @@ impl<'t> Controller<'t> {
         self.mode = command.mode;
         self.takeover = command.takeover;
         if command.mode == Mode::Standby {
-            self.speed_chain = None;
             return command;
         }
         self.standby_certificate = Err(DriverError::CertificateUnknown);
@@ -975,7 +947,6 @@ impl<'t> Controller<'t> {
             _ => None,
         };
         self.last_command = Some(c);
-        self.speed_chain = self.speed_kept.filter(|k| c <= k.up_to).map(|k| k.jerk);
         let config = self.config;
         self.law
             .settle(&config, c, seconds(u64::from(config.period_us)));
@@ -1084,7 +1055,6 @@ impl<'t> Controller<'t> {
             }
             let front =
                 self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, planned, look);
-            self.speed_kept = front.speed_kept;
             self.note_decision(&model, now, front.passed, front.named, look);
             command.acceleration = front.command;
             command.leader = self.track_state(leader.at_us, now);
@@ -1206,7 +1176,6 @@ impl<'t> Controller<'t> {
         let mut front = self.enforce_front(
             &model, &leader, ego_speed, t_e, now, pending, proposal, look,
         );
-        self.speed_kept = front.speed_kept;
         self.note_decision(&model, now, front.passed, front.named, look);
         // The emergency answer: as hard as the leader's worst case needs, gentler than the
         // band's floor where that suffices, harder under the emergency authority where it does
