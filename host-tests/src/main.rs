@@ -158,10 +158,43 @@ struct CertificateArgs {
     #[arg(long, value_enum)]
     authorities: Option<AuthoritiesArg>,
     /// The leader's hardest braking, m/s^2 (positive): the table's leader declared anew
-    /// (`table_format::with_leader`; the rear table does not depend on it). The table's own
-    /// without it.
-    #[arg(long, value_name = "M_PER_S2")]
-    leader_braking: Option<f32>,
+    /// (`table_format::with_leader`; the rear table does not depend on it), or `table` for the
+    /// table's own. The table's own without it (`replay`: the search's).
+    #[arg(long, value_name = "M_PER_S2|table")]
+    leader_braking: Option<LeaderBraking>,
+}
+
+/// `--leader-braking`: the table's own leader, or one declared anew.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum LeaderBraking {
+    /// The table's own leader (what a run without the flag uses; for `replay`, what undoes a
+    /// search's declaration).
+    Table,
+    /// The leader's hardest braking declared anew, m/s^2 (positive).
+    Declared(f32),
+}
+
+impl LeaderBraking {
+    /// The braking declared anew, `None` for the table's own.
+    fn declared(self) -> Option<f32> {
+        match self {
+            LeaderBraking::Table => None,
+            LeaderBraking::Declared(b) => Some(b),
+        }
+    }
+}
+
+impl std::str::FromStr for LeaderBraking {
+    type Err = String;
+
+    fn from_str(s: &str) -> std::result::Result<Self, Self::Err> {
+        if s == "table" {
+            return Ok(LeaderBraking::Table);
+        }
+        s.parse::<f32>().map(LeaderBraking::Declared).map_err(|_| {
+            format!("expected a braking in m/s^2 or `table` for the table's own, got {s:?}")
+        })
+    }
 }
 
 impl CertificateArgs {
@@ -177,7 +210,7 @@ impl CertificateArgs {
         if self.authorities() == AuthoritiesArg::Two {
             flags.push_str(" --authorities two");
         }
-        if let Some(b) = self.leader_braking {
+        if let Some(b) = self.leader_braking.and_then(LeaderBraking::declared) {
             flags.push_str(&format!(" --leader-braking {b}"));
         }
         flags
@@ -185,7 +218,7 @@ impl CertificateArgs {
 
     /// The table's bytes with the leader declared, and the configuration.
     fn resolve(&self, bytes: &'static [u8]) -> Result<(&'static [u8], firmware::Config)> {
-        let bytes = match self.leader_braking {
+        let bytes = match self.leader_braking.and_then(LeaderBraking::declared) {
             Some(b) => {
                 anyhow::ensure!(
                     b.is_finite() && b > 0.0,
@@ -337,7 +370,7 @@ fn falsify(
     );
     let searched = Searched {
         authorities: certificate.authorities(),
-        leader_braking: certificate.leader_braking,
+        leader_braking: certificate.leader_braking.and_then(LeaderBraking::declared),
         table: table.clone(),
     };
     let (bytes, config) = certificate.resolve(table_bytes(table)?)?;
@@ -435,7 +468,9 @@ impl Searched {
                 r.authorities.flag()
             ));
         }
-        let leader_braking = given.leader_braking.or(r.leader_braking);
+        let leader_braking = given
+            .leader_braking
+            .map_or(r.leader_braking, LeaderBraking::declared);
         if leader_braking != r.leader_braking {
             notes.push(format!(
                 "replaying with the leader braking at {leader_braking:?} m/s^2 where the search \
@@ -454,7 +489,7 @@ impl Searched {
         (
             CertificateArgs {
                 authorities: Some(authorities),
-                leader_braking,
+                leader_braking: leader_braking.map(LeaderBraking::Declared),
             },
             table,
             notes,
@@ -993,7 +1028,7 @@ mod tests {
         assert_eq!(band.flags(), "");
         let two = CertificateArgs {
             authorities: Some(AuthoritiesArg::Two),
-            leader_braking: Some(9.8),
+            leader_braking: Some(LeaderBraking::Declared(9.8)),
         };
         assert_eq!(two.flags(), " --authorities two --leader-braking 9.8");
         let parsed = Args::try_parse_from(
@@ -1002,6 +1037,15 @@ mod tests {
                 .chain(two.flags().split_whitespace()),
         );
         assert!(parsed.is_ok(), "the flags parse back");
+        let parse = |value: &str| {
+            Args::try_parse_from(["host-tests", "scenarios", "--leader-braking", value])
+        };
+        assert!(parse("table").is_ok() && parse("9.8").is_ok());
+        let refused = parse("soft")
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(refused.contains("`table` for the table's own"), "{refused}");
     }
 
     /// `replay` runs the certificate and table the search recorded, unless its command line
@@ -1024,7 +1068,7 @@ mod tests {
         };
         let (c, t, notes) = Searched::replayed(Some(searched.clone()), &nothing, &None);
         assert_eq!(c.authorities(), AuthoritiesArg::Two);
-        assert_eq!(c.leader_braking, Some(9.8));
+        assert_eq!(c.leader_braking, Some(LeaderBraking::Declared(9.8)));
         assert_eq!(t, searched.table);
         assert!(notes.is_empty(), "{notes:?}");
         let band = CertificateArgs {
@@ -1033,7 +1077,16 @@ mod tests {
         };
         let (c, _, notes) = Searched::replayed(Some(searched.clone()), &band, &None);
         assert_eq!(c.authorities(), AuthoritiesArg::Band);
-        assert_eq!(c.leader_braking, Some(9.8));
+        assert_eq!(c.leader_braking, Some(LeaderBraking::Declared(9.8)));
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        // `--leader-braking table` undoes the search's declaration, with its note.
+        let own = CertificateArgs {
+            authorities: None,
+            leader_braking: Some(LeaderBraking::Table),
+        };
+        let (c, _, notes) = Searched::replayed(Some(searched.clone()), &own, &None);
+        assert_eq!(c.leader_braking, None);
+        assert_eq!(c.flags(), " --authorities two");
         assert_eq!(notes.len(), 1, "{notes:?}");
         let (c, t, notes) = Searched::replayed(None, &nothing, &None);
         assert_eq!((c, t), (nothing, None));
