@@ -203,6 +203,11 @@ impl CertificateArgs {
         self.authorities.unwrap_or(AuthoritiesArg::Band)
     }
 
+    /// The leader's braking declared anew, m/s^2 (`None`: the table's own).
+    fn declared_leader(&self) -> Option<f32> {
+        self.leader_braking.and_then(LeaderBraking::declared)
+    }
+
     /// These arguments as they are given on the command line (nothing for the defaults), for
     /// a command that must run with the same certificate.
     fn flags(&self) -> String {
@@ -210,7 +215,7 @@ impl CertificateArgs {
         if self.authorities() == AuthoritiesArg::Two {
             flags.push_str(" --authorities two");
         }
-        if let Some(b) = self.leader_braking.and_then(LeaderBraking::declared) {
+        if let Some(b) = self.declared_leader() {
             flags.push_str(&format!(" --leader-braking {b}"));
         }
         flags
@@ -218,7 +223,7 @@ impl CertificateArgs {
 
     /// The table's bytes with the leader declared, and the configuration.
     fn resolve(&self, bytes: &'static [u8]) -> Result<(&'static [u8], firmware::Config)> {
-        let bytes = match self.leader_braking.and_then(LeaderBraking::declared) {
+        let bytes = match self.declared_leader() {
             Some(b) => {
                 anyhow::ensure!(
                     b.is_finite() && b > 0.0,
@@ -370,7 +375,7 @@ fn falsify(
     );
     let searched = Searched {
         authorities: certificate.authorities(),
-        leader_braking: certificate.leader_braking.and_then(LeaderBraking::declared),
+        leader_braking: certificate.declared_leader(),
         table: table.clone(),
     };
     let (bytes, config) = certificate.resolve(table_bytes(table)?)?;
