@@ -581,3 +581,70 @@ fn a_refused_engagement_is_reported_not_driven() {
     assert_eq!(alone.engagement_refused, None);
     assert!(alone.passed(), "{alone:?}");
 }
+
+/// An engagement near the domain's top (the late-follower search's findings, seed 51): the ego
+/// at 34.0-34.8 m/s, accelerating at 0.2-1.4 m/s^2, engaged from standby, every error (the
+/// actuator's report's too) at a random end of its bound. The speed headroom is argued along the speed's own ramp at the
+/// comfort band's 2.5 m/s^3; standby certified the engagement along that ramp from what the
+/// actuator may be doing (its report plus the report's error). Were the first engaged step to
+/// restart the ramp from that period's report, whose error reads high, its first command would
+/// raise the true acceleration (0.78 to 0.97 m/s^2 in the finding) and take the true speed
+/// headroom below zero within a period (-0.093 m/s in the finding). The engagement starts on
+/// the ramp standby argued with: every certified start stays certified, and some are refused.
+#[test]
+fn an_engagement_near_the_top_keeps_the_speed_headroom_it_was_certified_with() {
+    let bytes = table_bytes(6.0);
+    let table = Table::parse(bytes).unwrap();
+    let model = HumanModel::of(&table).unwrap();
+    let (mut engaged, mut refused) = (0, 0);
+    for ego in [34.0f32, 34.2, 34.4, 34.47, 34.6, 34.8] {
+        for acceleration in [0.2f32, 0.5, 0.78, 1.0, 1.4] {
+            for seed in 1..=4 {
+                let start = Start {
+                    cars: [
+                        Car { x: 111.4, v: 0.35 },
+                        Car { x: 0.0, v: ego },
+                        Car { x: -68.0, v: 0.7 },
+                    ],
+                    engaged_acceleration: acceleration,
+                };
+                let sensors = SensorModel {
+                    noise: Noise::RandomCorners,
+                    ..sensors()
+                };
+                let mut world = World::new(
+                    bytes,
+                    two(2),
+                    model,
+                    start,
+                    sensors,
+                    ACTUATOR_AT_LIMITS,
+                    Tolerances::default(),
+                    seed,
+                );
+                if world.engage_from_standby(0.0, 0.0).is_err() {
+                    refused += 1;
+                    continue;
+                }
+                engaged += 1;
+                world.request(DriverRequest::SetSpeed(35.0)).ok();
+                for _ in 0..100 {
+                    if !world.step(0.0, 0.0, None) {
+                        break;
+                    }
+                }
+                let score = world.score();
+                assert!(
+                    score.certificate_lost.is_none(),
+                    "ego {ego} m/s at {acceleration} m/s^2, seed {seed}: {score:?}"
+                );
+            }
+        }
+    }
+    println!("{engaged} engaged, {refused} refused");
+    // Not vacuous: both happen (52 of the 120 engaged).
+    assert!(
+        engaged > 40 && refused > 0,
+        "{engaged} engaged, {refused} refused"
+    );
+}

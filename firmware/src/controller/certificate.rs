@@ -670,7 +670,12 @@ impl<'t> Controller<'t> {
                 now_us,
             )
             .gap_after(model, braking.level, clock, dark);
-        let peak = ego_speed + speed_rise(hold, response, ramp_from, jerk);
+        // The speed headroom along the speed's ramp (module docs: the ego's speed).
+        let (speed_ramp, speed_jerk) = self.speed_ramp_after(now_us, last, model);
+        let (speed_response, speed_from) =
+            profile(now_us, speed_ramp, dead_time_us, lag, speed_jerk);
+        let speed_hold = math::max(math::max(pending, last), speed_from);
+        let peak = ego_speed + speed_rise(speed_hold, speed_response, speed_from, speed_jerk);
         Some(Certificate {
             front: front - self.config.certificate.front_margin,
             rear: rear - self.config.certificate.rear_margin,
@@ -685,6 +690,16 @@ impl<'t> Controller<'t> {
             start_us: now_us.saturating_add(u64::from(self.config.period_us)),
             from: last,
         })
+    }
+
+    /// The ramp the speed headroom is argued along after issuing `last` at `now_us`, and its
+    /// jerk: the speed's ramp under way, or the last command's, starting a period on.
+    fn speed_ramp_after(&self, now_us: u64, last: f32, model: &Model) -> (Ramp, f32) {
+        let ramp = self.speed_ramp.unwrap_or(Ramp {
+            start_us: now_us.saturating_add(u64::from(self.config.period_us)),
+            from: last,
+        });
+        (ramp, self.speed_jerk(model))
     }
 
     /// The braking the controller is committed to after this period's command, for
@@ -761,6 +776,39 @@ impl<'t> Controller<'t> {
             start_us: now,
             from: self.last_command_or_unknown(model),
         })
+    }
+
+    /// The jerk the speed headroom is argued along, m/s^3: with two authorities the slowest
+    /// authority's ramp (the comfort band's, unless the emergency's is declared slower), so
+    /// that a speed headroom is kept along a ramp within ISO 15622's jerk limit whatever
+    /// braking is in force; in the comfort band the braking ramp's.
+    pub(super) fn speed_jerk(&self, model: &Model) -> f32 {
+        let band = self.config.certificate.brake_jerk;
+        match (self.two_authorities(), model.emergency) {
+            (true, Some(e)) => math::min(band, e.jerk),
+            _ => self.braking_in_force(model).jerk,
+        }
+    }
+
+    /// With two authorities, the ramp the speed headroom is argued along at `now`, and its
+    /// jerk: the speed's ramp under way, or the last command's from now (module docs: the
+    /// ego's speed; in the comfort band the headroom is argued along the braking ramp).
+    pub(super) fn committed_speed_ramp(&self, now: u64, model: &Model) -> (Ramp, f32) {
+        let ramp = self.speed_ramp.unwrap_or(Ramp {
+            start_us: now,
+            from: self.last_command_or_unknown(model),
+        });
+        (ramp, self.speed_jerk(model))
+    }
+
+    /// With two authorities, the speed's ramp's command for the period from `now`: every
+    /// command at or below it keeps the speed headroom argued along it.
+    pub(super) fn speed_floor(&self, now: u64, model: &Model) -> f32 {
+        let (ramp, jerk) = self.committed_speed_ramp(now, model);
+        let h = seconds(u64::from(self.config.period_us));
+        let into = seconds(now.saturating_sub(ramp.start_us)) + h;
+        // Below zero the ramp raises no speed: its floor there changes no headroom.
+        math::clamp(ramp.from - jerk * into, model.ego.min, model.ego.max)
     }
 
     /// The last command issued, or what the actuator may be doing when none is known.
@@ -893,12 +941,17 @@ impl<'t> Controller<'t> {
             ego_high,
             &model.front(response, math::max(pending, ramp_from), ramp_from, braking),
         );
-        let (response_e, ramp_from_e) = profile(t_e, committed, dead_us, lag, jerk);
+        let (speed_ramp, speed_jerk) = if self.two_authorities() {
+            self.committed_speed_ramp(now, model)
+        } else {
+            (committed, jerk)
+        };
+        let (response_e, ramp_from_e) = profile(t_e, speed_ramp, dead_us, lag, speed_jerk);
         let rise = speed_rise(
             math::max(pending, ramp_from_e),
             response_e,
             ramp_from_e,
-            jerk,
+            speed_jerk,
         );
         MeasuredFront {
             gap,
@@ -968,8 +1021,14 @@ impl<'t> Controller<'t> {
             .filter(|l| l.comfort_lights_on_us.is_some())
             .map(|_| model.band_braking(c.certificate.brake_jerk));
         let look = look.map(|l| l.braking);
-        // The speed cap argues with the slower of the ramps (the peak is higher).
-        let speed_jerk = math::min(look.map_or(jerk, |b| b.jerk), c.certificate.brake_jerk);
+        // The speed cap argues with the slower of the ramps (the peak is higher): with two
+        // authorities the speed's own (`Controller::speed_jerk`).
+        let two = self.two_authorities();
+        let speed_jerk = if two {
+            self.speed_jerk(model)
+        } else {
+            math::min(look.map_or(jerk, |b| b.jerk), c.certificate.brake_jerk)
+        };
         // `u`'s ramp at `jerk` seen from `t_0`: its response, hold and the ramp's value at the
         // hold's end.
         let seen_from = |t_0: u64, u: f32, jerk: f32| {
@@ -1022,7 +1081,17 @@ impl<'t> Controller<'t> {
         // (the peak is non-decreasing in `u`; bisection, keeping the end that passes).
         let top = model.max_ego_speed;
         let speed_fits = |u: f32| peak_of(u) <= top;
-        let low = math::min(floor, proposal);
+        // The cap's low end: the braking ramp's floor in the comfort band; with two
+        // authorities the speed's ramp's, under which the headroom is kept where nothing fits
+        // (the front and the rear then judge that command as any other).
+        let low = math::min(
+            if two {
+                self.speed_floor(now, model)
+            } else {
+                floor
+            },
+            proposal,
+        );
         let (speed_cap, room) = if speed_fits(proposal) {
             (proposal, true)
         } else if !speed_fits(low) {
@@ -1048,7 +1117,10 @@ impl<'t> Controller<'t> {
             capped
         };
         let at_capped = ahead(capped);
-        let passes = room && at_capped > margin_front;
+        // With two authorities a command under the speed's ramp keeps the headroom whether it
+        // fits the cap or not.
+        let speed_kept = room || two;
+        let passes = speed_kept && at_capped > margin_front;
         let certified = value > margin_front && headroom >= 0.0;
         let mut jumped = false;
         let mut passed = passes;
@@ -1070,7 +1142,7 @@ impl<'t> Controller<'t> {
                 (floor, value)
             };
             let graded = c.certificate.override_policy == OverridePolicy::Graded
-                && room
+                && speed_kept
                 && capped > graded_floor;
             let gentler = if graded {
                 least_braking(
@@ -1162,6 +1234,8 @@ impl<'t> Controller<'t> {
             headroom,
             jumped,
             passed,
+            // Read only by the speed's ramp, which two authorities keep.
+            speed_fits: two && speed_fits(command),
         }
     }
 }
@@ -1232,6 +1306,9 @@ pub(super) struct FrontCheck {
     pub(super) passed: bool,
     /// The braking the passed look-ahead certified the next state with.
     pub(super) named: Option<Braking>,
+    /// The command fits the speed cap: the next state's speed headroom is argued from it
+    /// (with two authorities the speed's ramp ends).
+    pub(super) speed_fits: bool,
 }
 
 /// The rear value over a box of rear states: the intervals of `gap_follower`, the follower's

@@ -253,6 +253,29 @@
 //! below the domain's top by the ego speed's error and 0.5 m/s, so that cruising never leans on
 //! the cap.
 //!
+//! **With two authorities the speed has its own ramp.** The braking in force's ramp is the
+//! emergency authority's build-up (12 m/s^3 by default), past ISO 15622's jerk limit, and the
+//! speed needs no such haste: no human drives it. So the headroom is argued along the
+//! *speed's ramp*, at the slowest authority's jerk (the comfort band's 2.5 m/s^3,
+//! `Controller::speed_jerk`), kept apart from the braking ramp: while the commands fit the
+//! cap it is the last command's from now (the cap's look-ahead is then the next state's
+//! headroom); from a command that does not fit, the ramp goes on from its start, through that
+//! command (reference `c + j h`, as the braking ramp), and every command until one fits is at
+//! or below it: the cap's low end is the speed ramp's floor, not the braking ramp's. Standby
+//! argues an engagement along the ramp from what the actuator may be doing (its report plus
+//! the report's error) and keeps that ramp, so the first engaged step goes on from it rather
+//! than restarting from its own period's report, whose error may read higher than the truth
+//! (a command above the true acceleration raises it). Invariance
+//! is the band's argument at that jerk: along one ramp, with the commands at or below it and
+//! the actuator monotone, the bound `ego_speed + max(hold, 0) response + max(r_0, 0)^2 / (2 j)`
+//! never rises. The braking ramp, the look-ahead's level and the lights judge such a command
+//! as any other (it passes their look-ahead or the braking ramp takes it lower), so the front
+//! and the rear keep their own argument; a lower command keeps the speed's. The loop's judge
+//! (`Controller::certificate_with_actuator_and_lights`) takes the speed along the same ramp.
+//! So the ego speed's error switching corners near the top costs a step down the speed's
+//! ramp, within ISO 15622's jerk limit, not an emergency (`host-tests/tests/scenarios.rs`,
+//! `the_speed_near_the_domains_top_is_no_emergency_with_two_authorities`).
+//!
 //! # The driver's controls
 //! Set speed, time-gap setting, engage (SET), cancel and resume arrive through
 //! [`Controller::request`] or [`Inputs::driver`] (CAN frame `0x140`, [`crate::can`]). They change
@@ -488,6 +511,12 @@ pub struct Controller<'t> {
     ramp: Option<Ramp>,
     /// The last command passed the look-ahead (its ramp, if one was under way, ends).
     passed: bool,
+    /// With two authorities, the speed's ramp under way (`None`: the last command fitted the
+    /// speed cap): the ramp the speed headroom is argued along, at the slowest authority's jerk,
+    /// kept from its start while the commands stay under it (module docs: the ego's speed).
+    speed_ramp: Option<Ramp>,
+    /// The last command fitted the speed cap (the speed's ramp, if one was under way, ends).
+    speed_fitted: bool,
     /// With two authorities, the braking in force: the one the last passed look-ahead named,
     /// or the standby certificate's before an engagement (`None`: not known).
     in_force: Option<Braking>,
@@ -589,6 +618,8 @@ impl<'t> Controller<'t> {
             reported: IssuedCommands::new(),
             ramp: None,
             passed: false,
+            speed_ramp: None,
+            speed_fitted: false,
             in_force: None,
             allowed: None,
             law_braking: None,
@@ -765,6 +796,7 @@ impl<'t> Controller<'t> {
         self.lights_way_down = false;
         self.issued.forget();
         self.ramp = None;
+        self.speed_ramp = None;
         self.in_force = None;
         self.last_command = None;
         self.law.reset();
@@ -839,7 +871,11 @@ impl<'t> Controller<'t> {
         }
         let model = self.certifier.as_ref().ok().map(|c| c.model);
         let floor = model.map(|m| self.ramp_floor(now, &m));
+        let speed_floor = model
+            .filter(|_| self.two_authorities())
+            .map(|m| self.speed_floor(now, &m));
         self.passed = false;
+        self.speed_fitted = false;
         let command = if !self.driver.engaged {
             self.standby(inputs)
         } else if let Some(fault) = jump {
@@ -946,6 +982,22 @@ impl<'t> Controller<'t> {
             }
             _ => None,
         };
+        // The speed's ramp (two authorities): a command that did not fit the speed cap is at or
+        // below the speed's ramp, which goes on (one under way keeps its start and reference; a
+        // new one starts now through the command, as the braking ramp does). A command that
+        // fitted ends it: the next step's speed headroom is the one the cap argued with.
+        self.speed_ramp = match (model, speed_floor) {
+            (Some(m), Some(speed_floor))
+                if self.two_authorities() && c <= speed_floor && !self.speed_fitted =>
+            {
+                let jerk = self.speed_jerk(&m);
+                Some(self.speed_ramp.unwrap_or(Ramp {
+                    start_us: now,
+                    from: c + jerk * h,
+                }))
+            }
+            _ => None,
+        };
         self.last_command = Some(c);
         let config = self.config;
         self.law
@@ -963,6 +1015,7 @@ impl<'t> Controller<'t> {
     fn standby(&mut self, inputs: &Inputs) -> Command {
         let now = inputs.now_us;
         self.standby_certificate = Err(DriverError::CertificateUnknown);
+        self.speed_ramp = None;
         let mut command = Command::bare(0.0, Mode::Standby, None);
         let (Ok(model), Ok(v)) = (
             self.certifier.as_ref().map(|c| c.model),
@@ -1013,6 +1066,11 @@ impl<'t> Controller<'t> {
         };
         command.margin = certificate.ok().map(|c| c.margin());
         self.standby_certificate = certificate;
+        // The speed's ramp an engagement starts on: the one this certificate argued along (from
+        // what the actuator may be doing now), not one restarted from a later report.
+        if self.two_authorities() {
+            self.speed_ramp = Some(self.committed_speed_ramp(now, &model).0);
+        }
         command
     }
 
@@ -1056,6 +1114,7 @@ impl<'t> Controller<'t> {
             let front =
                 self.enforce_front(&model, &leader, ego_speed, t_e, now, pending, planned, look);
             self.note_decision(&model, now, front.passed, front.named, look);
+            self.speed_fitted = front.speed_fits;
             command.acceleration = front.command;
             command.leader = self.track_state(leader.at_us, now);
         }
@@ -1177,6 +1236,9 @@ impl<'t> Controller<'t> {
             &model, &leader, ego_speed, t_e, now, pending, proposal, look,
         );
         self.note_decision(&model, now, front.passed, front.named, look);
+        // Every later change of the command lowers it: it fits the speed cap where this one
+        // did (the peak is non-decreasing in the command).
+        self.speed_fitted = front.speed_fits;
         // The emergency answer: as hard as the leader's worst case needs, gentler than the
         // band's floor where that suffices, harder under the emergency authority where it does
         // not (module docs: emergencies).
