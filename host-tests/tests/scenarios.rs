@@ -84,8 +84,8 @@ fn the_speed_near_the_domains_top_is_no_emergency_with_two_authorities() {
             if leader_braking == 6.0 {
                 assert!(r.passed(), "{r:#?}");
             }
-            // Not vacuous: the ego comes within a metre a second of the top (its set speed is
-            // the domain's), closer than the speed's error box is wide twice over.
+            // Not vacuous: the ego comes within 1 m/s of the top (its set speed is the
+            // domain's), less than twice the ego speed's error box (0.55 m/s wide there).
             let fastest = trace.iter().map(|p| p.speeds[1]).fold(0.0f32, f32::max);
             assert!(fastest > 34.0, "{leader_braking}: {fastest}");
         }
