@@ -636,7 +636,7 @@ pub struct MethodSummary {
     pub min_gap_leader_m: f32,
     /// The smallest gap to the follower, m.
     pub min_gap_follower_m: f32,
-    /// The largest ego speed, m/s.
+    /// The largest ego speed while the firmware drove (engaged), m/s.
     pub max_ego_speed_m_per_s: f32,
     /// Engaged starts accelerating at 34-35 m/s.
     pub fast_accelerating_starts: usize,

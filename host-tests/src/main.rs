@@ -390,7 +390,7 @@ fn falsify(
     let report = search(&setting, &budget, seed, &|n| bar.inc(n as u64));
     bar.finish_and_clear();
     println!(
-        "| method | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | uncertified periods | min front [m] | min rear [m] | min speed headroom [m/s] | min gap front [m] | min gap rear [m] | max ego speed [m/s] | accelerating starts at 34-35 m/s | followers at 35 m/s |"
+        "| method | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | uncertified periods | min front [m] | min rear [m] | min speed headroom [m/s] | min gap front [m] | min gap rear [m] | max ego speed engaged [m/s] | accelerating starts at 34-35 m/s | followers at 35 m/s |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for m in &report.methods {

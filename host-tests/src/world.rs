@@ -180,7 +180,8 @@ pub struct Score {
     /// measured state (a true start at the certified set's edge, its error box past it) and
     /// gave the emergency answer.
     pub engaged_in_emergency: bool,
-    /// The largest ego speed, m/s.
+    /// The largest ego speed at the end of a period the firmware drove (engaged), m/s: in
+    /// standby the driver drives, and nothing is claimed.
     pub max_ego_speed: f32,
     /// Periods of the minimum-risk manoeuvre without a certificate (a fault the argument does
     /// not cover: the ego's speed signal lost, a clock jump).
@@ -1025,6 +1026,7 @@ impl<'t> World<'t> {
         self.iso.push(t, self.cars[1].v, realised);
         s.iso = self.iso.worst();
         self.actuator.request(now_us, command.acceleration);
+        let engaged = command.mode != Mode::Standby;
         let before = self.cars;
         let [mut leader, mut ego, mut follower] = self.cars;
         let dt_us = self.period_us / SUB_STEPS;
@@ -1044,7 +1046,9 @@ impl<'t> World<'t> {
             ego.advance(a_ego, dt);
             follower.advance(a_follower, dt);
         }
-        s.max_ego_speed = s.max_ego_speed.max(ego.v);
+        if engaged {
+            s.max_ego_speed = s.max_ego_speed.max(ego.v);
+        }
         self.cars = [leader, ego, follower];
         if let Some((mut adjacent, enters)) = self.adjacent {
             // In the next lane, it keeps its speed.

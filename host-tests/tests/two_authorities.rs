@@ -638,10 +638,34 @@ fn an_engagement_near_the_top_keeps_the_speed_headroom_it_was_certified_with() {
                     score.certificate_lost.is_none(),
                     "ego {ego} m/s at {acceleration} m/s^2, seed {seed}: {score:?}"
                 );
+                assert!(score.max_ego_speed <= 35.0, "{score:?}");
             }
         }
     }
     println!("{engaged} engaged, {refused} refused");
+    // A start at the top accelerating is refused; its standby period, which the driver drove
+    // past 35 m/s, is no speed of the firmware's (the searches' "max ego speed engaged").
+    let start = Start {
+        cars: [
+            Car { x: 111.4, v: 0.35 },
+            Car { x: 0.0, v: 34.99 },
+            Car { x: -68.0, v: 0.7 },
+        ],
+        engaged_acceleration: 2.0,
+    };
+    let mut world = World::new(
+        bytes,
+        two(2),
+        model,
+        start,
+        sensors(),
+        ACTUATOR_AT_LIMITS,
+        Tolerances::default(),
+        1,
+    );
+    assert!(world.engage_from_standby(0.0, 0.0).is_err());
+    assert!(world.cars()[1].v > 35.0, "{:?}", world.cars());
+    assert_eq!(world.score().max_ego_speed, 0.0, "{:?}", world.score());
     // Not vacuous: both happen (52 of the 120 engaged).
     assert!(
         engaged > 40 && refused > 0,
