@@ -265,15 +265,15 @@
 //! argues an engagement along the ramp from what the actuator may be doing (its report plus
 //! the report's error) and keeps that ramp, so the first engaged step goes on from it rather
 //! than restarting from its own period's report, whose error may read higher than the truth
-//! (a command above the true acceleration raises it). Invariance
-//! is the band's argument at that jerk: along one ramp, with the commands at or below it and
-//! the actuator monotone, the bound `ego_speed + max(hold, 0) response + max(r_0, 0)^2 / (2 j)`
-//! never rises. The braking ramp, the look-ahead's level and the lights judge such a command
-//! as any other (it passes their look-ahead or the braking ramp takes it lower), so the front
-//! and the rear keep their own argument; a lower command keeps the speed's. The loop's judge
-//! (`Controller::certificate_with_actuator_and_lights`) takes the speed along the same ramp.
-//! So the ego speed's error switching corners near the top costs a step down the speed's
-//! ramp, within ISO 15622's jerk limit, not an emergency (`host-tests/tests/scenarios.rs`,
+//! (a command above the true acceleration raises it). Invariance is the band's argument at
+//! that jerk: along one ramp, with the commands at or below it and the actuator monotone, the
+//! bound `ego_speed + max(hold, 0) response + max(r_0, 0)^2 / (2 j)` never rises. The braking
+//! ramp, the look-ahead's level and the lights judge such a command as any other (it passes
+//! their look-ahead or the braking ramp takes it lower), so the front and the rear keep their
+//! own argument; a lower command keeps the speed's. The loop's judge
+//! (`Controller::certificate_with_actuator_and_lights`) takes the speed along the same ramp. So
+//! the ego speed's error switching corners near the top costs a step down the speed's ramp,
+//! within ISO 15622's jerk limit, not an emergency (`host-tests/tests/scenarios.rs`,
 //! `the_speed_near_the_domains_top_is_no_emergency_with_two_authorities`).
 //!
 //! # The driver's controls
