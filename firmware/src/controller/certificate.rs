@@ -459,6 +459,15 @@ pub(super) struct Ramp {
     pub(super) from: f32,
 }
 
+impl Ramp {
+    /// The ramp's command at `jerk` for the period of `period_us` from `now` (its value at the
+    /// period's end), unclamped.
+    pub(super) fn command_for_period(&self, now: u64, period_us: u32, jerk: f32) -> f32 {
+        let into = seconds(now.saturating_sub(self.start_us)) + seconds(u64::from(period_us));
+        self.from - jerk * into
+    }
+}
+
 /// The profile a ramp gives an ego argued from time `t_0` through the actuator's dead time
 /// and lag: `(response_time, ramp_from)`, the hold lasting until the ramp's start takes force
 /// plus the lag, and the ramp's value at the hold's end (`table_format::front`'s module docs:
@@ -805,10 +814,9 @@ impl<'t> Controller<'t> {
     /// command at or below it keeps the speed headroom argued along it.
     pub(super) fn speed_floor(&self, now: u64, model: &Model) -> f32 {
         let (ramp, jerk) = self.committed_speed_ramp(now, model);
-        let h = seconds(u64::from(self.config.period_us));
-        let into = seconds(now.saturating_sub(ramp.start_us)) + h;
+        let command = ramp.command_for_period(now, self.config.period_us, jerk);
         // Below zero the ramp raises no speed: its floor there changes no headroom.
-        math::clamp(ramp.from - jerk * into, model.ego.min, model.ego.max)
+        math::clamp(command, model.ego.min, model.ego.max)
     }
 
     /// The last command issued, or what the actuator may be doing when none is known.
@@ -824,10 +832,10 @@ impl<'t> Controller<'t> {
         if !math::is_finite(jerk) {
             return -level;
         }
-        let ramp = self.committed_ramp(now, model);
-        let h = seconds(u64::from(self.config.period_us));
-        let into = seconds(now.saturating_sub(ramp.start_us)) + h;
-        math::clamp(ramp.from - jerk * into, -level, model.ego.max)
+        let command =
+            self.committed_ramp(now, model)
+                .command_for_period(now, self.config.period_us, jerk);
+        math::clamp(command, -level, model.ego.max)
     }
 
     /// The least measured gap at which a command of zero passes the look-ahead behind a leader
