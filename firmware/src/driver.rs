@@ -47,6 +47,12 @@ pub enum DriverError {
     /// table, no plausible or a lost track, no good ego speed, or no standby period since the
     /// last cancel). The car stays in standby.
     CertificateUnknown,
+    /// Engagement refused: the state measured in the last standby period is certified, but
+    /// the follower behind leaves the commands no time to go down to the brake lights'
+    /// command within ISO 15622's jerk limit, so the first engaged steps would be an
+    /// emergency braking. The car stays in standby; the driver brakes, or waits for the
+    /// follower to drop back.
+    NeedsEmergencyBraking,
 }
 
 impl core::fmt::Display for DriverError {
@@ -57,6 +63,9 @@ impl core::fmt::Display for DriverError {
             DriverError::NotCertified => "not engaged: the measured state is not certified",
             DriverError::CertificateUnknown => {
                 "not engaged: no certificate could be evaluated in standby"
+            }
+            DriverError::NeedsEmergencyBraking => {
+                "not engaged: the follower is too close to brake comfortably"
             }
         })
     }

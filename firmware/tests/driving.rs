@@ -404,6 +404,7 @@ fn refusals_and_faults_say_what_is_wrong() {
         DriverError::NoSuchTimeGap,
         DriverError::NotCertified,
         DriverError::CertificateUnknown,
+        DriverError::NeedsEmergencyBraking,
     ]
     .map(|e| e.to_string());
     let faults = [
@@ -461,4 +462,83 @@ fn the_certifier_refuses_a_configuration_the_controller_refuses() {
     assert!(Controller::new(DEFAULT_TABLE, config).table().is_none());
     let table = firmware::table_format::Table::parse(DEFAULT_TABLE).unwrap();
     assert!(Certifier::new(table, &Config::default()).is_ok());
+}
+
+/// With two authorities an engagement is taken only where the follower leaves the first
+/// engaged commands a comfortable way to brake: as a follower at the ego's speed drops back
+/// from 4 to 40 m behind (a leader 100 m ahead, the declared errors at the box's worst corner
+/// for the front), SET is refused as uncertified, then for want of a comfortable way
+/// (`DriverError::NeedsEmergencyBraking`: the state is certified, but only by commands that
+/// would drop faster than ISO 15622's jerk limit), then taken, in that order and each at
+/// least once, at 8.3, 15 and 25 m/s. The comfort band alone (the paper's follower, which
+/// brakes at once) takes every one of them.
+#[test]
+fn an_engagement_the_follower_leaves_no_comfortable_way_is_refused() {
+    for authorities in [
+        firmware::Authorities::ComfortBand,
+        firmware::Authorities::Two,
+    ] {
+        let config = Config {
+            certificate: CertificateConfig {
+                authorities,
+                ..CertificateConfig::default()
+            },
+            ..Config::default()
+        };
+        let two = authorities == firmware::Authorities::Two;
+        let s = config.sensors;
+        let long = |g: f32| g + s.error.range + s.error.range_relative * g;
+        let mut c = Controller::new(DEFAULT_TABLE, config);
+        let _ = c.request(DriverRequest::Cancel);
+        let mut k = 0u64;
+        for speed in [8.3f32, 15.0, 25.0] {
+            // 0: not certified, 1: no comfortable way, 2: taken.
+            let mut verdicts = Vec::new();
+            for gap_follower in (0..13).map(|i| 4.0 + 3.0 * i as f32) {
+                for _ in 0..2 {
+                    let now = NOW + k * 20_000;
+                    k += 1;
+                    let track = |gap: f32| {
+                        Measurement::new(
+                            Track {
+                                gap: long(gap),
+                                rel_speed: s.error.range_rate,
+                            },
+                            now,
+                        )
+                    };
+                    let measured = speed - s.error.ego_speed - s.error.ego_speed_relative * speed;
+                    let cmd = c.step(&Inputs {
+                        leader: track(100.0),
+                        follower: track(gap_follower),
+                        ego_speed: Measurement::new(measured, now),
+                        ego_acceleration: Measurement::new(-s.acceleration_error, now),
+                        driver: None,
+                        now_us: now,
+                    });
+                    assert_eq!(cmd.mode, Mode::Standby);
+                }
+                verdicts.push(match c.request(DriverRequest::Engage) {
+                    Err(DriverError::NotCertified) => 0,
+                    Err(DriverError::NeedsEmergencyBraking) => 1,
+                    Ok(()) => {
+                        c.request(DriverRequest::Cancel).unwrap();
+                        2
+                    }
+                    Err(e) => panic!("{speed} m/s, {gap_follower} m: {e}"),
+                });
+            }
+            if two {
+                assert!(verdicts.is_sorted(), "{speed} m/s: {verdicts:?}");
+                for verdict in 0..3 {
+                    assert!(verdicts.contains(&verdict), "{speed} m/s: {verdicts:?}");
+                }
+            } else {
+                assert!(
+                    verdicts.iter().all(|&v| v == 2),
+                    "{speed} m/s: {verdicts:?}"
+                );
+            }
+        }
+    }
 }

@@ -91,3 +91,61 @@ fn the_speed_near_the_domains_top_is_no_emergency_with_two_authorities() {
         }
     }
 }
+
+/// The suite with two authorities, behind the table's leader (6 m/s^2) and one braking at
+/// 9.8 m/s^2: no run brings an emergency period, and none collides or loses the certificate.
+/// The engagements that would have jumped, faster than ISO 15622's jerk limit, to the brake
+/// lights' command or down the braking ramp within 0.12 s (the Euro NCAP CCRs and CCRm at
+/// 30 km/h with an IDM follower 14.5 m behind, 1 period each; at 9.8 also the steady
+/// following at 10 m/s and the stop and go at 10 mph, 3 periods each) are refused in standby
+/// with their reason, `NeedsEmergencyBraking`; every refusal has a follower, and every run
+/// without one engages.
+#[test]
+fn the_suite_with_two_authorities_engages_only_without_an_emergency() {
+    let config = Config {
+        certificate: CertificateConfig {
+            authorities: Authorities::Two,
+            ..CertificateConfig::default()
+        },
+        ..Config::default()
+    };
+    for leader_braking in [6.0, 9.8] {
+        let bytes: &'static [u8] = table_format::with_leader(
+            firmware::DEFAULT_TABLE,
+            Bounds {
+                min: -leader_braking,
+                max: 2.0,
+            },
+        )
+        .unwrap()
+        .leak();
+        let table = Table::parse(bytes).unwrap();
+        let mut needs_emergency = Vec::new();
+        for s in suite() {
+            for follower in [false, true] {
+                let r = run(&table, bytes, config, &s, follower, None).unwrap();
+                assert_eq!(r.emergency_periods, 0, "{leader_braking}: {r:#?}");
+                assert!(
+                    !r.collided && !r.certificate_lost,
+                    "{leader_braking}: {r:#?}"
+                );
+                assert!(
+                    follower || r.engagement_refused.is_none(),
+                    "{leader_braking}: {r:#?}"
+                );
+                if r.engagement_refused.as_deref() == Some("NeedsEmergencyBraking") {
+                    needs_emergency.push(s.name.clone());
+                }
+            }
+        }
+        for name in [
+            "CCRs: stationary target, ego 30 km/h",
+            "CCRm: target at 20 km/h, ego 30 km/h",
+        ] {
+            assert!(
+                needs_emergency.iter().any(|n| n == name),
+                "{leader_braking}: {needs_emergency:?}"
+            );
+        }
+    }
+}

@@ -112,6 +112,20 @@ impl Controller<'_> {
         pending: f32,
         command: f32,
     ) -> Option<(Braking, Option<RearArgued>)> {
+        self.allowed_with_lights_at(model, now, pending, command, None)
+    }
+
+    /// [`Controller::look_ahead_argued`] with the lights brought on by a ramp from `command`
+    /// at `lights_jerk` (`None`: the look-ahead's, the emergency authority's build-up): the
+    /// hardest level the follower then allows, at the emergency authority's build-up.
+    fn allowed_with_lights_at(
+        &self,
+        model: &Model,
+        now: u64,
+        pending: f32,
+        command: f32,
+        lights_jerk: Option<f32>,
+    ) -> Option<(Braking, Option<RearArgued>)> {
         if !self.two_authorities() {
             return Some((self.braking_in_force(model), None));
         }
@@ -121,7 +135,8 @@ impl Controller<'_> {
             return Some((e, None));
         }
         let beta = -model.ego.min;
-        let ((clock, dark), _) = self.dark_after(now, pending, command, e.jerk, beta)?;
+        let lights_jerk = lights_jerk.unwrap_or(e.jerk);
+        let ((clock, dark), _) = self.dark_after(now, pending, command, lights_jerk, beta)?;
         let margin = self.config.certificate.rear_margin;
         let corner = self.rear_corner(model, &rear, now);
         let braking = hardest_clearing(
@@ -134,7 +149,13 @@ impl Controller<'_> {
             level,
             jerk: e.jerk,
         })
-        .or_else(|| self.gentler_than_band(model, now, pending, command, e.jerk, &corner))?;
+        .or_else(|| {
+            self.gentler_than_band(model, now, pending, command, lights_jerk, &corner)
+                .map(|level| Braking {
+                    level,
+                    jerk: e.jerk,
+                })
+        })?;
         Some((
             braking,
             Some(RearArgued {
@@ -153,11 +174,12 @@ impl Controller<'_> {
         -self.lights_command()
     }
 
-    /// The braking a look-ahead argues with where the follower allows not even the band's
+    /// The level a look-ahead argues with where the follower allows not even the band's
     /// floor: the hardest of [`GENTLER_LEVELS`] levels, evenly spaced from a step below the
     /// band's floor down to [`Controller::least_level`], at which the rear check of
-    /// [`Controller::look_ahead_braking`] clears, at the emergency authority's build-up `jerk`
-    /// (the rule's brakings, `table_format::authority`'s module docs); `None` where none does.
+    /// [`Controller::look_ahead_braking`] clears, the lights coming on along a ramp at `jerk`
+    /// (the look-ahead's: the emergency authority's build-up, the rule's brakings,
+    /// `table_format::authority`'s module docs); `None` where none does.
     /// Each pair of neighbouring levels is checked with the lights' on-time of its gentler
     /// level: a ramp that ends nearer the lights' deceleration lights them later through the
     /// lag (the lag is monotone in its input), so the harder level is credited no more than
@@ -172,7 +194,7 @@ impl Controller<'_> {
         command: f32,
         jerk: f32,
         corner: &RearCorner,
-    ) -> Option<Braking> {
+    ) -> Option<f32> {
         let beta = -model.ego.min;
         let least = self.least_level();
         // (NaN compares false: no level.)
@@ -190,7 +212,6 @@ impl Controller<'_> {
             [harder, gentler]
                 .into_iter()
                 .find(|l| corner.clears(model, *l, clock, dark, margin))
-                .map(|level| Braking { level, jerk })
         })
     }
 
@@ -328,7 +349,12 @@ impl Controller<'_> {
         // proposal (`Controller::look_ahead_braking`), so the look-ahead that passed covers it.
         if let Some(l) = found {
             let down = math::max(last - step, self.lights_command());
-            if down < proposal && !self.lit_in_time(model, l.argued, proposal, ego_speed) {
+            let spare = if self.lights_way_down {
+                LIGHTS_WAY_RELEASE_S
+            } else {
+                0.0
+            };
+            if down < proposal && !self.lit_in_time(model, l.argued, proposal, ego_speed, spare) {
                 found = Some(Look {
                     up_to: down,
                     way_down: true,
@@ -350,8 +376,9 @@ impl Controller<'_> {
 
     /// Whether the follower would still allow the comfort band's floor if `command` were held
     /// for as long as the comfortable way to the lights' command takes from it (ISO 15622's
-    /// jerk limit at `ego_speed`, after a period; [`LIGHTS_WAY_RELEASE_S`] longer while that
-    /// way is under way, so that the measurement's noise does not flip it every period): the
+    /// jerk limit at `ego_speed`, after a period, and `spare` longer: [`LIGHTS_WAY_RELEASE_S`]
+    /// while that way is under way, so that the measurement's noise does not flip it every
+    /// period): the
     /// look-ahead's rear check for the
     /// band's floor (the lights after `command` along the emergency ramp: `argued`, the
     /// look-ahead's own for `command`), with the follower's box corner carried that long at
@@ -365,6 +392,7 @@ impl Controller<'_> {
         argued: Option<RearArgued>,
         command: f32,
         ego_speed: f32,
+        spare: f32,
     ) -> bool {
         let Some(RearArgued {
             corner,
@@ -375,11 +403,6 @@ impl Controller<'_> {
             return true;
         };
         let h = seconds(u64::from(self.config.period_us));
-        let spare = if self.lights_way_down {
-            LIGHTS_WAY_RELEASE_S
-        } else {
-            0.0
-        };
         let lead = h + (command - self.lights_command()) / iso15622::jerk_limit(ego_speed) + spare;
         corner.ahead_by(lead, command).clears(
             model,
@@ -388,6 +411,54 @@ impl Controller<'_> {
             dark,
             self.config.certificate.rear_margin,
         )
+    }
+
+    /// Whether an engagement from standby now starts without an emergency as far as the
+    /// follower behind decides it (a prediction for the driver, not a bound: the engaged steps
+    /// keep their own certificate). Either the look-ahead would not send the first commands
+    /// down the comfortable way to the lights ([`Controller::lit_in_time`]), or, where it
+    /// would, the braking the follower allows with the lights lit that way certifies the front
+    /// (`front_certified`; the look-ahead's level with the lights coming on along a ramp at ISO
+    /// 15622's jerk limit at `ego_speed`, not the emergency authority's build-up). Otherwise the
+    /// engaged steps go down that way until their look-ahead fails and then jump, faster than
+    /// the jerk limit, to the lights' command or along the braking ramp: an emergency the
+    /// driver did not ask for (with the defaults, a follower 14.5 m behind at the ego's
+    /// 8.3 m/s: the scenario suite's CCRs and CCRm at 30 km/h). `true` where the kept follower
+    /// track shows no follower, `false` without one.
+    ///
+    /// Argued from what the engaged steps may see, not what standby sees: the actuator doing
+    /// the report plus three times its error and the lag's tail (the truth is at most the report
+    /// plus its error, [`Controller::unknown_acceleration`], and the next report reads at most
+    /// the truth plus its error again: a period later the noise at its other corner read
+    /// 0.47 m/s^2 where standby had 0.06, and the look-ahead's bound added the lag's tail),
+    /// and the way starting two periods on (the first engaged step is a period after standby,
+    /// and it was the second whose look-ahead sent the commands down the way, in the suite's
+    /// steady following at 10 m/s behind a 9.8 m/s^2 leader).
+    pub(super) fn engages_comfortably(
+        &self,
+        model: &Model,
+        now: u64,
+        ego_speed: f32,
+        front_certified: impl Fn(Braking) -> bool,
+    ) -> bool {
+        let Some(rear) = self.rear else {
+            return false;
+        };
+        if !math::is_finite(rear.track.gap) {
+            return true;
+        }
+        let reread = 2.0 * self.config.sensors.acceleration_error;
+        let doing = math::min(self.unknown_acceleration(model) + reread, model.ego.max)
+            + self.lag_tail(model);
+        let pending = math::max(self.pending(now, model), doing);
+        let later = now.saturating_add(2 * u64::from(self.config.period_us));
+        let held = self
+            .look_ahead_argued(model, later, pending, doing)
+            .is_some_and(|(_, argued)| self.lit_in_time(model, argued, doing, ego_speed, 0.0));
+        let comfortable = Some(iso15622::jerk_limit(ego_speed));
+        held || self
+            .allowed_with_lights_at(model, now, pending, doing, comfortable)
+            .is_some_and(|(braking, _)| front_certified(braking))
     }
 
     /// The rear half of `braking` now (m, less `rear_margin`), with two authorities: the

@@ -187,7 +187,18 @@
 //!   last look-ahead ([`Controller::allowed_braking`]): a close follower makes the car keep more
 //!   room ahead.
 //! - **Engagement**: in standby the braking in force is the one a look-ahead from what the
-//!   actuator is doing finds, and the engagement is judged by its certificate.
+//!   actuator is doing finds, and the engagement is judged by its certificate. A certified
+//!   engagement is taken only where the follower leaves the first engaged commands a
+//!   comfortable way (`authorities::engages_comfortably`): the look-ahead would not send them
+//!   down the comfortable way to the lights at once, or, where it would, the level the
+//!   follower allows with the lights lit along that way (ISO 15622's jerk, not the emergency
+//!   authority's build-up) still certifies the front. Elsewhere the engaged steps would go
+//!   down that way until their look-ahead failed and then jump to the lights' command within
+//!   0.12 s, an emergency the driver did not ask for; the engagement is refused
+//!   ([`DriverError::NeedsEmergencyBraking`]). A prediction for the driver, argued from what
+//!   the engaged steps may read (the actuator's report read again at its error's other end,
+//!   the way starting two periods on), not a bound: the engaged steps keep their own
+//!   certificate.
 //!
 //! What it does not do yet: credit a braking below `beta` since a measurement (the command
 //! history keeps its largest command, so the ego's braking since a follower measurement is
@@ -286,7 +297,8 @@
 //! and carried in the command's margin; an engagement (SET or resume) is taken only where it is
 //! positive, and refused otherwise with its reason ([`DriverError::NotCertified`],
 //! [`DriverError::CertificateUnknown`]): an engagement into an uncertified state would leave the
-//! certificate nothing to keep.
+//! certificate nothing to keep. With two authorities one the follower leaves no comfortable
+//! way to brake is refused too ([`DriverError::NeedsEmergencyBraking`], above: engagement).
 //!
 //! # The domain
 //! The rear table covers `gap_follower` up to its last breakpoint, and speeds in
@@ -576,7 +588,8 @@ pub struct Controller<'t> {
     /// [`LIGHTS_WAY_RELEASE_S`](authorities::LIGHTS_WAY_RELEASE_S) to spare.
     lights_way_down: bool,
     /// The certificate of the state measured in the last standby period (reset whenever a
-    /// step is engaged): what an engagement is judged by.
+    /// step is engaged), or why an engagement would be refused: what an engagement is judged
+    /// by.
     standby_certificate: Result<Certificate, DriverError>,
     /// The latest ego-speed measurements `(time, speed)`, oldest first: the one nearest a
     /// track's time gives the ego's speed there.
@@ -762,8 +775,9 @@ impl<'t> Controller<'t> {
     /// keeps knowing what the actuator was told. A cancel forgets it (the driver drives until
     /// the next engagement, which the actuator's reported state covers). An engagement from
     /// standby (SET or resume) is refused unless the state measured in the last standby period
-    /// is certified ([`DriverError::NotCertified`], [`DriverError::CertificateUnknown`]): the
-    /// car stays in standby.
+    /// is certified ([`DriverError::NotCertified`], [`DriverError::CertificateUnknown`]) and,
+    /// with two authorities, the follower leaves the first engaged commands a comfortable way
+    /// to brake ([`DriverError::NeedsEmergencyBraking`]): the car stays in standby.
     pub fn request(&mut self, request: DriverRequest) -> Result<(), DriverError> {
         let ego_speed = self.ego_history.back().map(|e| e.1);
         let was_engaged = self.driver.engaged;
@@ -1065,7 +1079,24 @@ impl<'t> Controller<'t> {
             }
         };
         command.margin = certificate.ok().map(|c| c.margin());
-        self.standby_certificate = certificate;
+        // With two authorities a certified state is engaged only where the follower leaves
+        // the first engaged steps a comfortable way: they would otherwise jump, an emergency
+        // the driver did not ask for.
+        let front_certified = |b: Braking| {
+            b.level >= braking.level
+                || self
+                    .measured_front(&model, &leader, v, t_e, now, pending, b)
+                    .value
+                    > self.config.certificate.front_margin
+        };
+        let refused = self.two_authorities()
+            && certificate.is_ok_and(|c| c.is_certified())
+            && !self.engages_comfortably(&model, now, v, front_certified);
+        self.standby_certificate = if refused {
+            Err(DriverError::NeedsEmergencyBraking)
+        } else {
+            certificate
+        };
         // The speed's ramp an engagement starts on: the one this certificate argued along (from
         // what the actuator may be doing now), not one restarted from a later report.
         if self.two_authorities() {
