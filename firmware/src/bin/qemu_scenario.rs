@@ -57,7 +57,8 @@ macro_rules! report {
 }
 use firmware::controller::ISO_15622_LIMITS;
 use firmware::{
-    Config, Controller, Inputs, Measurement, Mode, Track, CERTIFICATE_TOLERANCE, DEFAULT_TABLE,
+    Config, Controller, DriverError, DriverRequest, Inputs, Measurement, Mode, Track,
+    CERTIFICATE_TOLERANCE, DEFAULT_TABLE,
 };
 
 /// Tells the instruction counter that the step just counted was an emergency (the cut-in
@@ -94,6 +95,14 @@ pub extern "C" fn hjacc_mode_minimum_risk() {
 #[inline(never)]
 pub extern "C" fn hjacc_mode_uncertified() {
     black_box(0x5eed_0013u32);
+}
+
+/// Tells the instruction counter that the step just counted was in standby (the sweep of
+/// engagements after the run).
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn hjacc_mode_standby() {
+    black_box(0x5eed_0014u32);
 }
 
 #[panic_handler]
@@ -382,6 +391,59 @@ fn main() -> ! {
         follower.advance(a_follower, h);
     }
 
+    // Standby, where the driver drives and each period judges an engagement: the ego at 8.3,
+    // 15 and 25 m/s, the leader 100 m ahead and the follower 4-40 m behind at its speed, each
+    // state measured for two periods (the same errors as above), then SET asked for: accepted
+    // (and cancelled again), refused because the follower leaves no comfortable way to brake
+    // (`DriverError::NeedsEmergencyBraking`, with two authorities), or refused otherwise.
+    let (mut accepted, mut needs_emergency, mut refused) = (0u32, 0u32, 0u32);
+    let _ = controller.request(DriverRequest::Cancel);
+    let mut k = steps;
+    for speed in [8.3f32, 15.0, 25.0] {
+        for gap_follower in (0..13).map(|i| 4.0 + 3.0 * i as f32) {
+            for _ in 0..2 {
+                let now_us = u64::from(k) * u64::from(config.period_us);
+                k += 1;
+                let inputs = Inputs {
+                    leader: Measurement::new(
+                        Track {
+                            gap: long(100.0),
+                            rel_speed: s.error.range_rate,
+                        },
+                        now_us,
+                    ),
+                    follower: Measurement::new(
+                        Track {
+                            gap: long(gap_follower),
+                            rel_speed: s.error.range_rate,
+                        },
+                        now_us,
+                    ),
+                    ego_speed: Measurement::new(
+                        speed - s.error.ego_speed - s.error.ego_speed_relative * speed,
+                        now_us,
+                    ),
+                    ego_acceleration: Measurement::new(-s.acceleration_error, now_us),
+                    driver: None,
+                    now_us,
+                };
+                hjacc_step_begin();
+                let command = controller.step(black_box(&inputs));
+                hjacc_step_end();
+                hjacc_mode_standby();
+                black_box(command);
+            }
+            match controller.request(DriverRequest::Engage) {
+                Ok(()) => {
+                    accepted += 1;
+                    let _ = controller.request(DriverRequest::Cancel);
+                }
+                Err(DriverError::NeedsEmergencyBraking) => needs_emergency += 1,
+                Err(_) => refused += 1,
+            }
+        }
+    }
+
     let mut used_words = 0;
     for i in 0..PAINT_WORDS {
         if unsafe { core::ptr::read_volatile((bottom + 4 * i) as *const u32) } != PAINT {
@@ -420,6 +482,12 @@ fn main() -> ! {
         cut_in_front
     );
     report!(
+        "standby sweep, 39 engagements asked for: {} accepted, {} refused for want of a comfortable way to brake, {} refused otherwise",
+        accepted,
+        needs_emergency,
+        refused
+    );
+    report!(
         "stack used by the control loop (painted, 8 KiB window): {} bytes",
         stack_bytes
     );
@@ -435,7 +503,10 @@ fn main() -> ! {
         && misplaced_minimum_risk == 0
         && min_margin > -CERTIFICATE_TOLERANCE
         && below_band > 0
-        && cut_in_front > 0.0;
+        && cut_in_front > 0.0
+        // Both verdicts of an engagement ran (with two authorities, the refusal too).
+        && accepted > 0
+        && (needs_emergency > 0 || !cfg!(feature = "qemu-two-authorities"));
     report!("result: {}", if ok { "PASS" } else { "FAIL" });
     debug::exit(if ok {
         debug::EXIT_SUCCESS
