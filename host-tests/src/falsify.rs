@@ -181,6 +181,10 @@ pub struct Case {
     pub seconds: f32,
     /// The seed of the sensors' random numbers.
     pub seed: u64,
+    /// With two authorities, how many starts the firmware refused to engage before this one
+    /// was drawn (each drawn afresh, delays included): the search counts engaged episodes.
+    #[serde(default)]
+    pub refused_starts: u32,
 }
 
 /// The search's fixed setting: the table, its model and the firmware's configuration.
@@ -511,27 +515,45 @@ impl<'t> Setting<'t> {
         seconds: f32,
         rng: &mut impl Rng,
     ) -> Option<Case> {
-        let (sensors, actuator) = self.draw_delays(rng);
-        let start = self.draw_start(kind, &actuator, rng)?;
-        Some(Case {
-            method,
-            start_kind: kind,
-            start,
-            schedule,
-            follower_rule: rule,
-            follower_reacts: self.reacting.is_some(),
-            // With two authorities a third of the cases' leaders brake at every change of the
-            // braking in force.
-            leader_brakes_at_authority_change: self.config.certificate.authorities
-                == firmware::Authorities::Two
-                && rng.random_bool(1.0 / 3.0),
-            sensors,
-            actuator,
-            seconds,
-            seed: rng.random(),
-        })
+        let two = self.config.certificate.authorities == firmware::Authorities::Two;
+        // With two authorities a start the firmware refuses to engage is drawn again (the
+        // campaign does the same), so that every episode the search counts is the firmware's.
+        for refused_starts in 0..MAX_REFUSED_STARTS {
+            let (sensors, actuator) = self.draw_delays(rng);
+            let start = self.draw_start(kind, &actuator, rng)?;
+            let case = Case {
+                method,
+                start_kind: kind,
+                start,
+                schedule: schedule.clone(),
+                follower_rule: rule,
+                follower_reacts: self.reacting.is_some(),
+                // With two authorities a third of the cases' leaders brake at every change of
+                // the braking in force.
+                leader_brakes_at_authority_change: two && rng.random_bool(1.0 / 3.0),
+                sensors,
+                actuator,
+                seconds,
+                seed: rng.random(),
+                refused_starts,
+            };
+            if !two || self.engages(&case) {
+                return Some(case);
+            }
+        }
+        None
+    }
+
+    /// Whether the firmware takes `case`'s engagement from standby (two authorities).
+    fn engages(&self, case: &Case) -> bool {
+        let mut world = self.world(case);
+        let (a, b) = self.humans(&world, &case.schedule, case.follower_rule, case);
+        world.engage_from_standby(a, b).is_ok()
     }
 }
+
+/// How many refused starts a case draws again before it gives up (two authorities).
+const MAX_REFUSED_STARTS: u32 = 1_000;
 
 /// A human's speed at the domain's top: exactly `vmax` half the time, else in `[34, vmax]`.
 fn near_top_speed(vmax: f32, rng: &mut impl Rng) -> f32 {
@@ -642,6 +664,11 @@ pub struct MethodSummary {
     pub fast_accelerating_starts: usize,
     /// Starts with the follower at exactly `max_speed`.
     pub follower_at_max_speed_starts: usize,
+    /// Starts the firmware refused to engage, drawn again (two authorities; not episodes).
+    pub refused_starts: usize,
+    /// Episodes whose engagement the firmware refused (a mutated case's humans in its standby
+    /// period; not counted in `episodes`).
+    pub refused_episodes: usize,
 }
 
 /// A case and what it did.
@@ -729,6 +756,8 @@ impl Tally {
                 max_ego_speed_m_per_s: 0.0,
                 fast_accelerating_starts: 0,
                 follower_at_max_speed_starts: 0,
+                refused_starts: 0,
+                refused_episodes: 0,
             },
             findings: Vec::new(),
             worst: None,
@@ -737,6 +766,11 @@ impl Tally {
 
     fn add(&mut self, case: &Case, s: &Score, vmax: f32) {
         let m = &mut self.summary;
+        m.refused_starts += case.refused_starts as usize;
+        if s.engagement_refused {
+            m.refused_episodes += 1;
+            return;
+        }
         m.episodes += 1;
         let [_, ego, follower] = case.start.cars;
         if ego.v >= vmax - 1.0 && case.start.engaged_acceleration > 0.0 {
@@ -984,6 +1018,13 @@ pub fn search(
         ) else {
             continue;
         };
+        // The run's one start: its refused draws count once, not with every member.
+        if let Some(t) = tallies
+            .iter_mut()
+            .find(|t| t.summary.method == Method::CrossEntropy)
+        {
+            t.summary.refused_starts += base.refused_starts as usize;
+        }
         let mut mean = vec![0.0f32; 2 * ce_n];
         let mut sd = vec![0.7f32; 2 * ce_n];
         for (k, m) in mean.iter_mut().enumerate() {
@@ -1007,6 +1048,7 @@ pub fn search(
                             leader,
                             time_gap,
                         },
+                        refused_starts: 0,
                         ..base.clone()
                     }
                 })
@@ -1045,7 +1087,7 @@ pub fn search(
 
     // Hill climbing: from the cross-entropy's best case of the same run (or a random one),
     // perturb one to three segments, keep the change when the margin falls.
-    let hill_results: Vec<Vec<(Case, Score)>> = (0..budget.hill_runs)
+    let hill_results: Vec<(Vec<(Case, Score)>, usize)> = (0..budget.hill_runs)
         .into_par_iter()
         .map(|run| {
             let mut rng = StdRng::seed_from_u64(seed ^ 0x4111_0000 ^ run as u64);
@@ -1061,8 +1103,15 @@ pub fn search(
                 ),
             };
             let Some(mut current) = start else {
-                return Vec::new();
+                return (Vec::new(), 0);
             };
+            // A start drawn here: its refused draws count once (the cross-entropy's counted its).
+            let refused = if ce_best.get(run).is_some() {
+                0
+            } else {
+                current.refused_starts as usize
+            };
+            current.refused_starts = 0;
             current.method = Method::HillClimbing;
             let mut current_score = setting.run(&current, None);
             let mut out = Vec::with_capacity(budget.hill_steps);
@@ -1087,11 +1136,17 @@ pub fn search(
                     current_score = s;
                 }
             }
-            out
+            (out, refused)
         })
         .collect();
-    for r in &hill_results {
+    for (r, refused) in &hill_results {
         tally(&mut tallies, Method::HillClimbing, r);
+        if let Some(t) = tallies
+            .iter_mut()
+            .find(|t| t.summary.method == Method::HillClimbing)
+        {
+            t.summary.refused_starts += refused;
+        }
     }
 
     // Greedy rollouts.

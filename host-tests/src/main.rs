@@ -390,18 +390,18 @@ fn falsify(
     let report = search(&setting, &budget, seed, &|n| bar.inc(n as u64));
     bar.finish_and_clear();
     println!(
-        "| method | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | uncertified periods | min front [m] | min rear [m] | min speed headroom [m/s] | min gap front [m] | min gap rear [m] | max ego speed engaged [m/s] | accelerating starts at 34-35 m/s | followers at 35 m/s |"
+        "| method | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | uncertified periods | min front [m] | min rear [m] | min speed headroom [m/s] | min gap front [m] | min gap rear [m] | max ego speed engaged [m/s] | accelerating starts at 34-35 m/s | followers at 35 m/s | starts refused at engagement, drawn again (episodes refused) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for m in &report.methods {
         let (b, p) = (m.losses_by_mode, m.losses_by_part);
         println!(
-            "| {:?} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {} | {:.4} | {:.4} | {:.4} | {:.2} | {:.3} | {:.3} | {} | {} |",
+            "| {:?} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {} | {:.4} | {:.4} | {:.4} | {:.2} | {:.3} | {:.3} | {} | {} | {} ({}) |",
             m.method, m.episodes, m.collisions, m.collisions_unavoidable, m.certificate_losses,
             b[0], b[1], b[2], b[3], p[0], p[1], p[2], p[3], m.uncertified_periods,
             m.min_front_m, m.min_rear_m, m.min_speed_headroom_m_per_s, m.min_gap_leader_m,
             m.min_gap_follower_m, m.max_ego_speed_m_per_s, m.fast_accelerating_starts,
-            m.follower_at_max_speed_starts
+            m.follower_at_max_speed_starts, m.refused_starts, m.refused_episodes
         );
     }
     let (collisions, losses) = report.failures();

@@ -183,6 +183,9 @@ pub struct Score {
     /// The largest ego speed at the end of a period the firmware drove (engaged), m/s: in
     /// standby the driver drives, and nothing is claimed.
     pub max_ego_speed: f32,
+    /// The firmware refused the engagement from standby ([`World::engage_from_standby`]): the
+    /// driver drives on, and nothing after it is the firmware's.
+    pub engagement_refused: bool,
     /// Periods of the minimum-risk manoeuvre without a certificate (a fault the argument does
     /// not cover: the ego's speed signal lost, a clock jump).
     pub uncertified_minimum_risk: u64,
@@ -392,6 +395,7 @@ impl Score {
             leader_hardest_braking: 0.0,
             engaged_in_emergency: false,
             max_ego_speed: 0.0,
+            engagement_refused: false,
             uncertified_minimum_risk: 0,
             fallback_periods: 0,
             below_band_periods: 0,
@@ -693,7 +697,9 @@ impl<'t> World<'t> {
         self.controller.request(firmware::DriverRequest::Cancel)?;
         self.step_with(a_leader, a_follower, Some(self.start_acceleration), None);
         self.engaged_from = self.period;
-        self.controller.request(firmware::DriverRequest::Resume)
+        let engaged = self.controller.request(firmware::DriverRequest::Resume);
+        self.score.engagement_refused = engaged.is_err();
+        engaged
     }
 
     /// The firmware's controller.

@@ -76,6 +76,7 @@ fn case(start: Start, leader: f32, sensors: SensorModel, seconds: f32) -> Case {
         actuator: ACTUATOR,
         seconds,
         seed: 7,
+        refused_starts: 0,
     }
 }
 

@@ -363,7 +363,10 @@ fn the_campaigns_losses_stay_fixed() {
 /// time, at the certificate's worst before it (their largest acceleration), then the IDM
 /// (`host-tests falsify --authorities two --follower-reacts` runs the whole): no collision and
 /// no certificate loss at 6 and at 9.8 m/s^2. The same search against followers that react
-/// 2 s late, where the firmware argues with 1.15 s, finds rear losses: it can fail.
+/// 2 s late, where the firmware argues with 1.15 s, finds rear losses: it can fail. Every
+/// episode the search counts is one the firmware engaged: a start it refuses at engagement is
+/// drawn again and counted apart (a sixth of them or more are refused, most at the rear
+/// boundary), and each method's worst case replays engaged.
 #[test]
 fn the_search_with_late_reacting_followers() {
     use host_tests::falsify::{search, Budget, Setting};
@@ -382,6 +385,11 @@ fn the_search_with_late_reacting_followers() {
         );
         assert!(report.episodes() >= 290);
         assert_eq!((collisions, losses), (0, 0), "leader {leader_braking}");
+        let refused: usize = report.methods.iter().map(|m| m.refused_starts).sum();
+        assert!(refused * 10 > report.episodes(), "{refused} refused starts");
+        for worst in &report.worst {
+            assert!(!setting.run(&worst.case, None).engagement_refused);
+        }
     }
     // Planted: the followers react 2 s late.
     let bytes = table_bytes(6.0);
