@@ -102,6 +102,9 @@ pub struct Outcome {
     pub emergencies: EmergencyCauses,
     /// The engagement itself was an emergency ([`crate::world::Score::engaged_in_emergency`]).
     pub engaged_in_emergency: bool,
+    /// The comfort band alone certified the start
+    /// ([`crate::world::Score::started_comfort_certified`]): no emergency was needed from it.
+    pub started_comfort_certified: bool,
     /// The initial state `(gap_leader, leader_speed, gap_follower, follower_speed, ego_speed)`.
     pub initial: [f32; 5],
     /// The certificate margin at the start, m.
@@ -201,6 +204,7 @@ impl Outcome {
             emergency_periods: s.emergencies.total(),
             emergencies: s.emergencies,
             engaged_in_emergency: s.engaged_in_emergency,
+            started_comfort_certified: s.started_comfort_certified.unwrap_or(false),
             initial,
             initial_margin,
             uncertified_minimum_risk: s.uncertified_minimum_risk,
@@ -580,6 +584,11 @@ pub struct GroupSummary {
     /// emergency (ISO 15622's scope), and of them those where every ISO 15622 check held from
     /// 1 s after engagement.
     pub iso_scope: (usize, usize),
+    /// Of the scope's episodes, those that started where the comfort band alone certified the
+    /// truth ([`Outcome::started_comfort_certified`]: the leader was not closer than comfort
+    /// allows from the start, as a late one is), those of them where ISO 15622 held, and their
+    /// emergency periods.
+    pub iso_scope_comfort_start: (usize, usize, u64),
     /// Episodes whose engagement was an emergency (left out of the scope above).
     pub engaged_in_emergency: usize,
     /// The worst ISO 15622 ratio (to its limit) over the scope's episodes.
@@ -740,6 +749,15 @@ pub fn run_group(
         iso_scope: (
             count(&|o| in_iso_scope(o)),
             count(&|o| in_iso_scope(o) && o.iso.holds()),
+        ),
+        iso_scope_comfort_start: (
+            count(&|o| in_iso_scope(o) && o.started_comfort_certified),
+            count(&|o| in_iso_scope(o) && o.started_comfort_certified && o.iso.holds()),
+            outcomes
+                .iter()
+                .filter(|(_, o)| in_iso_scope(o) && o.started_comfort_certified)
+                .map(|(_, o)| o.emergency_periods)
+                .sum(),
         ),
         engaged_in_emergency: count(&|o| o.engaged_in_emergency),
         iso_worst_in_scope: outcomes

@@ -690,9 +690,11 @@ fn campaign(args: CampaignArgs) -> Result<()> {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     println!(
-        "| leader | follower | in model | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | min margin [m] (front, rear) | min gap front [m] | min gap rear [m] | override | uncertified min-risk periods | fallback periods (episodes) | oldest track [s] (front, rear) | leader stops | standstill starts | max jerk [m/s^3] | ISO 15622 held (episodes whose leader braked at most 3.5 m/s^2, engaged without an emergency) | worst ISO ratio there | emergency periods: engagement / cut-in / uncertified truth / certified truth [of which by the comfort band alone] (engagements that were one) |"
+        "| leader | follower | in model | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | min margin [m] (front, rear) | min gap front [m] | min gap rear [m] | override | uncertified min-risk periods | fallback periods (episodes) | oldest track [s] (front, rear) | leader stops | standstill starts | max jerk [m/s^3] | ISO 15622 held (episodes whose leader braked at most 3.5 m/s^2, engaged without an emergency) | worst ISO ratio there | of them from starts the comfort band certifies: ISO 15622 held (emergency periods) | emergency periods: engagement / cut-in / uncertified truth / certified truth [of which by the comfort band alone] (engagements that were one) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!(
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    );
     let mut plotted: Result<()> = Ok(());
     let report = run_campaign(
         &table,
@@ -702,7 +704,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
             let l = summary.certificate_losses_by_mode;
             bar.suspend(|| {
                 println!(
-                    "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {} | {} ({}) | {:.2}, {:.2} | {:.1} | {} | {:.0} | {} of {} | {:.2} | {} / {} / {} / {} [{}] ({}) |",
+                    "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {} | {} ({}) | {:.2}, {:.2} | {:.1} | {} | {:.0} | {} of {} | {:.2} | {} of {} ({}) | {} / {} / {} / {} [{}] ({}) |",
                     summary.leader,
                     summary.follower,
                     summary.in_model,
@@ -735,6 +737,9 @@ fn campaign(args: CampaignArgs) -> Result<()> {
                     summary.iso_scope.1,
                     summary.iso_scope.0,
                     summary.iso_worst_in_scope,
+                    summary.iso_scope_comfort_start.1,
+                    summary.iso_scope_comfort_start.0,
+                    summary.iso_scope_comfort_start.2,
                     summary.emergencies.engagement,
                     summary.emergencies.cut_in,
                     summary.emergencies.uncertified_truth,
@@ -827,6 +832,19 @@ fn campaign(args: CampaignArgs) -> Result<()> {
         e.comfort_certified_truth,
         t.below_band_periods,
         t.below_band_episodes
+    );
+    let comfort_start =
+        report
+            .groups
+            .iter()
+            .filter(|g| g.in_model)
+            .fold((0, 0, 0), |(n, held, periods), g| {
+                let (gn, gheld, gperiods) = g.iso_scope_comfort_start;
+                (n + gn, held + gheld, periods + gperiods)
+            });
+    println!(
+        "in ISO 15622's scope there (leaders within 3.5 m/s^2), from starts the comfort band certifies: ISO 15622 held in {} of {}, {} emergency periods",
+        comfort_start.1, comfort_start.0, comfort_start.2
     );
     if settings.cut_in.is_some() {
         let emergency = settings.config.certificate.emergency;

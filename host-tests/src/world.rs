@@ -186,6 +186,11 @@ pub struct Score {
     /// The firmware refused the engagement from standby ([`World::engage_from_standby`]): the
     /// driver drives on, and nothing after it is the firmware's.
     pub engagement_refused: bool,
+    /// Whether the comfort band alone certified the true state a period into the engagement,
+    /// braking along its own ramp from the first engaged command (`World::comfort_certificate`;
+    /// with one authority, the comfort band, always): a start from which no emergency was
+    /// needed. `None` before that period.
+    pub started_comfort_certified: Option<bool>,
     /// Periods of the minimum-risk manoeuvre without a certificate (a fault the argument does
     /// not cover: the ego's speed signal lost, a clock jump).
     pub uncertified_minimum_risk: u64,
@@ -396,6 +401,7 @@ impl Score {
             engaged_in_emergency: false,
             max_ego_speed: 0.0,
             engagement_refused: false,
+            started_comfort_certified: None,
             uncertified_minimum_risk: 0,
             fallback_periods: 0,
             below_band_periods: 0,
@@ -967,6 +973,17 @@ impl<'t> World<'t> {
             self.emergency_run
                 .unwrap_or_else(|| self.emergency_cause(engagement))
         });
+        // A period into the engagement (its first command issued): whether the comfort band
+        // alone certified where it started.
+        if self.period == self.engaged_from + 1 {
+            self.score.started_comfort_certified =
+                Some(match self.controller.config().certificate.authorities {
+                    firmware::Authorities::ComfortBand => true,
+                    firmware::Authorities::Two => {
+                        self.comfort_certificate().is_some_and(|c| c.is_certified())
+                    }
+                });
+        }
         let s = &mut self.score;
         if let Some(c) = certificate {
             s.min_front = s.min_front.min(c.front);

@@ -680,3 +680,61 @@ fn an_engagement_near_the_top_keeps_the_speed_headroom_it_was_certified_with() {
         "{engaged} engaged, {refused} refused"
     );
 }
+
+/// The campaign's comfort reading (`GroupSummary::iso_scope_comfort_start`) tells a start the
+/// comfort band certifies from one only the emergency authority does, where the leader is as
+/// close from the start as a late one is. Engaged from standby with exact sensors: behind a
+/// stopped car 28.8 m ahead at 13.4 m/s (the comfortable leader's campaign, seed 18,000,002:
+/// certified only by the emergency build-up, it braked along it at once) the flag is false;
+/// 120 m behind a car at the ego's 20 m/s it is true, and each comes with the first engaged
+/// period. With the comfort band's certificate the flag is always true.
+#[test]
+fn a_start_only_the_emergency_authority_certifies_is_told_apart() {
+    let bytes = table_bytes(6.0);
+    let table = Table::parse(bytes).unwrap();
+    let model = HumanModel::of(&table).unwrap();
+    let exact = SensorModel::exact_with_latency(0);
+    let start = |gap: f32, leader: f32, ego: f32| Start {
+        cars: [
+            Car { x: gap, v: leader },
+            Car { x: 0.0, v: ego },
+            Car { x: -108.0, v: 25.0 },
+        ],
+        engaged_acceleration: 0.0,
+    };
+    let band = Config {
+        certificate: CertificateConfig {
+            authorities: Authorities::ComfortBand,
+            ..CertificateConfig::default()
+        },
+        ..two(2)
+    };
+    for (config, cars, comfortable) in [
+        (two(2), start(28.76, 0.0, 13.41), false),
+        (two(2), start(120.0, 20.0, 20.0), true),
+        (band, start(120.0, 20.0, 20.0), true),
+    ] {
+        let mut world = World::new(
+            bytes,
+            config,
+            model,
+            cars,
+            exact,
+            ACTUATOR_AT_LIMITS,
+            Tolerances::default(),
+            5,
+        );
+        if config.certificate.authorities == Authorities::Two {
+            world.engage_from_standby(0.0, 0.0).unwrap();
+        }
+        assert_eq!(world.score().started_comfort_certified, None);
+        assert!(world.step(0.0, 0.0, None));
+        assert!(world.step(0.0, 0.0, None));
+        assert_eq!(
+            world.score().started_comfort_certified,
+            Some(comfortable),
+            "{:?}",
+            cars.cars
+        );
+    }
+}
