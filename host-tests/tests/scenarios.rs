@@ -20,6 +20,30 @@ fn results(config: Config) -> Vec<ScenarioResult> {
         .collect()
 }
 
+/// The default configuration with the certificate argued with two authorities.
+fn two_authorities() -> Config {
+    Config {
+        certificate: CertificateConfig {
+            authorities: Authorities::Two,
+            ..CertificateConfig::default()
+        },
+        ..Config::default()
+    }
+}
+
+/// The default table with its leader braking at up to `leader_braking`, m/s^2.
+fn with_leader(leader_braking: f32) -> &'static [u8] {
+    table_format::with_leader(
+        firmware::DEFAULT_TABLE,
+        Bounds {
+            min: -leader_braking,
+            max: 2.0,
+        },
+    )
+    .unwrap()
+    .leak()
+}
+
 #[test]
 fn the_default_policy_passes_the_suite() {
     let results = results(Config::default());
@@ -49,23 +73,9 @@ fn the_bang_bang_policy_is_safe_but_jerks() {
 /// (the firmware's controller docs: the ego's speed), so the answer is a comfortable one.
 #[test]
 fn the_speed_near_the_domains_top_is_no_emergency_with_two_authorities() {
-    let config = Config {
-        certificate: CertificateConfig {
-            authorities: Authorities::Two,
-            ..CertificateConfig::default()
-        },
-        ..Config::default()
-    };
+    let config = two_authorities();
     for leader_braking in [6.0, 9.8] {
-        let bytes: &'static [u8] = table_format::with_leader(
-            firmware::DEFAULT_TABLE,
-            Bounds {
-                min: -leader_braking,
-                max: 2.0,
-            },
-        )
-        .unwrap()
-        .leak();
+        let bytes = with_leader(leader_braking);
         let table = Table::parse(bytes).unwrap();
         let steady = suite()
             .into_iter()
@@ -102,23 +112,9 @@ fn the_speed_near_the_domains_top_is_no_emergency_with_two_authorities() {
 /// without one engages.
 #[test]
 fn the_suite_with_two_authorities_engages_only_without_an_emergency() {
-    let config = Config {
-        certificate: CertificateConfig {
-            authorities: Authorities::Two,
-            ..CertificateConfig::default()
-        },
-        ..Config::default()
-    };
+    let config = two_authorities();
     for leader_braking in [6.0, 9.8] {
-        let bytes: &'static [u8] = table_format::with_leader(
-            firmware::DEFAULT_TABLE,
-            Bounds {
-                min: -leader_braking,
-                max: 2.0,
-            },
-        )
-        .unwrap()
-        .leak();
+        let bytes = with_leader(leader_braking);
         let table = Table::parse(bytes).unwrap();
         let mut needs_emergency = Vec::new();
         for s in suite() {
