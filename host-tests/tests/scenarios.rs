@@ -9,7 +9,7 @@
 use firmware::{Authorities, CertificateConfig, Config};
 use host_tests::scenarios::{run, suite, ScenarioResult};
 use host_tests::world::Trace;
-use table_format::{Bounds, Table};
+use table_format::Table;
 
 fn results(config: Config) -> Vec<ScenarioResult> {
     let table = Table::parse(firmware::DEFAULT_TABLE).unwrap();
@@ -31,18 +31,8 @@ fn two_authorities() -> Config {
     }
 }
 
-/// The default table with its leader braking at up to `leader_braking`, m/s^2.
-fn with_leader(leader_braking: f32) -> &'static [u8] {
-    table_format::with_leader(
-        firmware::DEFAULT_TABLE,
-        Bounds {
-            min: -leader_braking,
-            max: 2.0,
-        },
-    )
-    .unwrap()
-    .leak()
-}
+mod common;
+use common::table_with_leader as with_leader;
 
 #[test]
 fn the_default_policy_passes_the_suite() {

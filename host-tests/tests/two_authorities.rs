@@ -10,7 +10,7 @@ use host_tests::humans::HumanModel;
 use host_tests::sim::{ActuatorModel, Car, Channel, Noise};
 use host_tests::world::{Start, Tolerances, World};
 use host_tests::{Follower, Leader, SensorModel};
-use table_format::{Bounds, Table};
+use table_format::Table;
 
 /// The firmware's declared actuator limits: 100 ms dead time, 0.3 s lag.
 const ACTUATOR_AT_LIMITS: ActuatorModel = ActuatorModel {
@@ -18,18 +18,8 @@ const ACTUATOR_AT_LIMITS: ActuatorModel = ActuatorModel {
     lag: 0.3,
 };
 
-/// The deployed table with its leader braking at most at `leader_braking`.
-fn table_bytes(leader_braking: f32) -> &'static [u8] {
-    table_format::with_leader(
-        firmware::DEFAULT_TABLE,
-        Bounds {
-            min: -leader_braking,
-            max: 2.0,
-        },
-    )
-    .unwrap()
-    .leak()
-}
+mod common;
+use common::table_with_leader as table_bytes;
 
 /// Two authorities at the time-gap setting `setting`.
 fn two(setting: u8) -> Config {
