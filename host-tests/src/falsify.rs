@@ -810,6 +810,11 @@ impl Tally {
     }
 }
 
+/// The tally of `method`.
+fn tally_of(tallies: &mut [Tally], method: Method) -> Option<&mut Tally> {
+    tallies.iter_mut().find(|t| t.summary.method == method)
+}
+
 /// Runs `cases` in parallel, in order.
 fn run_all(setting: &Setting<'_>, cases: Vec<Case>) -> Vec<(Case, Score)> {
     cases
@@ -964,7 +969,7 @@ pub fn search(
     let segments_of = |segment_s: f32| (seconds / segment_s).ceil() as usize;
     let mut tallies: Vec<Tally> = Method::ALL.iter().map(|&m| Tally::new(m)).collect();
     let tally = |tallies: &mut Vec<Tally>, method: Method, results: &[(Case, Score)]| {
-        if let Some(t) = tallies.iter_mut().find(|t| t.summary.method == method) {
+        if let Some(t) = tally_of(tallies, method) {
             for (c, s) in results {
                 t.add(c, s, vmax);
             }
@@ -1019,10 +1024,7 @@ pub fn search(
             continue;
         };
         // The run's one start: its refused draws count once, not with every member.
-        if let Some(t) = tallies
-            .iter_mut()
-            .find(|t| t.summary.method == Method::CrossEntropy)
-        {
+        if let Some(t) = tally_of(&mut tallies, Method::CrossEntropy) {
             t.summary.refused_starts += base.refused_starts as usize;
         }
         let mut mean = vec![0.0f32; 2 * ce_n];
@@ -1091,25 +1093,25 @@ pub fn search(
         .into_par_iter()
         .map(|run| {
             let mut rng = StdRng::seed_from_u64(seed ^ 0x4111_0000 ^ run as u64);
-            let start = match ce_best.get(run) {
-                Some(c) => Some(c.clone()),
-                None => setting.case(
-                    Method::HillClimbing,
-                    kind_of(run + 2),
-                    Schedule::random(ce_n, ce_segment, &mut rng),
-                    FollowerRule::Schedule,
-                    seconds,
-                    &mut rng,
-                ),
+            // A start drawn here has its refused draws counted once, with the run (the
+            // cross-entropy counted its own).
+            let (start, refused) = match ce_best.get(run) {
+                Some(c) => (Some(c.clone()), 0),
+                None => {
+                    let c = setting.case(
+                        Method::HillClimbing,
+                        kind_of(run + 2),
+                        Schedule::random(ce_n, ce_segment, &mut rng),
+                        FollowerRule::Schedule,
+                        seconds,
+                        &mut rng,
+                    );
+                    let refused = c.as_ref().map_or(0, |c| c.refused_starts as usize);
+                    (c, refused)
+                }
             };
             let Some(mut current) = start else {
                 return (Vec::new(), 0);
-            };
-            // A start drawn here: its refused draws count once (the cross-entropy's counted its).
-            let refused = if ce_best.get(run).is_some() {
-                0
-            } else {
-                current.refused_starts as usize
             };
             current.refused_starts = 0;
             current.method = Method::HillClimbing;
@@ -1141,10 +1143,7 @@ pub fn search(
         .collect();
     for (r, refused) in &hill_results {
         tally(&mut tallies, Method::HillClimbing, r);
-        if let Some(t) = tallies
-            .iter_mut()
-            .find(|t| t.summary.method == Method::HillClimbing)
-        {
+        if let Some(t) = tally_of(&mut tallies, Method::HillClimbing) {
             t.summary.refused_starts += refused;
         }
     }

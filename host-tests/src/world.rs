@@ -823,15 +823,21 @@ impl<'t> World<'t> {
             EmergencyCause::CutIn
         } else if truth_before.is_some_and(|m| m > 0.0) {
             EmergencyCause::CertifiedTruth {
-                comfort: match self.controller.config().certificate.authorities {
-                    firmware::Authorities::ComfortBand => true,
-                    firmware::Authorities::Two => {
-                        self.comfort_certificate().is_some_and(|c| c.is_certified())
-                    }
-                },
+                comfort: self.comfort_band_certifies(),
             }
         } else {
             EmergencyCause::UncertifiedTruth
+        }
+    }
+
+    /// Whether the comfort band alone certifies the true state now ([`World::comfort_certificate`];
+    /// with one authority it is the certificate, so yes). Called as [`World::certificate`] is.
+    fn comfort_band_certifies(&self) -> bool {
+        match self.controller.config().certificate.authorities {
+            firmware::Authorities::ComfortBand => true,
+            firmware::Authorities::Two => {
+                self.comfort_certificate().is_some_and(|c| c.is_certified())
+            }
         }
     }
 
@@ -976,13 +982,7 @@ impl<'t> World<'t> {
         // A period into the engagement (its first command issued): whether the comfort band
         // alone certified where it started.
         if self.period == self.engaged_from + 1 {
-            self.score.started_comfort_certified =
-                Some(match self.controller.config().certificate.authorities {
-                    firmware::Authorities::ComfortBand => true,
-                    firmware::Authorities::Two => {
-                        self.comfort_certificate().is_some_and(|c| c.is_certified())
-                    }
-                });
+            self.score.started_comfort_certified = Some(self.comfort_band_certifies());
         }
         let s = &mut self.score;
         if let Some(c) = certificate {
