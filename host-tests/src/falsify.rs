@@ -7,7 +7,10 @@
 //!   `[0, 0.2]` m, found by bisection on its gap), at the domain's edges (each speed near 0 and
 //!   near `max_speed`, a follower or a leader at exactly `max_speed`), engaged at any acceleration
 //!   in the band, and at standstill. Every start is certified at the true state, with the engaged
-//!   acceleration held through the actuator's dead time and lag.
+//!   acceleration held through the actuator's dead time and lag. With two authorities it is
+//!   engaged from a period in standby, as a driver engages; a start the firmware refuses is
+//!   drawn again and counted apart ([`MethodSummary::refused_starts`]), so every episode the
+//!   search counts is one the firmware drove.
 //! - **Humans** ([`Method`]), every input within the model (the leader's acceleration in its
 //!   bounds, the follower an IDM whose time gap is anywhere in its range at every instant):
 //!   structured cases (hard stops, stop-and-go at many frequencies, time-gap switches timed to
