@@ -404,7 +404,8 @@ fn the_search_with_late_reacting_followers() {
 /// follower stopped at the IDM's jam distance (2 m) behind, the two-authority firmware holds
 /// the car along the emergency authority's ramp (it cannot certify a move-off: the follower's
 /// model lets it accelerate blind until the lights), its command dropping faster than
-/// ISO 15622's jerk limit in many periods; the car does not move, and none of those periods
+/// ISO 15622's jerk limit in several periods (9 in 20 s: the lights' command holds it between
+/// them, `Controller::look_ahead`); the car does not move, and none of those periods
 /// is flagged an emergency or asks the driver to take over (`Command::emergency`: the jerk
 /// check leaves out a car whose measured speed's error box reaches zero).
 #[test]
@@ -448,7 +449,7 @@ fn a_car_held_at_standstill_is_no_emergency() {
         takeovers += usize::from(command.takeover);
     }
     println!("{fast_drops} drops faster than ISO's jerk limit, {emergencies} emergencies, {takeovers} takeover requests");
-    assert!(fast_drops > 50, "{fast_drops}");
+    assert!(fast_drops > 5, "{fast_drops}");
     assert_eq!((emergencies, takeovers), (0, 0));
 }
 
@@ -478,6 +479,23 @@ fn no_emergency_behind_a_comfortable_leader(seed: u64) {
         assert!(!outcome.collided);
         assert_eq!(outcome.certificate_lost, None);
         assert_eq!(outcome.emergency_periods, 0, "{:?}", outcome.emergencies);
+    }
+}
+
+/// A lights' run ends only where the law may hover above the lights' command a while: the
+/// release is asked with the proposal held 0.2 s longer than a period, and again of every
+/// proposal that keeps the lights dark for a second after a run ended, where it fails the
+/// command going down the comfortable way to the lights' command (`Controller::look_ahead`).
+/// Seed 18,000,031: stopping at 0.7 m/s behind a comfortable leader, a fixed-gap IDM follower
+/// 17 m behind at 6.8 m/s; the stopping profile's proposals (-1.4, -1.3, -1.2 m/s^2) ended
+/// the run, the rear slack at the braking in force fell from 13.6 to 1.8 m in one period and
+/// to zero in two more, no candidate passed the look-ahead, and the command stepped down the
+/// emergency authority's ramp (one emergency period). Seed 18,000,124 the same, seven. Each
+/// seed has an emergency again with either the spare or the watch taken out, at both leaders.
+#[test]
+fn a_lights_run_ends_only_with_room_for_the_law_to_hover() {
+    for seed in [18_000_031, 18_000_124] {
+        no_emergency_behind_a_comfortable_leader(seed);
     }
 }
 

@@ -22,6 +22,25 @@ pub(super) const LEVEL_RESOLUTION: f32 = table_format::authority::LEVEL_RESOLUTI
 /// 30 m), which moves the prediction by more than a period's worth of the way down.
 pub(super) const LIGHTS_WAY_RELEASE_S: f32 = 1.0;
 
+/// How much longer than a period a proposal that ends a lights' run is held dark in the
+/// release check ([`Controller::release_allowed`], asked by [`Controller::look_ahead`]),
+/// microseconds: the law's proposals after a run's end stay above the lights' command for
+/// several periods, where the check assumes one. Chosen by measurement (300 episodes per group
+/// of `host-tests campaign --authorities two`, behind leaders at 6 m/s^2, with
+/// [`RELEASE_WATCH_US`]): the emergency periods in ISO 15622's scope from starts the comfort
+/// band certifies were 1,625 before either, 1,213 with the watch alone and 731 with 0.2 s
+/// (2,097 and 1,256 behind leaders at 9.8 m/s^2). Without the watch, 1 s left 624 but held a car
+/// braking at the lights' command for 33 s, to a standstill 400 m behind a leader at 18 m/s (the
+/// scenario suite's approach to a 40 mph car), and 0.5 s braked at it for up to 35 s while
+/// the leader, faster, drew away (0.2 s: up to 10 s, 7.5 s before).
+pub(super) const RELEASE_SPARE_US: u64 = 200_000;
+
+/// How long after a lights' run ends the look-ahead asks the release check again of every
+/// proposal that keeps the lights dark ([`Controller::look_ahead`]), microseconds. Measured as
+/// [`RELEASE_SPARE_US`] was, without the spare: 1,227 emergency periods with 0.5 s, 1,213
+/// with 1 s, 1,171 with 2 s.
+pub(super) const RELEASE_WATCH_US: u64 = 1_000_000;
+
 /// How many levels below the band's floor a look-ahead tries where the follower allows not
 /// even the floor ([`Controller::gentler_than_band`]): with the defaults 3.0, 2.5, 2.0 and
 /// 1.5 m/s^2. A handful of fixed levels rather than a search: each pair needs a lights'
@@ -324,20 +343,30 @@ impl Controller<'_> {
         let step = iso15622::jerk_limit(ego_speed) * seconds(u64::from(self.config.period_us));
         // A proposal that ends a lights' run (above the lights' command) where the follower
         // would allow not even the comfort band's floor with its reaction starting again when
-        // the comfort band's ramp brings the lights back (`Controller::release_allowed`, the
-        // band's rule for ending a run): the lights' command instead, which keeps the run and
-        // the follower's reaction clock going. Ended there, the run's next look-ahead, counted
-        // from the new run's own on-time, failed, and the command followed the braking in
-        // force's ramp at the emergency authority's build-up (an emergency by ISO 15622's jerk
-        // limit): 143 of the 228 emergency runs behind the comfortable leader with the fixed
-        // IDM began within 0.7 s of a run's end.
-        let keeps_lit = self.lights_on_us.is_some()
+        // the comfort band's ramp brings the lights back, the proposal held RELEASE_SPARE_US
+        // longer than a period first (`Controller::release_allowed`, the band's rule for
+        // ending a run): the lights' command instead, which keeps the run and the follower's
+        // reaction clock going. Ended there, the run's next look-ahead, counted from the new
+        // run's own on-time, failed, and the command followed the braking in force's ramp at
+        // the emergency authority's build-up (an emergency by ISO 15622's jerk limit): 143 of
+        // the 228 emergency runs behind the comfortable leader with the fixed IDM began within
+        // 0.7 s of a run's end. The same question is asked of every proposal that keeps the
+        // lights dark for RELEASE_WATCH_US after a run ended: the law's proposals near a stop
+        // hover above the lights' command for several periods (-1.4, -1.3, -1.2 m/s^2), and
+        // every dark period costs the follower's reaction; where it fails the command goes down
+        // the comfortable way (ISO 15622's jerk) to the lights' command.
+        let run_on = self.lights_on_us.is_some();
+        let watched = !run_on
+            && self
+                .lights_off_at_us
+                .is_some_and(|off| now.saturating_sub(off) < RELEASE_WATCH_US);
+        let keeps_lit = (run_on || watched)
             && proposal > self.lights_command()
-            && !self.release_allowed(model, now, proposal);
-        let proposal = if keeps_lit {
-            self.lights_command()
-        } else {
-            proposal
+            && !self.release_allowed(model, now, proposal, RELEASE_SPARE_US);
+        let proposal = match (keeps_lit, run_on) {
+            (false, _) => proposal,
+            (true, true) => self.lights_command(),
+            (true, false) => math::max(math::min(proposal, last - step), self.lights_command()),
         };
         let mut tried = proposal;
         let mut found = look(proposal);

@@ -197,9 +197,11 @@ impl Controller<'_> {
     /// band's floor is then the hardest braking that may come next without a check of its
     /// own); where it fails, the step follows that ramp from its last command (the one the
     /// last check passed with): the lights come on, and the follower, reacting, falls back.
-    /// With two authorities it is asked of every proposal that would end a run; where it fails
-    /// the proposal is the lights' command ([`Controller::look_ahead`]).
-    pub(super) fn release_allowed(&self, model: &Model, now: u64, u: f32) -> bool {
+    /// With two authorities it is asked of every proposal that would end a run, and of every
+    /// proposal that keeps the lights dark for a while after one ended, with `u` held
+    /// `spare_us` longer than the period ([`Controller::look_ahead`]); in the band `spare_us`
+    /// is zero.
+    pub(super) fn release_allowed(&self, model: &Model, now: u64, u: f32, spare_us: u64) -> bool {
         if model.emergency.is_none() {
             return true;
         }
@@ -219,6 +221,7 @@ impl Controller<'_> {
         } else {
             (self.lights_command(), u64::from(c.period_us))
         };
+        let held_for = held_for.saturating_add(spare_us);
         let level = -self.lights_command();
         let Some(on) = self.lights_on_after(now.saturating_add(held_for), held, from, jerk, level)
         else {

@@ -168,10 +168,15 @@
 //! - **Keeping the lights**: a proposal above the lights' command ends a lights' run, and the
 //!   follower's reaction starts again when the lights next come on. Where the follower would
 //!   then allow not even `beta` (`emergency::release_allowed`, the band's rule for ending a
-//!   run: the proposal held a period, the lights back along the comfort band's ramp), the
-//!   proposal is the lights' command instead, which the look-ahead checks as any other: a
-//!   comfort choice (a run ended under a closing follower made the next look-ahead fail and
-//!   the command follow the emergency authority's ramp), not a bound.
+//!   run: the proposal held a period and `authorities::RELEASE_SPARE_US` (0.2 s) more, the
+//!   lights back along the comfort band's ramp), the proposal is the lights' command instead,
+//!   which the look-ahead checks as any other. For `authorities::RELEASE_WATCH_US` (1 s) after
+//!   a run ended, every proposal that keeps the lights dark is asked the same, and where it
+//!   fails goes down the comfortable way to the lights' command: the law's proposals near a
+//!   stop hover above the lights' command for several periods. Comfort choices (a run ended
+//!   under a closing follower made the next look-ahead fail and the command follow the
+//!   emergency authority's ramp), not bounds: they only lower the proposal the look-ahead
+//!   then checks.
 //! - **The override** grades its braking between the refused command and the comfort band's
 //!   floor reached at ISO 15622's jerk limit (`last - jerk_limit h`, at least `-beta`); where
 //!   nothing passes, the command follows the ramp of the braking in force (an emergency, by the
@@ -572,6 +577,10 @@ pub struct Controller<'t> {
     /// From when the brake lights are on for sure, while every command since a run of braking
     /// commands began has been at or below the lights' command (`None`: no run).
     lights_on_us: Option<u64>,
+    /// When the last lights' run ended (its first command above the lights' command), while
+    /// no run is under way (`Controller::look_ahead` watches the proposals for
+    /// [`RELEASE_WATCH_US`](authorities::RELEASE_WATCH_US) after it).
+    lights_off_at_us: Option<u64>,
     /// The same by the run's commands alone (`Controller::lights_run_starting` at its start,
     /// or its hold's): without the earlier on-time a look-ahead argued with
     /// (`lights_expected_us`), which holds only while the commands stay under that
@@ -647,6 +656,7 @@ impl<'t> Controller<'t> {
             rear: None,
             emergency: None,
             lights_on_us: None,
+            lights_off_at_us: None,
             lights_run_own_us: None,
             lights_expected_us: None,
             run_went_below_band: false,
@@ -803,6 +813,7 @@ impl<'t> Controller<'t> {
         self.front_chain = false;
         // The lights' run ends with the commands it was argued from.
         self.lights_on_us = None;
+        self.lights_off_at_us = None;
         self.lights_run_own_us = None;
         self.lights_expected_us = None;
         self.run_went_below_band = false;
@@ -975,6 +986,11 @@ impl<'t> Controller<'t> {
             _ => (None, None, None),
         };
         self.lights_run_own_us = own;
+        self.lights_off_at_us = match (self.lights_on_us, on) {
+            (Some(_), None) => Some(now),
+            (_, Some(_)) => None,
+            (None, None) => self.lights_off_at_us,
+        };
         self.lights_on_us = on;
         self.lights_hold = hold;
         self.run_went_below_band = self.lights_on_us.is_some()
@@ -1290,7 +1306,7 @@ impl<'t> Controller<'t> {
             && !self.two_authorities()
             && (self.run_went_below_band || self.emergency_reaches(now))
             && front.command > self.lights_command()
-            && !self.release_allowed(&model, now, front.command)
+            && !self.release_allowed(&model, now, front.command, 0)
         {
             // Down the braking ramp the last check passed with, to the lights' braking.
             let jerk = self.config.certificate.brake_jerk;
