@@ -702,6 +702,7 @@ pub fn run_group(
             .map(|(_, o)| f(o))
             .fold(f32::INFINITY, f32::min)
     };
+    let comfort_start = |o: &Outcome| in_iso_scope(o) && o.started_comfort_certified;
     let mut by_mode = LossesByMode::default();
     for (_, o) in &outcomes {
         let Some((_, mode, half)) = o.certificate_lost else {
@@ -751,11 +752,11 @@ pub fn run_group(
             count(&|o| in_iso_scope(o) && o.iso.holds()),
         ),
         iso_scope_comfort_start: (
-            count(&|o| in_iso_scope(o) && o.started_comfort_certified),
-            count(&|o| in_iso_scope(o) && o.started_comfort_certified && o.iso.holds()),
+            count(&|o| comfort_start(o)),
+            count(&|o| comfort_start(o) && o.iso.holds()),
             outcomes
                 .iter()
-                .filter(|(_, o)| in_iso_scope(o) && o.started_comfort_certified)
+                .filter(|(_, o)| comfort_start(o))
                 .map(|(_, o)| o.emergency_periods)
                 .sum(),
         ),

@@ -341,6 +341,9 @@ impl Controller<'_> {
         }
         let last = self.last_command_or_unknown(model);
         let step = iso15622::jerk_limit(ego_speed) * seconds(u64::from(self.config.period_us));
+        // The comfortable way's next command: ISO 15622's jerk down from the last, to the
+        // lights' command.
+        let down = math::max(last - step, self.lights_command());
         // A proposal that ends a lights' run (above the lights' command) where the follower
         // would allow not even the comfort band's floor with its reaction starting again when
         // the comfort band's ramp brings the lights back, the proposal held RELEASE_SPARE_US
@@ -366,7 +369,8 @@ impl Controller<'_> {
         let proposal = match (keeps_lit, run_on) {
             (false, _) => proposal,
             (true, true) => self.lights_command(),
-            (true, false) => math::max(math::min(proposal, last - step), self.lights_command()),
+            // (The proposal is above the lights' command: the way down caps it.)
+            (true, false) => math::min(proposal, down),
         };
         let mut tried = proposal;
         let mut found = look(proposal);
@@ -377,7 +381,6 @@ impl Controller<'_> {
         // later have to jump to the lights' command. One level serves every command up to the
         // proposal (`Controller::look_ahead_braking`), so the look-ahead that passed covers it.
         if let Some(l) = found {
-            let down = math::max(last - step, self.lights_command());
             let spare = if self.lights_way_down {
                 LIGHTS_WAY_RELEASE_S
             } else {
