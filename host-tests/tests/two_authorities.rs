@@ -499,6 +499,80 @@ fn a_lights_run_ends_only_with_room_for_the_law_to_hover() {
     }
 }
 
+/// The longest stretch (s) of commands at or below `at_most` (m/s^2) while the leader is more
+/// than 40 m ahead and more than 2 m/s faster than the ego: braking the road did not ask for.
+fn longest_needless_braking(trace: &[host_tests::world::TracePoint], at_most: f32) -> f32 {
+    let (mut run, mut longest) = (0.0f32, 0.0f32);
+    for w in trace.windows(2) {
+        let p = &w[0];
+        let needless =
+            p.command <= at_most && p.speeds[0] > p.speeds[1] + 2.0 && p.gap_leader > 40.0;
+        run = if needless { run + (w[1].t - p.t) } else { 0.0 };
+        longest = longest.max(run);
+    }
+    longest
+}
+
+/// The longest stretch of braking the road did not ask for (s, [`longest_needless_braking`])
+/// at or beyond the lights' command (at or below -1.45 m/s^2) and beyond the lights'
+/// deceleration (at or below -1.3 m/s^2), in a campaign episode behind a leader that may
+/// brake at 6 m/s^2 with a fixed-gap IDM follower, at the default setting.
+fn needless_braking(leader: Leader, seed: u64) -> (f32, f32) {
+    let bytes = table_bytes(6.0);
+    let table = Table::parse(bytes).unwrap();
+    let mut e = episode(leader, Follower::IdmFixed, seed);
+    e.config.law.time_gap_setting = LawConfig::default().time_gap_setting;
+    let mut trace = Vec::new();
+    let outcome = run_episode(&table, bytes, &e, Some(&mut trace)).unwrap();
+    let at_lights = longest_needless_braking(&trace, -1.45);
+    let below_lights = longest_needless_braking(&trace, -1.3);
+    println!(
+        "{leader:?} seed {seed}: {at_lights:.1} s at the lights' command, {below_lights:.1} s \
+         below -1.3 m/s^2; {outcome:?}"
+    );
+    assert!(!outcome.collided, "seed {seed}");
+    assert_eq!(outcome.certificate_lost, None, "seed {seed}");
+    (at_lights, below_lights)
+}
+
+/// Once a lights' run's own commands have lit the brakes, any command below the lights'
+/// deceleration's negative keeps it (`Controller::keeps_lights_run`: through the first-order
+/// lag the acceleration stays below -1.3 m/s^2), and a proposal the follower would not let
+/// end the run is the gentlest command that keeps it, -1.35 m/s^2, not the lights' command.
+/// Before, the law's proposals between -1.5 and -1.3 m/s^2 were held at the lights' command
+/// while the leader drew away: behind a comfortable leader (seed 18,000,083) the car braked at
+/// -1.5 m/s^2 for 10.1 s with the leader more than 40 m ahead and 2 m/s faster; in stop and
+/// go (seed 7,000,121) 9.7 s; behind the random leader (seed 13,000,068) 6.6 s. Now at most
+/// 1 s.
+#[test]
+fn a_lit_run_is_kept_by_a_gentler_braking() {
+    for (leader, seed) in [
+        (Leader::Comfortable, 18_000_083),
+        (Leader::StopAndGo, 7_000_121),
+        (Leader::Random, 13_000_068),
+    ] {
+        let (at_lights, _) = needless_braking(leader, seed);
+        assert!(at_lights < 2.0, "seed {seed}: {at_lights} s");
+    }
+}
+
+/// A lights' run ends where the follower allows a level gentler than the comfort band's floor
+/// once the lights are back and the front certifies with it (`Controller::release_allowed`,
+/// the levels the look-ahead argues with, `Controller::gentler_levels`), not only where it
+/// allows the band's floor. Behind a comfortable leader with the fixed-gap IDM follower
+/// closing as the speeds fall, the car braked at or below -1.3 m/s^2 for 14.6, 11.5 and
+/// 15.8 s with the leader more than 40 m ahead and 2 m/s faster (seeds 18,000,039,
+/// 18,000,126 and 18,000,083, with the lit run kept as above; 18.8, 11.4 and 24.7 s before
+/// either): the follower allowed not even the band's floor, so the run was kept, the speeds
+/// fell, and the IDM's gap with them. Now at most 5 s.
+#[test]
+fn a_lights_run_ends_where_a_gentler_level_certifies() {
+    for seed in [18_000_039, 18_000_126, 18_000_083] {
+        let (_, below_lights) = needless_braking(Leader::Comfortable, seed);
+        assert!(below_lights < 5.0, "seed {seed}: {below_lights} s");
+    }
+}
+
 /// A follower closing on an ego that brakes at the lights' command keeps the lights: a
 /// proposal that would end the run where the follower would not allow the comfort band's floor
 /// once they come on again is the lights' command instead (`Controller::look_ahead`). Behind a

@@ -193,6 +193,17 @@ impl Controller<'_> {
         -self.lights_command()
     }
 
+    /// The levels below the band's floor a look-ahead tries ([`GENTLER_LEVELS`], evenly spaced
+    /// from a step below the band's floor down to [`Controller::least_level`]), hardest first;
+    /// none where the lights' command is not below the band's floor.
+    pub(super) fn gentler_levels(&self, model: &Model) -> impl Iterator<Item = f32> {
+        let beta = -model.ego.min;
+        let least = self.least_level();
+        // (NaN compares false: no level.)
+        let count = if least < beta { GENTLER_LEVELS } else { 0 };
+        (0..count).rev().map(move |k| gentler_level(least, beta, k))
+    }
+
     /// The level a look-ahead argues with where the follower allows not even the band's
     /// floor: the hardest of [`GENTLER_LEVELS`] levels, evenly spaced from a step below the
     /// band's floor down to [`Controller::least_level`], at which the rear check of
@@ -222,7 +233,7 @@ impl Controller<'_> {
             return None;
         }
         let margin = self.config.certificate.rear_margin;
-        let level = |k: usize| least + (beta - least) * (k as f32) / (GENTLER_LEVELS as f32);
+        let level = |k: usize| gentler_level(least, beta, k);
         // Two neighbouring levels share the gentler one's on-time: the later, so the harder
         // one is credited less than its own.
         (0..GENTLER_LEVELS / 2).rev().find_map(|pair| {
@@ -240,8 +251,10 @@ impl Controller<'_> {
     /// or how long after it the lights are on for sure (s, [`RearCorner::gap_after`]); and when
     /// that ramp brings them on (microseconds).
     ///
-    /// A command at or below the lights' command keeps a lights' run under way (the step
-    /// keeps its on-time, or an earlier one: [`Controller::lights_run`]), and so does the
+    /// A command that keeps a lights' run under way ([`Controller::keeps_lights_run`]: at or
+    /// below the lights' command, or below the lights' deceleration's negative once the run is
+    /// lit) keeps its on-time (the step keeps it, or an earlier one:
+    /// [`Controller::lights_run`]), and so does the
     /// ramp of the braking in force after it: the follower's reaction is counted from the
     /// run's own on-time where that is earlier than the later of the run's and the ramp's
     /// (the bound for a command that may end the run), and the clock's invariance carries the
@@ -264,7 +277,7 @@ impl Controller<'_> {
         let rear = self.rear?;
         let off = self.ramp_lights_on(now, pending, command, jerk, level)?;
         // (A NaN command does not keep a run.)
-        let keeps_run = command <= self.lights_command();
+        let keeps_run = self.keeps_lights_run(now, command);
         let on = match (self.lights_on_us, self.lights_run_own_us) {
             (Some(run), Some(own)) if keeps_run => own.min(run.max(off)),
             (Some(run), _) => run.max(off),
@@ -302,13 +315,15 @@ impl Controller<'_> {
     /// (ISO 15622's jerk limit), then for the lights' command (which keeps a lights' run going,
     /// or starts one): the command is capped there, as by the speed, and the follower then
     /// lets it down gently where it can. A proposal that would end a lights' run the follower
-    /// does not allow to end ([`Controller::release_allowed`]) is the lights' command.
+    /// does not allow to end ([`Controller::release_allowed`]) is the gentlest command that
+    /// keeps the run ([`Controller::gentlest_keeping_run`]).
     pub(super) fn look_ahead(
         &self,
         model: &Model,
         now: u64,
         proposal: f32,
         ego_speed: f32,
+        front_certified: &dyn Fn(Braking) -> bool,
     ) -> Option<Look> {
         // What the actuator may be doing: one bound for every command the look-ahead tries.
         let pending = self.pending(now, model);
@@ -344,13 +359,14 @@ impl Controller<'_> {
         // The comfortable way's next command: ISO 15622's jerk down from the last, to the
         // lights' command.
         let down = math::max(last - step, self.lights_command());
-        // A proposal that ends a lights' run (above the lights' command) where the follower
-        // would allow not even the comfort band's floor with its reaction starting again when
-        // the comfort band's ramp brings the lights back, the proposal held RELEASE_SPARE_US
-        // longer than a period first (`Controller::release_allowed`, the band's rule for
-        // ending a run): the lights' command instead, which keeps the run and the follower's
-        // reaction clock going. Ended there, the run's next look-ahead, counted from the new
-        // run's own on-time, failed, and the command followed the braking in force's ramp at
+        // A proposal that ends a lights' run (`Controller::keeps_lights_run`) where the
+        // follower would allow not even the comfort band's floor, nor a gentler level at which
+        // the front certifies, with its reaction starting again when the comfort band's ramp
+        // brings the lights back, the proposal held RELEASE_SPARE_US longer than a period
+        // first (`Controller::release_allowed`, the band's rule for ending a run): the
+        // gentlest command that keeps the run instead, which keeps the follower's reaction
+        // clock going. Ended there, the run's next look-ahead, counted from the new run's own
+        // on-time, failed, and the command followed the braking in force's ramp at
         // the emergency authority's build-up (an emergency by ISO 15622's jerk limit): 143 of
         // the 228 emergency runs behind the comfortable leader with the fixed IDM began within
         // 0.7 s of a run's end. The same question is asked of every proposal that keeps the
@@ -365,10 +381,17 @@ impl Controller<'_> {
                 .is_some_and(|off| now.saturating_sub(off) < RELEASE_WATCH_US);
         let keeps_lit = (run_on || watched)
             && proposal > self.lights_command()
-            && !self.release_allowed(model, now, proposal, RELEASE_SPARE_US);
+            && !self.keeps_lights_run(now, proposal)
+            && !self.release_allowed(
+                model,
+                now,
+                proposal,
+                RELEASE_SPARE_US,
+                Some(front_certified),
+            );
         let proposal = match (keeps_lit, run_on) {
             (false, _) => proposal,
-            (true, true) => self.lights_command(),
+            (true, true) => self.gentlest_keeping_run(now),
             // (The proposal is above the lights' command: the way down caps it.)
             (true, false) => math::min(proposal, down),
         };
@@ -592,6 +615,12 @@ impl Controller<'_> {
             }
         }
     }
+}
+
+/// The `k`-th of [`GENTLER_LEVELS`] levels evenly spaced from `least` (`k` = 0) to a step
+/// below the band's floor `beta`, m/s^2.
+fn gentler_level(least: f32, beta: f32, k: usize) -> f32 {
+    least + (beta - least) * (k as f32) / (GENTLER_LEVELS as f32)
 }
 
 /// Where the follower's reaction to lights on for sure from `on` stands at a measurement's

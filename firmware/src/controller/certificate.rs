@@ -915,6 +915,24 @@ impl<'t> Controller<'t> {
         }
     }
 
+    /// Whether the front half certifies the measured state along `braking`
+    /// ([`Controller::measured_front`]'s value above `front_margin`).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn front_certifies(
+        &self,
+        model: &Model,
+        leader: &LeaderMemo,
+        ego_speed: f32,
+        t_e: u64,
+        now: u64,
+        pending: f32,
+        braking: Braking,
+    ) -> bool {
+        self.measured_front(model, leader, ego_speed, t_e, now, pending, braking)
+            .value
+            > self.config.certificate.front_margin
+    }
+
     /// The front half of the certificate at a measured state (module docs: the delays, the
     /// measurement error, the ego's speed): the front value at the error box's worst corner and
     /// the speed headroom at its worst and best corners, for the committed ramp argued from the

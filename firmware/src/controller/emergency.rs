@@ -10,11 +10,18 @@ use super::certificate::{profile, LeaderMemo, Model, Ramp, RearMemo, WorstCorner
 use super::history::seconds;
 use super::{Controller, CERTIFICATE_TOLERANCE};
 use crate::math;
+use table_format::authority::Braking;
 
 /// How many lag time constants after the last command below the band takes force the
 /// actuator's acceleration is taken back in the band: a first-order lag still passes on
 /// `e^-10` of the excess then (2e-4 m/s^2 from 8 m/s^2 to a 3.5 m/s^2 band).
 const AFTERMATH_LAGS: u64 = 10;
+
+/// How far below the lights' deceleration's negative the gentlest command that keeps a lit
+/// lights' run stays, m/s^2 ([`Controller::gentlest_keeping_run`]): any margin keeps the lights
+/// on in the declared model; this one is the largest step down from a command of the run
+/// above it that ISO 15622's jerk limit allows in a 20 ms period at every speed (2.5 m/s^3).
+pub(super) const LIT_RUN_MARGIN: f32 = 0.05;
 
 /// The last braking below the band, while its effect may last.
 #[derive(Debug, Clone, Copy)]
@@ -117,6 +124,45 @@ impl Controller<'_> {
         self.config.certificate.emergency.lights_command
     }
 
+    /// Whether `command`, issued at `now`, keeps the lights' run under way going: one at or
+    /// below the lights' command always does; once the run's own commands have lit the brakes
+    /// for sure ([`Controller::run_lit`]), so does any command below the declared lights'
+    /// deceleration's negative.
+    ///
+    /// Why: the lights are on for sure while the actuator's acceleration `A` is below
+    /// `-theta` (`table_format::authority`'s module docs). The run's commands alone keep `A`
+    /// below `-theta` from the run's own on-time on, and `A` until `now` plus the dead time
+    /// depends only on commands issued before `now`, so it is below `-theta` there. From then
+    /// on the first-order lag moves `A` only towards the commands in force (`A' = (u - A) /
+    /// lag`: `A` is a convex combination of where it was and of those commands, or the
+    /// command itself without a lag), all below `-theta`: it stays below, and the follower's
+    /// reaction, counted from the run's on-time, goes on. (At standstill after a braking the
+    /// lights are on by the same model.) A NaN command keeps no run.
+    pub(super) fn keeps_lights_run(&self, now: u64, command: f32) -> bool {
+        let theta = self.config.certificate.emergency.lights_deceleration;
+        command <= self.lights_command() || (self.run_lit(now) && command < -theta)
+    }
+
+    /// Whether a lights' run is under way whose own commands have lit the brakes for sure by
+    /// `now` (`lights_run_own_us`, not an earlier on-time a look-ahead argued with: that one
+    /// holds only while the commands stay under its ramp).
+    pub(super) fn run_lit(&self, now: u64) -> bool {
+        self.lights_on_us.is_some() && self.lights_run_own_us.is_some_and(|own| own <= now)
+    }
+
+    /// The gentlest command that keeps the lights' run under way at `now` going
+    /// ([`Controller::keeps_lights_run`]), m/s^2: once the run is lit, [`LIT_RUN_MARGIN`]
+    /// below the lights' deceleration's negative (or the lights' command, if gentler), else
+    /// the lights' command.
+    pub(super) fn gentlest_keeping_run(&self, now: u64) -> f32 {
+        let theta = self.config.certificate.emergency.lights_deceleration;
+        if self.run_lit(now) {
+            math::max(-theta - LIT_RUN_MARGIN, self.lights_command())
+        } else {
+            self.lights_command()
+        }
+    }
+
     /// Until when (microseconds) the last command below the band may still pull the
     /// actuator's acceleration below it: a period, the dead time and [`AFTERMATH_LAGS`] lag
     /// time constants after it was issued. `None` when no such command was issued.
@@ -200,8 +246,23 @@ impl Controller<'_> {
     /// With two authorities it is asked of every proposal that would end a run, and of every
     /// proposal that keeps the lights dark for a while after one ended, with `u` held
     /// `spare_us` longer than the period ([`Controller::look_ahead`]); in the band `spare_us`
-    /// is zero.
-    pub(super) fn release_allowed(&self, model: &Model, now: u64, u: f32, spare_us: u64) -> bool {
+    /// is zero. With two authorities (`front_certified` given: whether the front certifies the
+    /// measured state along a braking), where the follower would not allow the band's floor,
+    /// the hardest of the gentler levels a look-ahead argues with that it would allow, the
+    /// lights back the same way ([`Controller::gentler_levels`]; that way's on-time, down to
+    /// the gentlest level, serves every harder one), passes where the front certifies with
+    /// it: the look-ahead would then pass with that level too, so the release costs no
+    /// emergency, where insisting on the band's floor held the lights' run, and the braking,
+    /// while the leader drew away and a follower closed as the speeds fell. A prediction for
+    /// comfort, not a bound: the look-ahead of the proposal decides what is certified.
+    pub(super) fn release_allowed(
+        &self,
+        model: &Model,
+        now: u64,
+        u: f32,
+        spare_us: u64,
+        front_certified: Option<&dyn Fn(Braking) -> bool>,
+    ) -> bool {
         if model.emergency.is_none() {
             return true;
         }
@@ -228,7 +289,23 @@ impl Controller<'_> {
             return false;
         };
         let dark = seconds(on.saturating_sub(rear.at_us));
-        self.rear_check(model, &rear, -model.ego.min, 0.0, dark, now)
+        if self.rear_check(model, &rear, -model.ego.min, 0.0, dark, now) {
+            return true;
+        }
+        // With two authorities, a gentler level the follower allows with the lights back that
+        // way, where the front certifies with it: the hardest such level (the front needs more
+        // room at a gentler one).
+        let (Some(front_certified), Some(e)) = (front_certified, model.emergency) else {
+            return false;
+        };
+        self.gentler_levels(model)
+            .find(|level| self.rear_check(model, &rear, *level, 0.0, dark, now))
+            .is_some_and(|level| {
+                front_certified(Braking {
+                    level,
+                    jerk: e.jerk,
+                })
+            })
     }
 
     /// Whether the effect of a braking below the band may reach time `t`, or after it.

@@ -153,8 +153,9 @@
 //!   level is sought for the last command, then for the comfort band's step down from it, then
 //!   for the lights' command. A command braking harder than the level does not pass. The
 //!   follower's reaction is counted from when the lights come on along that ramp, or, for a
-//!   command at or below the lights' command (which keeps a lights' run going), from the
-//!   on-time the run's own commands bound where that is earlier: its reaction has then been
+//!   command that keeps a lights' run going (at or below the lights' command, or, once the
+//!   run's own commands have lit the brakes, below the lights' deceleration's negative), from
+//!   the on-time the run's own commands bound where that is earlier: its reaction has then been
 //!   running, as for the braking in force (not from an on-time a look-ahead argued with along
 //!   its ramp, which holds only while the commands follow it).
 //! - **The comfortable way to the lights**: where the proposal passes, but a follower closing
@@ -166,11 +167,16 @@
 //!   (the look-ahead that passed covers the lower command), so that the lights come on
 //!   without the jump to the lights' command that the look-ahead would otherwise need later.
 //! - **Keeping the lights**: a proposal above the lights' command ends a lights' run, and the
-//!   follower's reaction starts again when the lights next come on. Where the follower would
+//!   follower's reaction starts again when the lights next come on; once the run's own
+//!   commands have lit the brakes for sure, only one at or above the lights' deceleration's
+//!   negative does (`emergency::keeps_lights_run`: through a first-order lag the acceleration
+//!   stays below -1.3 m/s^2 under commands all below it). Where the follower would
 //!   then allow not even `beta` (`emergency::release_allowed`, the band's rule for ending a
 //!   run: the proposal held a period and `authorities::RELEASE_SPARE_US` (0.2 s) more, the
-//!   lights back along the comfort band's ramp), the proposal is the lights' command instead,
-//!   which the look-ahead checks as any other. For `authorities::RELEASE_WATCH_US` (1 s) after
+//!   lights back along the comfort band's ramp), nor a gentler level a look-ahead argues
+//!   with at which the front certifies, the proposal is the gentlest command that
+//!   keeps the run instead (-1.35 m/s^2 in a lit run, else the lights' command), which the
+//!   look-ahead checks as any other. For `authorities::RELEASE_WATCH_US` (1 s) after
 //!   a run ended, every proposal that keeps the lights dark is asked the same, and where it
 //!   fails goes down the comfortable way to the lights' command: the law's proposals near a
 //!   stop hover above the lights' command for several periods. Comfort choices (a run ended
@@ -186,8 +192,9 @@
 //!   because the ego brakes at most at that level from then on and the lights come on no later
 //!   than it argued), and along `B`'s own ramp the front value does not decrease and the rear
 //!   value with the lights' clock does not decrease while they stay on (`table_format::rear`).
-//!   The lights are counted from a run of commands at or below the lights' command, or from the
-//!   earlier time the certificate last argued with while the commands stay under its ramp.
+//!   The lights are counted from a run of commands that keep it
+//!   (`emergency::keeps_lights_run`), or from the earlier time the certificate last argued
+//!   with while the commands stay under its ramp.
 //! - **The law's steady gap** is the certificate's with the braking the follower allowed the
 //!   last look-ahead ([`Controller::allowed_braking`]): a close follower makes the car keep more
 //!   room ahead.
@@ -211,10 +218,13 @@
 //! with); move off from standstill with a follower at the IDM's jam distance behind (the
 //! follower's model lets it accelerate blind until it sees the lights, and no braking
 //! certifies that), so in stop and go the car is held, by the emergency authority's ramp; and
-//! leave the lights' command where the follower would then allow not even `beta`, even where a
-//! gentler level would pass: at 8-10 m/s with a follower 1-1.5 s behind the car is brought to
-//! a standstill the comfortable way, with no car ahead (the scenario suite's cruise on a 10%
-//! grade at 20 mph; docs/closed-loop.md has the closed-loop figures).
+//! leave a lit run where the follower would then allow not even the gentlest level a
+//! look-ahead argues with (the lights' command's, 1.5 m/s^2): at 8-10 m/s with a follower
+//! 1-1.5 s behind the car is brought to a standstill the comfortable way, with no car ahead
+//! (the scenario suite's cruise on a 10% grade at 20 mph), and behind a leader that draws
+//! away, a fixed-gap IDM follower closes as the speeds fall until the car stops with it at
+//! the jam distance behind and is held there (docs/closed-loop.md has the closed-loop
+//! figures).
 //!
 //! # Delays: the measurements' age, the actuator's dead time and lag
 //! The configuration declares the actuator's dead time `D` (a command acts `D` after it is
@@ -575,7 +585,9 @@ pub struct Controller<'t> {
     /// with brings them on for sure, while every command since is under its ramp.
     lights_expected_us: Option<u64>,
     /// From when the brake lights are on for sure, while every command since a run of braking
-    /// commands began has been at or below the lights' command (`None`: no run).
+    /// commands began has kept it (`Controller::keeps_lights_run`: at or below the lights'
+    /// command, or below the lights' deceleration's negative once the run is lit; `None`: no
+    /// run).
     lights_on_us: Option<u64>,
     /// When the last lights' run ended (its first command above the lights' command), while
     /// no run is under way (`Controller::look_ahead` watches the proposals for
@@ -983,6 +995,11 @@ impl<'t> Controller<'t> {
         // The brake lights' run (module docs: emergencies).
         let (on, hold, own) = match model {
             Some(m) if c <= self.lights_command() => self.lights_run(now, &m, c),
+            // A lit run kept by a gentler command (`Controller::keeps_lights_run`): on from
+            // its own on-time, whatever a look-ahead argued with along a ramp it has left.
+            Some(_) if self.keeps_lights_run(now, c) => {
+                (self.lights_run_own_us, None, self.lights_run_own_us)
+            }
             _ => (None, None, None),
         };
         self.lights_run_own_us = own;
@@ -1100,10 +1117,7 @@ impl<'t> Controller<'t> {
         // the driver did not ask for.
         let front_certified = |b: Braking| {
             b.level >= braking.level
-                || self
-                    .measured_front(&model, &leader, v, t_e, now, pending, b)
-                    .value
-                    > self.config.certificate.front_margin
+                || self.front_certifies(&model, &leader, v, t_e, now, pending, b)
         };
         let refused = self.two_authorities()
             && certificate.is_ok_and(|c| c.is_certified())
@@ -1154,7 +1168,9 @@ impl<'t> Controller<'t> {
         {
             let t_e = inputs.ego_speed.timestamp_us;
             let pending = self.pending(leader.at_us.min(t_e), &model);
-            let look = self.look_ahead(&model, now, planned, ego_speed);
+            let front_certified =
+                |b: Braking| self.front_certifies(&model, &leader, ego_speed, t_e, now, pending, b);
+            let look = self.look_ahead(&model, now, planned, ego_speed, &front_certified);
             if self.two_authorities() && self.in_force.is_none() {
                 self.in_force = look.map(|l| l.braking);
             }
@@ -1275,7 +1291,9 @@ impl<'t> Controller<'t> {
         let pending = self.pending(leader.at_us.min(t_e), &model);
         // The look-ahead's braking (with two authorities, the level the follower allows every
         // command up to the proposal).
-        let look = self.look_ahead(&model, now, proposal, ego_speed);
+        let front_certified =
+            |b: Braking| self.front_certifies(&model, &leader, ego_speed, t_e, now, pending, b);
+        let look = self.look_ahead(&model, now, proposal, ego_speed, &front_certified);
         self.lights_way_down = look.is_some_and(|l| l.way_down);
         self.allowed = look.map(|l| l.braking);
         self.remember_law_braking(now);
@@ -1306,17 +1324,20 @@ impl<'t> Controller<'t> {
             && !self.two_authorities()
             && (self.run_went_below_band || self.emergency_reaches(now))
             && front.command > self.lights_command()
-            && !self.release_allowed(&model, now, front.command, 0)
+            && !self.keeps_lights_run(now, front.command)
+            && !self.release_allowed(&model, now, front.command, 0, None)
         {
-            // Down the braking ramp the last check passed with, to the lights' braking.
+            // Down the braking ramp the last check passed with, to the gentlest braking that
+            // keeps the run.
+            let keeping = self.gentlest_keeping_run(now);
             let jerk = self.config.certificate.brake_jerk;
             let down = if math::is_finite(jerk) {
                 self.last_command_or_unknown(&model)
                     - jerk * seconds(u64::from(self.config.period_us))
             } else {
-                self.lights_command()
+                keeping
             };
-            front.command = math::min(front.command, math::max(self.lights_command(), down));
+            front.command = math::min(front.command, math::max(keeping, down));
         }
         // Every command below the band (the emergency answer's, or with two authorities the
         // ramp of the braking in force) is remembered while its effect may last.
