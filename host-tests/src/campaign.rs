@@ -19,7 +19,9 @@ use table_format::Table;
 use crate::humans::{within_speed_limit, Follower, HumanModel, Humans, Leader};
 use crate::sim::{ActuatorModel, Car, SensorModel};
 use crate::world::{r157_least_gap, EmergencyCauses, Start, Tolerances, World};
-pub use crate::world::{state_of, CutInKind, CutInScore, Half, ModeName, Trace, TracePoint};
+pub use crate::world::{
+    state_of, CutInKind, CutInScore, Half, ModeName, Needless, Trace, TracePoint, FREE_ROAD,
+};
 
 /// The sensors of an episode.
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -117,6 +119,8 @@ pub struct Outcome {
     pub below_band_periods: u64,
     /// The largest track ages the firmware read, s (leader, follower).
     pub max_track_age: [f32; 2],
+    /// Braking and standing the road did not ask for.
+    pub needless: Needless,
     /// The cut-in, if any, and how it was answered.
     pub cut_in: Option<CutInScore>,
     /// After a cut-in that ended in a collision: whether braking at beta from the period the
@@ -211,6 +215,7 @@ impl Outcome {
             fallback_periods: s.fallback_periods,
             below_band_periods: s.below_band_periods,
             max_track_age: s.max_track_age,
+            needless: s.needless,
             cut_in: s.cut_in,
             cut_in_unavoidable: None,
             cut_in_unavoidable_at_emergency: None,
@@ -617,8 +622,49 @@ pub struct GroupSummary {
     pub below_band_episodes: usize,
     /// The largest track age the firmware read, s (leader, follower).
     pub max_track_age: [f32; 2],
+    /// Braking and standing the road did not ask for ([`Needless`]): the episodes with a
+    /// stretch longer than [`NEEDLESS_REPORTED_S`] (braking, standstill), and the longest
+    /// stretch of each with its episode's seed (s).
+    pub needless: NeedlessSummary,
     /// Cut-ins, if the group has them.
     pub cut_ins: Option<CutInSummary>,
+}
+
+/// A stretch of braking or standing the road did not ask for longer than this is counted
+/// ([`NeedlessSummary`]), s: a driver notices it.
+pub const NEEDLESS_REPORTED_S: f32 = 5.0;
+
+/// Braking and standing the road did not ask for over episodes ([`Needless`]).
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct NeedlessSummary {
+    /// The episodes with a stretch of braking, and of standstill, longer than
+    /// [`NEEDLESS_REPORTED_S`].
+    pub episodes: [usize; 2],
+    /// The longest stretch of braking, s, and its episode's seed.
+    pub braking: (f32, u64),
+    /// The longest stretch at a standstill, s, and its episode's seed.
+    pub standstill: (f32, u64),
+}
+
+impl NeedlessSummary {
+    /// The summary of one episode's figures.
+    fn of(seed: u64, n: &Needless) -> NeedlessSummary {
+        NeedlessSummary {
+            episodes: [n.braking, n.standstill].map(|t| usize::from(t > NEEDLESS_REPORTED_S)),
+            braking: (n.braking, seed),
+            standstill: (n.standstill, seed),
+        }
+    }
+
+    /// Two summaries as one.
+    fn add(self, other: NeedlessSummary) -> NeedlessSummary {
+        let longer = |a: (f32, u64), b: (f32, u64)| if b.0 > a.0 { b } else { a };
+        NeedlessSummary {
+            episodes: [0, 1].map(|i| self.episodes[i] + other.episodes[i]),
+            braking: longer(self.braking, other.braking),
+            standstill: longer(self.standstill, other.standstill),
+        }
+    }
 }
 
 /// How a group's cut-ins were answered.
@@ -789,6 +835,10 @@ pub fn run_group(
                 .map(|(_, o)| o.max_track_age[i])
                 .fold(0.0, f32::max)
         }),
+        needless: outcomes
+            .iter()
+            .map(|(seed, o)| NeedlessSummary::of(*seed, &o.needless))
+            .fold(NeedlessSummary::default(), NeedlessSummary::add),
         cut_ins: template.cut_in.map(|_| cut_in_summary(&outcomes)),
     };
     (summary, outcomes)
@@ -1002,6 +1052,8 @@ pub struct CampaignTotals {
     pub below_band_periods: u64,
     /// See `below_band_periods`.
     pub below_band_episodes: usize,
+    /// Their braking and standing the road did not ask for.
+    pub needless: NeedlessSummary,
     /// Their emergency periods by cause.
     pub emergencies: EmergencyCauses,
     /// Cut-ins over every group.
@@ -1133,6 +1185,7 @@ pub fn run_campaign(
         totals.fallback_periods += s.fallback_periods;
         totals.below_band_periods += s.below_band_periods;
         totals.below_band_episodes += s.below_band_episodes;
+        totals.needless = totals.needless.add(s.needless);
         totals.emergencies = totals.emergencies.add(&s.emergencies);
     }
     for c in groups.iter().filter_map(|s| s.cut_ins) {

@@ -640,7 +640,7 @@ struct CampaignArgs {
 }
 
 fn campaign(args: CampaignArgs) -> Result<()> {
-    use host_tests::campaign::{run_campaign, CampaignSettings};
+    use host_tests::campaign::{run_campaign, CampaignSettings, FREE_ROAD, NEEDLESS_REPORTED_S};
     let CampaignArgs {
         episodes,
         seconds,
@@ -845,6 +845,24 @@ fn campaign(args: CampaignArgs) -> Result<()> {
     println!(
         "in ISO 15622's scope there (leaders within 3.5 m/s^2), from starts the comfort band certifies: ISO 15622 held in {} of {}, {} emergency periods",
         comfort_start.1, comfort_start.0, comfort_start.2
+    );
+    let needless = &t.needless;
+    println!(
+        "braking the road did not ask for there (engaged, the leader more than {} m ahead and \
+         {} m/s faster): beyond the lights' deceleration ({} m/s^2) for more than {} s in {} \
+         episodes (the longest {:.1} s, seed {}), at a standstill for more than {} s in {} (the \
+         longest {:.1} s, seed {})",
+        FREE_ROAD.0,
+        FREE_ROAD.1,
+        settings.config.certificate.emergency.lights_deceleration,
+        NEEDLESS_REPORTED_S,
+        needless.episodes[0],
+        needless.braking.0,
+        needless.braking.1,
+        NEEDLESS_REPORTED_S,
+        needless.episodes[1],
+        needless.standstill.0,
+        needless.standstill.1
     );
     if settings.cut_in.is_some() {
         let emergency = settings.config.certificate.emergency;

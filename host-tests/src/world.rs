@@ -141,6 +141,45 @@ pub struct Start {
     pub engaged_acceleration: f32,
 }
 
+/// Where the road asks for no braking: the leader more than this far ahead (m) and more than
+/// this much faster than the ego (m/s) ([`Needless`]).
+pub const FREE_ROAD: (f32, f32) = (40.0, 2.0);
+
+/// Below this speed the ego stands (m/s; [`Needless::standstill`]).
+const STANDING_SPEED: f32 = 0.1;
+
+/// Braking and standing the road did not ask for while the firmware drives, at the true state
+/// ([`FREE_ROAD`]: the leader more than 40 m ahead and more than 2 m/s faster): the longest
+/// stretch of each over an episode, s. A liveness figure: the certificate is not at stake, but
+/// a car that brakes, or stands, while the car ahead draws away is one no driver keeps on
+/// (with two authorities, a lights' run kept for a follower that closes as the speeds fall).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Needless {
+    /// The longest stretch of commands braking beyond the declared lights' deceleration
+    /// (-1.3 m/s^2 by default: the brake lights on for sure) while the ego moves, s.
+    pub braking: f32,
+    /// The longest stretch at a standstill, s.
+    pub standstill: f32,
+    /// The stretches under way, s (braking, standstill).
+    #[serde(skip)]
+    under_way: [f32; 2],
+}
+
+impl Needless {
+    /// One period of `h` seconds: on a free road or not, braking or not, standing or not (a
+    /// car that stands is counted standing, whatever it commands).
+    fn push(&mut self, free_road: bool, braking: bool, standing: bool, h: f32) {
+        for (i, on) in [free_road && braking && !standing, free_road && standing]
+            .into_iter()
+            .enumerate()
+        {
+            self.under_way[i] = if on { self.under_way[i] + h } else { 0.0 };
+        }
+        self.braking = self.braking.max(self.under_way[0]);
+        self.standstill = self.standstill.max(self.under_way[1]);
+    }
+}
+
 /// The running score of an episode.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct Score {
@@ -203,6 +242,8 @@ pub struct Score {
     pub max_track_age: [f32; 2],
     /// What became of a cut-in, if the episode had one.
     pub cut_in: Option<CutInScore>,
+    /// Braking and standing the road did not ask for.
+    pub needless: Needless,
 }
 
 /// The emergency periods ([`firmware::Command::emergency`]) by cause, judged with what the world
@@ -407,6 +448,7 @@ impl Score {
             below_band_periods: 0,
             max_track_age: [0.0; 2],
             cut_in: None,
+            needless: Needless::default(),
         }
     }
 
@@ -973,6 +1015,7 @@ impl<'t> World<'t> {
         }
         self.score_cut_in(&inputs, &command);
         let certificate = self.certificate();
+        let lights_deceleration = self.lights_deceleration();
         // An emergency period counts under the cause its run began with.
         let engagement = self.period == self.engaged_from;
         let cause = command.emergency.then(|| {
@@ -1018,6 +1061,14 @@ impl<'t> World<'t> {
             } += 1;
         }
         self.emergency_run = cause;
+        let [ahead, ego, _] = self.cars;
+        let free_road = command.mode != Mode::Standby
+            && ahead.x - ego.x > FREE_ROAD.0
+            && ahead.v > ego.v + FREE_ROAD.1;
+        let braking = command.acceleration < -lights_deceleration;
+        let h = self.period_us as f32 * 1e-6;
+        s.needless
+            .push(free_road, braking, ego.v < STANDING_SPEED, h);
         s.periods += 1;
         if command.acceleration < self.model.band_min {
             s.below_band_periods += 1;
@@ -1032,7 +1083,6 @@ impl<'t> World<'t> {
         let age = |t: u64| now_us.saturating_sub(t) as f32 * 1e-6;
         s.max_track_age[0] = s.max_track_age[0].max(age(inputs.leader.timestamp_us));
         s.max_track_age[1] = s.max_track_age[1].max(age(inputs.follower.timestamp_us));
-        let h = self.period_us as f32 * 1e-6;
         if let Some(prev) = self.last_command {
             s.max_jerk = s.max_jerk.max((command.acceleration - prev).abs() / h);
         }
@@ -1115,5 +1165,38 @@ impl<'t> World<'t> {
             s.leader_stops += 1;
         }
         true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Needless;
+
+    /// A stretch counts only on a free road, braking counts only while the car moves, and a
+    /// break in a stretch starts it again: the longest is kept.
+    #[test]
+    fn needless_braking_and_standing_are_the_longest_stretches() {
+        let mut n = Needless::default();
+        let h = 0.5;
+        // Braking on a free road for 1.5 s, then not free: 1.5 s.
+        for _ in 0..3 {
+            n.push(true, true, false, h);
+        }
+        n.push(false, true, false, h);
+        // Braking again for 1 s: the longest stays 1.5 s.
+        for _ in 0..2 {
+            n.push(true, true, false, h);
+        }
+        assert_eq!(n.braking, 1.5);
+        // Standing, commanding a braking, for 2 s: standstill, not braking.
+        for _ in 0..4 {
+            n.push(true, true, true, h);
+        }
+        assert_eq!((n.braking, n.standstill), (1.5, 2.0));
+        // Neither off a free road.
+        for _ in 0..10 {
+            n.push(false, true, true, h);
+        }
+        assert_eq!((n.braking, n.standstill), (1.5, 2.0));
     }
 }
