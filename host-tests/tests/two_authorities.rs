@@ -406,8 +406,9 @@ fn the_search_with_late_reacting_followers() {
 /// follower stopped at the IDM's jam distance (2 m) behind, the two-authority firmware holds
 /// the car along the emergency authority's ramp (it cannot certify a move-off: the follower's
 /// model lets it accelerate blind until the lights), its command dropping faster than
-/// ISO 15622's jerk limit in several periods (9 in 20 s: the lights' command holds it between
-/// them, `Controller::look_ahead`); the car does not move, and none of those periods
+/// ISO 15622's jerk limit in several periods (7 in 20 s: the gentlest command that keeps the
+/// lit run holds it between them, `Controller::look_ahead`); the car does not move, and none
+/// of those periods
 /// is flagged an emergency or asks the driver to take over (`Command::emergency`: the jerk
 /// check leaves out a car whose measured speed's error box reaches zero).
 #[test]
