@@ -575,13 +575,14 @@ fn a_lights_run_ends_where_a_gentler_level_certifies() {
 
 /// A follower closing on an ego that brakes at the lights' command keeps the lights: a
 /// proposal that would end the run where the follower would not allow the comfort band's floor
-/// once they come on again is the lights' command instead (`Controller::look_ahead`). Behind a
+/// (nor a gentler level at which the front certifies) once they come on again is the gentlest
+/// command that keeps the run instead (`Controller::look_ahead`). Behind a
 /// comfortable leader braking at 2.7 m/s^2, a fixed-gap IDM follower closes at 4.8 m/s from
 /// 31 m back (seed 18,000,003): the law's command moved between -1.33 and -1.5 m/s^2, each
 /// step above ending the run, and the next look-ahead, counting the follower's reaction from
 /// the new run's on-time, failed, so the command followed the emergency authority's ramp at
-/// 12 m/s^3 (9 emergency periods in the episode); it now keeps the lights' command and flags
-/// no emergency.
+/// 12 m/s^3 (9 emergency periods in the episode); it now keeps the run and flags no
+/// emergency.
 #[test]
 fn a_follower_closing_on_a_lit_ego_keeps_its_lights() {
     no_emergency_behind_a_comfortable_leader(18_000_003);
