@@ -380,8 +380,7 @@ impl Controller<'_> {
                 .lights_off_at_us
                 .is_some_and(|off| now.saturating_sub(off) < RELEASE_WATCH_US);
         let keeps_lit = (run_on || watched)
-            && proposal > self.lights_command()
-            && !self.keeps_lights_run(now, proposal)
+            && self.ends_lights_run(now, proposal)
             && !self.release_allowed(
                 model,
                 now,

@@ -143,6 +143,13 @@ impl Controller<'_> {
         command <= self.lights_command() || (self.run_lit(now) && command < -theta)
     }
 
+    /// Whether `command`, issued at `now`, ends the lights' run under way (or, with none, would
+    /// end one): it does not keep it ([`Controller::keeps_lights_run`]). A NaN command ends
+    /// none: the release question is not asked of it.
+    pub(super) fn ends_lights_run(&self, now: u64, command: f32) -> bool {
+        command > self.lights_command() && !self.keeps_lights_run(now, command)
+    }
+
     /// Whether a lights' run is under way whose own commands have lit the brakes for sure by
     /// `now` (`lights_run_own_us`, not an earlier on-time a look-ahead argued with: that one
     /// holds only while the commands stay under its ramp).

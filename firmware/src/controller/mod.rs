@@ -1323,8 +1323,7 @@ impl<'t> Controller<'t> {
         if below_band.is_none()
             && !self.two_authorities()
             && (self.run_went_below_band || self.emergency_reaches(now))
-            && front.command > self.lights_command()
-            && !self.keeps_lights_run(now, front.command)
+            && self.ends_lights_run(now, front.command)
             && !self.release_allowed(&model, now, front.command, 0, None)
         {
             // Down the braking ramp the last check passed with, to the gentlest braking that
