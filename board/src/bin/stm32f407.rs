@@ -12,8 +12,8 @@
 //!    board. It starts after the table check, so that the check's length cannot trip it.
 //! 5. TIM2 runs free at 1 MHz over its 32 bits (the controller's clock); TIM3 paces the loop
 //!    at 50 Hz.
-//! 6. CAN1 on PB8 (RX) / PB9 (TX) at 500 kbit/s; filters pass the tracks (0x120, 0x121) and the
-//!    ego speed (0x130). The peripheral joins the bus without blocking: until it has, no frame
+//! 6. CAN1 on PB8 (RX) / PB9 (TX) at 500 kbit/s; filters pass the tracks (0x120, 0x121), the
+//!    ego speed and the actuator's state (0x130, 0x131) and the driver's requests (0x140). The peripheral joins the bus without blocking: until it has, no frame
 //!    arrives and the controller is in the minimum-risk manoeuvre, as with a silent bus. The
 //!    takeover request goes on PD14.
 //!
@@ -44,7 +44,7 @@ use bxcan::filter::Mask32;
 use bxcan::{Fifo, StandardId};
 use cortex_m_rt::entry;
 use defmt_rtt as _;
-use firmware::can::{CanBus, EGO_SPEED_ID, FRONT_TRACK_ID};
+use firmware::can::{CanBus, DRIVER_REQUEST_ID, EGO_SPEED_ID, FRONT_TRACK_ID};
 use firmware::{Config, Controller};
 use stm32f4xx_hal::pac;
 use stm32f4xx_hal::prelude::*;
@@ -157,15 +157,18 @@ fn main() -> ! {
     let mut can = builder.leave_disabled();
     {
         let mut filters = can.modify_filters();
-        if let (Some(tracks), Some(pair), Some(ego), Some(exact)) = (
+        if let (Some(tracks), Some(pair), Some(ego), Some(driver), Some(exact)) = (
             StandardId::new(FRONT_TRACK_ID),
             StandardId::new(0x7FE),
             StandardId::new(EGO_SPEED_ID),
+            StandardId::new(DRIVER_REQUEST_ID),
             StandardId::new(0x7FF),
         ) {
-            // 0x120 and 0x121 differ in the last bit only.
+            // 0x120 and 0x121 differ in the last bit only, as 0x130 and 0x131 (the ego speed
+            // and the actuator's state) do.
             filters.enable_bank(0, Fifo::Fifo0, Mask32::frames_with_std_id(tracks, pair));
-            filters.enable_bank(1, Fifo::Fifo0, Mask32::frames_with_std_id(ego, exact));
+            filters.enable_bank(1, Fifo::Fifo0, Mask32::frames_with_std_id(ego, pair));
+            filters.enable_bank(2, Fifo::Fifo0, Mask32::frames_with_std_id(driver, exact));
         }
     }
     // The request sequence goes on from the last run's (0 after a power-on).
