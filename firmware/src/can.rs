@@ -10,6 +10,7 @@
 //! | `0x131` | actuator state ([`crate::Inputs::ego_acceleration`]) | 0-1 acceleration `i16` 0.001 m/s^2 (the largest of the powertrain's realised acceleration and its requests in force and in flight), 2 flags (bit 0: valid), 3 age `u8` ms, 4 counter, 5 CRC |
 //! | `0x140` | driver request ([`crate::controller::DriverRequest`]) | 0 request (1 engage/SET, 2 cancel, 3 resume, 4 set speed, 5 time gap), 1-2 value `u16` (set speed 0.01 m/s; time-gap setting), 3 counter, 4 CRC; one request per frame, delivered one per period in order (up to 4 queued) |
 //! | `0x200` | acceleration request (sent) | 0-1 acceleration `i16` 0.001 m/s^2, 2 mode (bits 0-6: 0 nominal, 1 override, 2 minimum risk, 3 uncertified, 4 standby: not for the actuator; bit 7: an emergency, [`crate::Command::emergency`]: the actuator is to deliver it as an automatic emergency braking, beyond the comfort band or faster than ISO 15622's jerk limit), 3 status ([`status_byte`]: certified, takeover request, the tracks' states), 4 counter, 5 CRC |
+//! | `0x210` | driver's display (sent, [`crate::DriverDisplay`]: [`crate::Controller::driver`]) | 0 flags (bit 0: engaged, bit 1: a resume waits for the move-off), 1-2 set speed `u16` 0.01 m/s, 3 time-gap setting, 4 why the latest driver request was refused ([`refusal_code`]: 0 taken or none yet, 1 set speed out of range, 2 no such time gap, 3 not certified, 4 certificate unknown, 5 needs emergency braking), 5 refusals since start (`u8`, wrapping: a new refusal changes it even with the same reason), 6 counter, 7 CRC; after every acceleration request |
 //!
 //! # End-to-end protection (after AUTOSAR E2E profile 1)
 //! - **CRC**: CRC-8 SAE J1850 (polynomial 0x1D, initial value 0xFF, final XOR 0xFF, the
@@ -33,8 +34,8 @@
 use embedded_can::{Frame, Id, StandardId};
 
 use crate::controller::{Command, Mode};
-use crate::driver::DriverRequest;
-use crate::hardware::{Actuator, Sensors};
+use crate::driver::{DriverError, DriverRequest, DriverState};
+use crate::hardware::{Actuator, DriverDisplay, Sensors};
 use crate::inputs::{Inputs, Measurement, Track};
 use crate::math;
 use crate::sensing::TrackState;
@@ -51,6 +52,8 @@ pub const ACTUATOR_STATE_ID: u16 = 0x131;
 pub const DRIVER_REQUEST_ID: u16 = 0x140;
 /// Identifier of the acceleration request.
 pub const ACCEL_REQUEST_ID: u16 = 0x200;
+/// Identifier of the driver's display frame.
+pub const DRIVER_DISPLAY_ID: u16 = 0x210;
 
 /// Frames drained per `read`, at most (bounds the time a flooded bus can take).
 pub const MAX_FRAMES_PER_READ: usize = 32;
@@ -73,6 +76,10 @@ pub struct CanBus<C> {
     can: C,
     inputs: Inputs,
     counter: u8,
+    /// The rolling counter of the next display frame.
+    display_counter: u8,
+    /// Display frames the bus did not take.
+    unshown: u32,
     counts: E2eCounts,
     /// The last counter accepted per identifier: front, rear, ego speed, actuator state,
     /// driver request.
@@ -286,6 +293,76 @@ pub fn encode_command(command: &Command, counter: u8) -> [u8; 6] {
     ]
 }
 
+/// The display's code for why the latest driver request was refused (frame `0x210`, byte 4):
+/// 0 taken (or none yet), then one per [`DriverError`].
+pub fn refusal_code(refused: Option<DriverError>) -> u8 {
+    match refused {
+        None => 0,
+        Some(DriverError::SetSpeedOutOfRange) => 1,
+        Some(DriverError::NoSuchTimeGap) => 2,
+        Some(DriverError::NotCertified) => 3,
+        Some(DriverError::CertificateUnknown) => 4,
+        Some(DriverError::NeedsEmergencyBraking) => 5,
+    }
+}
+
+/// Encodes the driver's display frame: the driver's state ([`DriverState`]), the counter and
+/// the CRC.
+pub fn encode_driver_display(driver: &DriverState, counter: u8) -> [u8; 8] {
+    let flags = u8::from(driver.engaged) | u8::from(driver.resume_requested) << 1;
+    let [v0, v1] = quantize_u16(driver.set_speed * 100.0).to_le_bytes();
+    let body = [
+        flags,
+        v0,
+        v1,
+        driver.time_gap_setting,
+        refusal_code(driver.refused),
+        driver.refusals,
+        counter,
+    ];
+    let [b0, b1, b2, b3, b4, b5, b6] = body;
+    [
+        b0,
+        b1,
+        b2,
+        b3,
+        b4,
+        b5,
+        b6,
+        frame_crc(DRIVER_DISPLAY_ID, &body),
+    ]
+}
+
+/// Decodes a driver's display frame (the display's end, and tests): the driver's state, the
+/// set speed to 0.01 m/s, and the counter. An unknown refusal code or unknown flags are a
+/// malformed frame ([`FrameError::Length`]'s count).
+pub fn decode_driver_display(data: &[u8]) -> Result<(DriverState, u8), FrameError> {
+    let body = checked(DRIVER_DISPLAY_ID, data, 8)?;
+    let field = |at| body.get(at).copied().ok_or(FrameError::Length);
+    let flags = field(0)?;
+    if flags > 0b11 {
+        return Err(FrameError::Length);
+    }
+    let refused = match field(4)? {
+        0 => None,
+        1 => Some(DriverError::SetSpeedOutOfRange),
+        2 => Some(DriverError::NoSuchTimeGap),
+        3 => Some(DriverError::NotCertified),
+        4 => Some(DriverError::CertificateUnknown),
+        5 => Some(DriverError::NeedsEmergencyBraking),
+        _ => return Err(FrameError::Length),
+    };
+    let state = DriverState {
+        engaged: flags & 1 != 0,
+        resume_requested: flags & 2 != 0,
+        set_speed: f32::from(u16_at(body, 1).ok_or(FrameError::Length)?) * 0.01,
+        time_gap_setting: field(3)?,
+        refused,
+        refusals: field(5)?,
+    };
+    Ok((state, field(6)?))
+}
+
 /// The request's status byte, which says which case of the argument holds: bit 0 the state is
 /// certified (a positive margin: in a minimum-risk manoeuvre, the certified fallback), bit 1
 /// the driver's takeover request, bits 2-4 the leader track's state and bits 5-7 the
@@ -386,6 +463,8 @@ impl<C: embedded_can::nb::Can> CanBus<C> {
             can,
             inputs: Inputs::invalid(0),
             counter,
+            display_counter: 0,
+            unshown: 0,
             counts: E2eCounts::default(),
             last_counters: [None; 5],
             driver: heapless::Deque::new(),
@@ -395,6 +474,12 @@ impl<C: embedded_can::nb::Can> CanBus<C> {
     /// Frames ignored for a wrong length so far.
     pub fn malformed_frames(&self) -> u32 {
         self.counts.malformed
+    }
+
+    /// Display frames ([`DRIVER_DISPLAY_ID`]) the bus did not take so far: the display is
+    /// not the control path, so [`crate::run_period_on_bus`] goes on without it.
+    pub fn unshown(&self) -> u32 {
+        self.unshown
     }
 
     /// What the end-to-end checks refused or noticed so far.
@@ -521,5 +606,27 @@ impl<C: embedded_can::nb::Can> Actuator for CanBus<C> {
             Err(nb::Error::WouldBlock) => Err(Error::TransmitBusy),
             Err(nb::Error::Other(e)) => Err(Error::Bus(e)),
         }
+    }
+}
+
+impl<C: embedded_can::nb::Can> DriverDisplay for CanBus<C> {
+    type Error = Error<C::Error>;
+
+    fn show(&mut self, driver: &DriverState) -> Result<(), Self::Error> {
+        let payload = encode_driver_display(driver, self.display_counter);
+        self.display_counter = self.display_counter.wrapping_add(1);
+        let sent =
+            match StandardId::new(DRIVER_DISPLAY_ID).and_then(|id| C::Frame::new(id, &payload)) {
+                None => Err(Error::FrameConstruction),
+                Some(frame) => match self.can.transmit(&frame) {
+                    Ok(_) => Ok(()),
+                    Err(nb::Error::WouldBlock) => Err(Error::TransmitBusy),
+                    Err(nb::Error::Other(e)) => Err(Error::Bus(e)),
+                },
+            };
+        if sent.is_err() {
+            self.unshown = self.unshown.saturating_add(1);
+        }
+        sent
     }
 }

@@ -25,9 +25,10 @@ pub enum DriverRequest {
     TimeGap(u8),
 }
 
-/// Why a driver request was refused (the state is unchanged). Shown to the driver: the
-/// controller returns it from [`Controller::request`] and logs it
-/// ([`Event::DriverRequestRefused`](crate::Event::DriverRequestRefused)).
+/// Why a driver request was refused (the driver's settings are unchanged). Shown to the
+/// driver: the controller returns it from [`Controller::request`], keeps it in
+/// [`DriverState::refused`] (sent to the display on CAN, frame `0x210` of [`crate::can`]) and
+/// logs it ([`Event::DriverRequestRefused`](crate::Event::DriverRequestRefused)).
 ///
 /// [`Controller::request`]: crate::Controller::request
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -85,6 +86,13 @@ pub struct DriverState {
     pub time_gap_setting: u8,
     /// A resume was asked for and not yet used by a move-off.
     pub resume_requested: bool,
+    /// Why the latest driver request was refused (`None`: it was taken, or none came yet): what
+    /// the driver's display shows ([`crate::can`]'s frame `0x210`).
+    pub refused: Option<DriverError>,
+    /// How many requests were refused since start, wrapping at 255: a display tells a new
+    /// refusal from the one it shows by it, even where frames are lost or the same reason
+    /// comes twice.
+    pub refusals: u8,
 }
 
 impl DriverState {
@@ -95,7 +103,18 @@ impl DriverState {
             set_speed: config.law.set_speed,
             time_gap_setting: config.law.time_gap_setting,
             resume_requested: false,
+            refused: None,
+            refusals: 0,
         }
+    }
+
+    /// Records the outcome of a request: the latest refusal (or none) and the refusals' count.
+    pub(super) fn record(&mut self, outcome: Result<(), DriverError>) -> Result<(), DriverError> {
+        self.refused = outcome.err();
+        if self.refused.is_some() {
+            self.refusals = self.refusals.wrapping_add(1);
+        }
+        outcome
     }
 
     /// Applies `request`, with the ego's measured speed (for SET) and the envelope's top speed.

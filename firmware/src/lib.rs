@@ -50,7 +50,7 @@ pub use controller::{
     LawConfig, Mode, OverridePolicy, PlantConfig, CERTIFICATE_TOLERANCE, REAR_SAMPLE_TOLERANCE,
     SPEED_TOLERANCE,
 };
-pub use hardware::{Actuator, Clock, Sensors, Watchdog};
+pub use hardware::{Actuator, Clock, DriverDisplay, Sensors, Watchdog};
 pub use inputs::{Inputs, Measurement, Track};
 pub use sensing::{SensorBounds, TrackState};
 pub use table_format;
@@ -82,21 +82,26 @@ pub fn run_period<S: Sensors, A: Actuator, C: Clock, W: Watchdog>(
 }
 
 /// [`run_period`] over one transport that both delivers the inputs and takes the command, such
-/// as a CAN bus ([`can::CanBus`]): the same period, in the same order.
-pub fn run_period_on_bus<B: Sensors + Actuator, C: Clock, W: Watchdog>(
+/// as a CAN bus ([`can::CanBus`]): the same period, in the same order, and the driver's state
+/// shown on the display after the command is sent ([`DriverDisplay`]). The display is not the
+/// control path: a display that could not be shown is the transport's to count
+/// ([`can::CanBus::unshown`]), and the period's result is the command's.
+pub fn run_period_on_bus<B: Sensors + Actuator + DriverDisplay, C: Clock, W: Watchdog>(
     controller: &mut Controller<'_>,
     bus: &mut B,
     clock: &mut C,
     watchdog: &mut W,
 ) -> Result<Command, <B as Actuator>::Error> {
-    period(
+    let command = period(
         controller,
         bus,
         |bus, now| bus.read(now).ok(),
         |bus, command| bus.request(command),
         clock,
         watchdog,
-    )
+    );
+    let _ = bus.show(&controller.driver());
+    command
 }
 
 /// The period, once: the time, the inputs (all invalid if they could not be read), the step,

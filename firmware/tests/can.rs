@@ -1,6 +1,6 @@
 //! The CAN driver against a mock bus: decoding, the sender's age in the time stamp, the
 //! end-to-end checks (CRC, rolling counter), staleness through missing frames, malformed frames,
-//! and the request frame.
+//! the request frame and the driver's display frame.
 
 use std::collections::VecDeque;
 
@@ -350,8 +350,17 @@ fn one_bus_runs_the_whole_period() {
     assert_eq!(dog.0, 1);
     assert_eq!(bus.next_counter(), 1);
     let raw = bus.release();
-    assert_eq!(raw.tx.len(), 1);
+    // The acceleration request, then the driver's display.
+    assert_eq!(raw.tx.len(), 2);
     assert_eq!(raw.tx[0].data, can::encode_command(&cmd, 0).to_vec());
+    assert_eq!(
+        raw.tx[1].id,
+        Id::Standard(StandardId::new(can::DRIVER_DISPLAY_ID).unwrap())
+    );
+    assert_eq!(
+        raw.tx[1].data,
+        can::encode_driver_display(&controller.driver(), 0).to_vec()
+    );
     // A failing bus: the manoeuvre, and the watchdog still fed.
     let mut failing = CanBus::new(MockBus {
         fail: true,
@@ -449,4 +458,117 @@ fn the_actuator_state_and_the_drivers_requests_arrive() {
     );
     assert_eq!(bus.read(140_000).unwrap().driver, None);
     assert_eq!(bus.e2e().malformed, 1);
+}
+
+/// The display frame carries the driver's state and why the latest request was refused, so
+/// that a refused engagement reaches the driver: every field round-trips, the refusal's code is
+/// the one documented for it, and a later accepted request clears the reason but not the
+/// count.
+#[test]
+fn a_refused_engagement_reaches_the_drivers_display() {
+    use firmware::{DriverError, DriverRequest};
+    let mut controller = Controller::new(DEFAULT_TABLE, Config::default());
+    assert_eq!(controller.request(DriverRequest::Cancel), Ok(()));
+    // No standby period since the cancel: nothing certifies an engagement yet.
+    assert_eq!(
+        controller.request(DriverRequest::Engage),
+        Err(DriverError::CertificateUnknown)
+    );
+    let mut bus = CanBus::new(MockBus::default());
+    bus = push_all(&mut bus, healthy_frames());
+    let mut dog = Dog::default();
+    firmware::run_period_on_bus(&mut controller, &mut bus, &mut TestClock(20_000), &mut dog)
+        .unwrap();
+    let raw = bus.release();
+    let shown = raw
+        .tx
+        .iter()
+        .find(|f| f.id == Id::Standard(StandardId::new(can::DRIVER_DISPLAY_ID).unwrap()))
+        .expect("a display frame");
+    assert_eq!(shown.data[4], 4, "certificate unknown is code 4");
+    let (state, counter) = can::decode_driver_display(&shown.data).unwrap();
+    assert_eq!(counter, 0);
+    assert!(!state.engaged);
+    assert_eq!(state.refused, Some(DriverError::CertificateUnknown));
+    assert_eq!(state.refusals, 1);
+    assert_eq!(state, controller.driver());
+
+    // A request taken clears the reason; the count stays.
+    assert_eq!(controller.request(DriverRequest::TimeGap(0)), Ok(()));
+    let taken = controller.driver();
+    assert_eq!((taken.refused, taken.refusals), (None, 1));
+    // Every reason and both flags round-trip, the set speed to 0.01 m/s.
+    for (refused, code) in [
+        (None, 0),
+        (Some(DriverError::SetSpeedOutOfRange), 1),
+        (Some(DriverError::NoSuchTimeGap), 2),
+        (Some(DriverError::NotCertified), 3),
+        (Some(DriverError::CertificateUnknown), 4),
+        (Some(DriverError::NeedsEmergencyBraking), 5),
+    ] {
+        let state = firmware::DriverState {
+            engaged: true,
+            resume_requested: true,
+            set_speed: 27.5,
+            time_gap_setting: 3,
+            refused,
+            refusals: 255,
+        };
+        let bytes = can::encode_driver_display(&state, 7);
+        assert_eq!(bytes[4], code);
+        assert_eq!(can::refusal_code(refused), code);
+        let (back, counter) = can::decode_driver_display(&bytes).unwrap();
+        assert_eq!((back, counter), (state, 7));
+    }
+    // An unknown reason or flag is malformed; a flipped bit fails the CRC.
+    let state = controller.driver();
+    let mut bogus = can::encode_driver_display(&state, 1);
+    bogus[4] = 6;
+    bogus[7] = can::frame_crc(can::DRIVER_DISPLAY_ID, &bogus[..7]);
+    assert_eq!(
+        can::decode_driver_display(&bogus),
+        Err(can::FrameError::Length)
+    );
+    let mut flipped = can::encode_driver_display(&state, 1);
+    flipped[1] ^= 1;
+    assert_eq!(
+        can::decode_driver_display(&flipped),
+        Err(can::FrameError::Checksum)
+    );
+}
+
+/// A display frame the bus does not take is counted, and the period's command still stands.
+#[test]
+fn a_display_the_bus_does_not_take_is_counted() {
+    use firmware::DriverDisplay;
+    struct Full(MockBus);
+    impl embedded_can::nb::Can for Full {
+        type Frame = MockFrame;
+        type Error = BusError;
+        fn transmit(&mut self, frame: &MockFrame) -> nb::Result<Option<MockFrame>, BusError> {
+            if frame.id == Id::Standard(StandardId::new(can::DRIVER_DISPLAY_ID).unwrap()) {
+                return Err(nb::Error::WouldBlock);
+            }
+            self.0.transmit(frame)
+        }
+        fn receive(&mut self) -> nb::Result<MockFrame, BusError> {
+            self.0.receive()
+        }
+    }
+    let mut controller = Controller::new(DEFAULT_TABLE, Config::default());
+    let mut raw = MockBus::default();
+    raw.rx.extend(healthy_frames());
+    let mut bus = CanBus::new(Full(raw));
+    let mut dog = Dog::default();
+    let cmd =
+        firmware::run_period_on_bus(&mut controller, &mut bus, &mut TestClock(20_000), &mut dog)
+            .unwrap();
+    assert_eq!(cmd.mode, Mode::Nominal);
+    assert_eq!(bus.unshown(), 1);
+    assert!(matches!(
+        bus.show(&controller.driver()),
+        Err(can::Error::TransmitBusy)
+    ));
+    assert_eq!(bus.unshown(), 2);
+    assert_eq!(bus.release().0.tx.len(), 1);
 }

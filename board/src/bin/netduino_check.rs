@@ -37,8 +37,8 @@ use cortex_m_semihosting::debug;
 use defmt_semihosting as _;
 use embedded_can::{Frame as _, Id, StandardId};
 use firmware::can::{
-    encode_ego_speed, encode_track, CanBus, ACCEL_REQUEST_ID, EGO_SPEED_ID, FRONT_TRACK_ID,
-    REAR_TRACK_ID,
+    decode_driver_display, encode_ego_speed, encode_track, CanBus, ACCEL_REQUEST_ID,
+    DRIVER_DISPLAY_ID, EGO_SPEED_ID, FRONT_TRACK_ID, REAR_TRACK_ID,
 };
 use firmware::{Config, Controller, Fault, Mode, Track};
 use heapless::Deque;
@@ -218,6 +218,8 @@ struct Run {
     e2e_faults: u32,
     /// The rolling counter of the first acceleration request sent.
     first_counter: Option<u8>,
+    /// Display frames that decoded to an engaged ACC with nothing refused.
+    displays: u32,
 }
 
 /// Runs `steps` periods of the loop: the leader cruises at 25 m/s, then at 2 s brakes at
@@ -241,6 +243,7 @@ fn drive(controller: &mut Controller<'_>, steps: u32) -> Run {
         smallest_gap: f32::INFINITY,
         last_ego_speed: ego.v,
         e2e_faults: 0,
+        displays: 0,
     };
     let mut seq = 0u8;
     for k in 0..steps {
@@ -294,12 +297,21 @@ fn drive(controller: &mut Controller<'_>, steps: u32) -> Run {
         }
         // Kept for the run after a reset, as the board keeps it.
         target::keep_request_counter(bus.next_counter());
-        // The actuator reads the request off the bus.
-        if let Some(f) = bus.bus_mut().tx.pop_front() {
-            if f.id.as_raw() == ACCEL_REQUEST_ID {
-                let [a0, a1, _, _, counter, ..] = f.data;
-                ego_a = f32::from(i16::from_le_bytes([a0, a1])) * 1e-3;
-                run.first_counter = run.first_counter.or(Some(counter));
+        // The actuator reads the request off the bus, the display its frame.
+        while let Some(f) = bus.bus_mut().tx.pop_front() {
+            match f.id.as_raw() {
+                ACCEL_REQUEST_ID => {
+                    let [a0, a1, _, _, counter, ..] = f.data;
+                    ego_a = f32::from(i16::from_le_bytes([a0, a1])) * 1e-3;
+                    run.first_counter = run.first_counter.or(Some(counter));
+                }
+                DRIVER_DISPLAY_ID
+                    if decode_driver_display(f.data.get(..f.len).unwrap_or(&[]))
+                        .is_ok_and(|(d, _)| d.engaged && d.refused.is_none()) =>
+                {
+                    run.displays += 1;
+                }
+                _ => {}
             }
         }
         let t = k as f32 * h;
@@ -359,12 +371,13 @@ fn main() -> ! {
         (None, _) => {
             let run = drive(&mut controller, 1500);
             defmt::info!(
-                "closed loop, 30 s: {=u32} nominal, {=u32} minimum-risk steps, smallest gap {=f32} m, ego at {=f32} m/s at the end, {=u32} end-to-end faults",
+                "closed loop, 30 s: {=u32} nominal, {=u32} minimum-risk steps, smallest gap {=f32} m, ego at {=f32} m/s at the end, {=u32} end-to-end faults, {=u32} display frames",
                 run.nominal,
                 run.minimum_risk,
                 run.smallest_gap,
                 run.last_ego_speed,
-                run.e2e_faults
+                run.e2e_faults,
+                run.displays
             );
             // Everything on the stack so far: main's frame (the controller), the loop's (the
             // CAN driver, the plant) and the deepest control step.
@@ -378,7 +391,8 @@ fn main() -> ! {
                 && run.minimum_risk == 0
                 && run.smallest_gap > 2.0
                 && run.last_ego_speed < 0.1
-                && run.e2e_faults == 0)
+                && run.e2e_faults == 0
+                && run.displays == 1500)
             {
                 finish(false);
             }

@@ -18,7 +18,7 @@
 //!    takeover request goes on PD14.
 //!
 //! Then, every 20 ms: read the CAN frames, step the controller, send the acceleration request,
-//! feed the watchdog (`firmware::run_period_on_bus`), show the takeover request on PD14 (the
+//! feed the watchdog, send the driver's display frame (0x210; `firmware::run_period_on_bus`), show the takeover request on PD14 (the
 //! Discovery's red LED). A step that overran its period is counted and logged.
 //!
 //! The HardFault and panic handlers send one minimum-risk request straight from a CAN mailbox,

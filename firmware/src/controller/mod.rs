@@ -711,7 +711,8 @@ impl<'t> Controller<'t> {
         self.takeover
     }
 
-    /// The driver's state: engaged or not, the set speed, the time-gap setting.
+    /// The driver's state: engaged or not, the set speed, the time-gap setting, the latest
+    /// request's refusal: what the driver's display shows ([`crate::DriverDisplay`]).
     pub fn driver(&self) -> DriverState {
         self.driver
     }
@@ -800,7 +801,15 @@ impl<'t> Controller<'t> {
     /// is certified ([`DriverError::NotCertified`], [`DriverError::CertificateUnknown`]) and,
     /// with two authorities, the follower leaves the first engaged commands a comfortable way
     /// to brake ([`DriverError::NeedsEmergencyBraking`]): the car stays in standby.
+    /// The outcome, refused or taken, is the driver state's latest ([`DriverState::refused`],
+    /// [`DriverState::refusals`]), for the display.
     pub fn request(&mut self, request: DriverRequest) -> Result<(), DriverError> {
+        let outcome = self.take_request(request);
+        self.driver.record(outcome)
+    }
+
+    /// [`Controller::request`] but for recording its outcome.
+    fn take_request(&mut self, request: DriverRequest) -> Result<(), DriverError> {
         let ego_speed = self.ego_history.back().map(|e| e.1);
         let was_engaged = self.driver.engaged;
         // An engagement (not a SET or resume while engaged) needs a certified state: the one
