@@ -166,6 +166,73 @@ impl IdmParameters {
         )
     }
 
+    /// The fastest an IDM vehicle can make itself (m/s) while its gap stays at most
+    /// `gap_bound` (m) and the car ahead drives at most at `leader_speed_bound` (m/s), its
+    /// desired time gap anywhere at or above `min_time_gap` (s) at every instant, if it may
+    /// hold an acceleration it once had for up to `hold` seconds (zero: it drives by its IDM
+    /// at every instant; a driver who keeps the acceleration it had when it sees brake lights
+    /// for its reaction time, as `table_format::rear`'s late follower, holds): the vehicle's
+    /// speed stays at most the larger of its speed at the start and this, where the gap has
+    /// been at most `gap_bound` from `hold` seconds before the start on. `+inf` where anything
+    /// is NaN or infinite, or `hold` is negative.
+    ///
+    /// **Derivation.** With `c = 2 sqrt(a b)`, `v >= 0`, `T >= T_min` and `v_l <= V` (the
+    /// leader's speed bound), the desired gap is `s* = s0 + max(0, v T + v (v - v_l) / c)`,
+    /// at least `s0 + k v + v^2 / c` with `k = T_min - V / c`. A positive IDM acceleration
+    /// needs `(s*/s)^2 < 1 - (v / v0)^delta <= 1`, so `s* < s <= S` (the gap bound), so
+    /// `v^2 / c + k v < S - s0`: `v` is below the quadratic's positive root,
+    /// `v_cap = c (sqrt(k^2 + 4 (S - s0) / c) - k) / 2`, and no positive acceleration comes at
+    /// all where `S <= s0`.
+    /// At or above `v_cap` the acceleration is at most zero, and the clip keeps it so. So along
+    /// any motion with the gap at most `S` the speed cannot rise above `max(v(0), v_cap)`:
+    /// after the last time it was at or below that, it is above `v_cap` and does not grow. A
+    /// held acceleration was the IDM's at the hold's start: positive only where the speed was
+    /// below `v_cap` then, and at most `a (1 - (s0 / S)^2)` (`s* >= s0`, the gap at most `S`),
+    /// so a hold of at most `hold` seconds ends at most `v_cap + a (1 - (s0 / S)^2) hold`; the
+    /// IDM takes over above `v_cap` without a positive acceleration, and a hold that starts
+    /// above `v_cap` holds no positive one. The property test
+    /// `a_positive_idm_acceleration_comes_only_below_the_cap` checks the root where it is
+    /// tight; `an_idm_follower_keeps_under_its_speed_cap` integrates IDM followers whose time
+    /// gap switches at random against the whole bound.
+    pub fn speed_cap(
+        &self,
+        min_time_gap: f32,
+        gap_bound: f32,
+        leader_speed_bound: f32,
+        hold: f32,
+    ) -> f32 {
+        let c = 2.0 * sqrt_f32(self.max_acceleration * self.comfortable_deceleration);
+        let finite = [min_time_gap, gap_bound, leader_speed_bound, hold, c]
+            .iter()
+            .all(|x| x.is_finite());
+        if !(finite && hold >= 0.0) {
+            return f32::INFINITY;
+        }
+        let room = gap_bound - self.jam_distance;
+        let cap = if room > 0.0 {
+            let k = min_time_gap - leader_speed_bound.max(0.0) / c;
+            0.5 * c * (sqrt_f32(k * k + 4.0 * room / c) - k)
+        } else {
+            0.0
+        };
+        cap + self.acceleration_within(gap_bound) * hold
+    }
+
+    /// The largest acceleration (m/s^2, at least zero) the IDM gives a vehicle whose gap is
+    /// at most `gap_bound` (m): `a (1 - (s0 / S)^2)` where the gap bound exceeds the jam
+    /// distance `s0` (`s* >= s0`), zero at or below it, `a` where NaN.
+    pub fn acceleration_within(&self, gap_bound: f32) -> f32 {
+        let a = self.max_acceleration;
+        if gap_bound.is_nan() {
+            return a;
+        }
+        if gap_bound <= self.jam_distance {
+            return 0.0;
+        }
+        let r = self.jam_distance / gap_bound;
+        (a * (1.0 - r * r)).max(0.0)
+    }
+
     /// The free-road term `(v / v0)^delta` at `speed`.
     pub fn free_road_term(&self, speed: f32) -> f32 {
         power_f32(speed / self.desired_speed, self.exponent)
@@ -226,8 +293,149 @@ impl IdmParameters {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
-    /// The point form at the corners and inside a box lies within the interval form's bounds.
+    /// An IDM follower behind a car that brakes at `braking` from `leader_speed` to a stop,
+    /// `gap` metres ahead, by brute force (f64, 1 ms steps, 8 s): its desired time gap jumps
+    /// between `[t_min, t_max]`'s ends at the steps in `switches`, and from each time in
+    /// `holds` it keeps the acceleration it has for `hold` seconds (a late driver seeing brake
+    /// lights). Returns the largest speed and the largest gap it reached.
+    #[allow(clippy::too_many_arguments)]
+    fn follow(
+        p: &IdmParameters,
+        (gap, follower_speed, leader_speed): (f64, f64, f64),
+        braking: f64,
+        (t_min, t_max): (f64, f64),
+        switches: &[u32],
+        holds: &[f64],
+        hold: f64,
+    ) -> (f64, f64) {
+        let dt = 1e-3;
+        let (mut s, mut v, mut vl) = (gap, follower_speed, leader_speed);
+        let (mut fastest, mut widest) = (v, s);
+        let mut held: Option<(f64, f64)> = None;
+        let mut time_gap = t_min;
+        for k in 0..8000u32 {
+            let t = f64::from(k) * dt;
+            if switches.contains(&(k / 100)) && k % 100 == 0 {
+                time_gap = if time_gap == t_min { t_max } else { t_min };
+            }
+            let idm = p.acceleration_f64(v, v - vl, s, time_gap).clamp(-6.0, 2.0);
+            if held.is_some_and(|(until, _)| t >= until) {
+                held = None;
+            }
+            if held.is_none() && holds.iter().any(|h| (t - h).abs() < 0.5 * dt) {
+                held = Some((t + hold, idm));
+            }
+            let a = held.map_or(idm, |(_, a)| a);
+            let al = if vl > 0.0 { -braking } else { 0.0 };
+            let nv = (v + a * dt).max(0.0);
+            let nl = (vl + al * dt).max(0.0);
+            s += 0.5 * (vl + nl) * dt - 0.5 * (v + nv) * dt;
+            v = nv;
+            vl = nl;
+            fastest = fastest.max(v);
+            widest = widest.max(s);
+        }
+        (fastest, widest)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(400))]
+
+        /// An IDM follower, its time gap switching at random, some seeing brake lights late
+        /// and holding their acceleration for 1.15 s, never drives faster than the larger of
+        /// its start and [`IdmParameters::speed_cap`] for the largest gap the run reached
+        /// (the car ahead stopping, that gap is at most its start plus the car's stopping
+        /// distance).
+        #[test]
+        fn an_idm_follower_keeps_under_its_speed_cap(
+            gap in 0.5f64..30.0,
+            follower_speed in 0.0f64..8.0,
+            leader_speed in 0.0f64..2.0,
+            braking in 1.0f64..8.0,
+            switches in proptest::collection::vec(0u32..80, 0..6),
+            holds in proptest::collection::vec(0.0f64..3.0, 0..3),
+            late in any::<bool>(),
+        ) {
+            let p = IdmParameters::HIGHWAY;
+            let hold = if late { 1.15 } else { 0.0 };
+            let holds: Vec<f64> = holds.iter().map(|h| (h * 1000.0).round() / 1000.0).collect();
+            let (fastest, widest) = follow(
+                &p,
+                (gap, follower_speed, leader_speed),
+                braking,
+                (1.0, 2.0),
+                &switches,
+                if late { &holds } else { &[] },
+                hold,
+            );
+            let bound = gap + leader_speed * leader_speed / (2.0 * braking);
+            prop_assert!(widest <= bound + 1e-6, "{widest} > {bound}");
+            // The lemma holds for any bound of the gap over the run: the tightest is the
+            // widest gap it reached.
+            let cap = p.speed_cap(1.0, widest as f32, leader_speed as f32, hold as f32);
+            prop_assert!(
+                fastest <= follower_speed.max(f64::from(cap)) + 1e-3,
+                "{fastest} above {follower_speed} and {cap}"
+            );
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(20000))]
+
+        /// The derivation's two steps at a point, where they are tight: a positive IDM
+        /// acceleration comes only below the cap for the gap it has, and is at most
+        /// [`IdmParameters::acceleration_within`] that gap (equal at rest behind a car at
+        /// rest).
+        #[test]
+        fn a_positive_idm_acceleration_comes_only_below_the_cap(
+            speed in 0.0f32..10.0,
+            leader_speed in 0.0f32..2.4,
+            gap in 0.1f32..20.0,
+            time_gap in 1.0f32..3.0,
+        ) {
+            let p = IdmParameters::HIGHWAY;
+            let a = p.acceleration(speed, speed - leader_speed, gap, time_gap);
+            if a > 0.0 {
+                let cap = p.speed_cap(1.0, gap, leader_speed, 0.0);
+                prop_assert!(speed < cap * (1.0 + 1e-5) + 1e-6, "{speed} at {a} not below {cap}");
+                let within = p.acceleration_within(gap);
+                prop_assert!(a <= within * (1.0 + 1e-5) + 1e-6, "{a} above {within}");
+            }
+        }
+    }
+
+    /// The cap at the jam distance is the speed the follower has: an IDM vehicle at rest 2 m
+    /// behind a stopped car does not move; one that sees its leader pull away at up to 2 m/s
+    /// with at most 2.5 m between them gets no faster than the quadratic's root (0.90 m/s),
+    /// and 0.36 m/s more after a hold of a second. `+inf` for a NaN.
+    #[test]
+    fn the_speed_cap_at_the_jam_distance() {
+        let p = IdmParameters::HIGHWAY;
+        assert_eq!(p.speed_cap(1.0, 2.0, 0.0, 0.0), 0.0);
+        assert_eq!(p.speed_cap(1.0, 1.5, 0.0, 1.15), 0.0);
+        let c = 2.0 * 1.5f32.sqrt();
+        let k = 1.0 - 2.0 / c;
+        let root = 0.5 * c * ((k * k + 2.0 / c).sqrt() - k);
+        let cap = p.speed_cap(1.0, 2.5, 2.0, 0.0);
+        assert!(
+            (cap - root).abs() < 1e-4 && (cap - 0.905).abs() < 0.005,
+            "{cap}"
+        );
+        // On the root the desired gap is the gap bound.
+        let desired = 2.0 + cap * 1.0 + cap * (cap - 2.0) / c;
+        assert!((desired - 2.5).abs() < 1e-4, "{desired}");
+        let held = p.speed_cap(1.0, 2.5, 2.0, 1.0);
+        assert!((held - cap - (1.0 - 0.64)).abs() < 1e-4, "{held}");
+        assert_eq!(p.speed_cap(f32::NAN, 2.5, 0.0, 0.0), f32::INFINITY);
+        assert_eq!(p.speed_cap(1.0, f32::NAN, 0.0, 0.0), f32::INFINITY);
+        assert_eq!(p.speed_cap(1.0, 2.5, 0.0, -1.0), f32::INFINITY);
+        assert_eq!(p.acceleration_within(f32::NAN), 1.0);
+        assert_eq!(p.acceleration_within(1.0), 0.0);
+    }
+
     #[test]
     fn the_bounds_hold_the_point_form_over_a_box() {
         let p = IdmParameters::HIGHWAY;

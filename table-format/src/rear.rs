@@ -63,6 +63,23 @@
 //! `a_release_restarts_the_clock` checks that the restarted clock still bounds the gap from below
 //! after a release in which the follower accelerated.
 //!
+//! # Crediting an IDM follower
+//! The model's follower accelerates at up to `reaction_acceleration` until it reacts,
+//! whatever the gap: at the IDM's jam distance behind a stopped ego it may drive into the ego
+//! at its largest acceleration for its whole reaction, and so no move-off from a standstill
+//! with a follower there is ever certified. A follower that drives by the IDM (the table's
+//! declared one, its time gap anywhere in its range), and keeps the acceleration it had for
+//! its reaction time when it sees brake lights late, does not: it accelerates only below the
+//! speed at which its desired gap reaches its gap, so over a time in which the gap stays at
+//! most `S` its speed stays at most the larger of its speed and
+//! [`crate::IdmParameters::speed_cap`] for `S`. [`rear_gap_capped`] is the closed form with
+//! the follower at that cap. Using it needs a bound of the gap over the follower's reaction,
+//! and from its reaction time before: the ego's travel from now until the lights come on and
+//! the follower has reacted bounds it from above, and the gaps measured in the reaction time
+//! before now bound where a late follower's held acceleration came from. The firmware does
+//! not argue it yet. The property test `an_idm_follower_stays_above_the_capped_gap` checks it
+//! against IDM followers integrated by brute force.
+//!
 //! # The ego's build-up
 //! [`rear_gap`] brakes the ego at its level at once. A real ego brakes through its actuator: a
 //! dead time in which the commands already issued act, then a first-order lag. Any ego whose
@@ -167,6 +184,35 @@ pub fn rear_gap_after(
         }
     }
     front_value(gap, ego_speed, follower_speed, &car_behind)
+}
+
+/// [`rear_gap_after`] for a follower whose speed is known to stay at most `speed_cap` (m/s)
+/// until it reacts: the follower taken at the larger of its speed and the cap from now, with
+/// no acceleration, until its reaction, then braking as the model says. A lower bound of the
+/// gap where the cap holds over the reaction (it covers at most the distance of that
+/// follower at every instant, and reaches its braking no faster), so the larger of it and
+/// [`rear_gap_after`] is one too. For an IDM follower, whose model the certificate's
+/// follower then keeps to, [`crate::IdmParameters::speed_cap`] gives the cap from a bound of
+/// the gap over the reaction (module docs: crediting an IDM follower). NaN in, NaN out.
+pub fn rear_gap_capped(
+    gap: f32,
+    ego_speed: f32,
+    follower_speed: f32,
+    speed_cap: f32,
+    ego_braking: f32,
+    braking_for: f32,
+    follower: &ReactingFollower,
+) -> f32 {
+    let capped = ReactingFollower {
+        reaction_acceleration: 0.0,
+        ..*follower
+    };
+    let speed = if follower_speed.is_nan() || speed_cap.is_nan() {
+        f32::NAN
+    } else {
+        follower_speed.max(speed_cap)
+    };
+    rear_gap_after(gap, ego_speed, speed, ego_braking, braking_for, &capped)
 }
 
 /// What is known of the ego's acceleration from the follower measurement's time on, for
@@ -687,6 +733,149 @@ mod tests {
             a = next_a;
             mean
         })
+    }
+
+    /// The smallest gap behind an ego braking at `braking` from `ego_speed` at once, to an IDM
+    /// follower (f64, 0.5 ms steps): its time gap jumps between 1 and 2 s at the tenths of a
+    /// second in `switches`; the ego's lights are on for sure `dark` seconds from now; a `late`
+    /// follower keeps the acceleration it has then for its reaction time; after `dark` plus
+    /// the reaction it brakes as the model's follower does (from zero at its jerk to its
+    /// braking). Both to standstill.
+    fn least_gap_behind_idm(
+        (gap, ego_speed, follower_speed): (f64, f64, f64),
+        braking: f64,
+        f: &ReactingFollower,
+        dark: f64,
+        late: bool,
+        switches: &[u32],
+    ) -> f64 {
+        let p = crate::IdmParameters::HIGHWAY;
+        let dt = 5e-4;
+        let (mut g, mut ve, mut vf, mut t) = (gap, ego_speed, follower_speed, 0.0f64);
+        let reacts = dark + f64::from(f.reaction_time);
+        let (bf, jf) = (f64::from(f.braking), f64::from(f.jerk));
+        let mut time_gap = 1.0;
+        let mut held: Option<f64> = None;
+        let mut least = g;
+        let mut k = 0u32;
+        while ve > 0.0 || vf > 0.0 || t <= reacts {
+            if k % 200 == 0 && switches.contains(&(k / 200)) {
+                time_gap = if time_gap == 1.0 { 2.0 } else { 1.0 };
+            }
+            let idm = p.acceleration_f64(vf, vf - ve, g, time_gap).clamp(-bf, 2.0);
+            let af = if t < reacts {
+                if late && t >= dark {
+                    *held.get_or_insert(idm)
+                } else {
+                    idm
+                }
+            } else {
+                (-jf * (t - reacts)).max(-bf)
+            };
+            let ae = if ve > 0.0 { -braking } else { 0.0 };
+            let ne = (ve + ae * dt).max(0.0);
+            let nf = (vf + af * dt).max(0.0);
+            g += 0.5 * (ve + ne) * dt - 0.5 * (vf + nf) * dt;
+            ve = ne;
+            vf = nf;
+            t += dt;
+            k += 1;
+            least = least.min(g);
+            if t > 120.0 {
+                break;
+            }
+        }
+        least
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+
+        /// An IDM follower, reacting to the lights at once or holding its acceleration for
+        /// its reaction time, keeps at least [`rear_gap_capped`]'s gap, the cap
+        /// ([`crate::IdmParameters::speed_cap`]) taken for the gap's bound over the run (its
+        /// start plus the ego's stopping distance) and the ego's speed; and the credit is
+        /// real: at the jam distance behind an ego at rest, the capped value is above the
+        /// model's.
+        #[test]
+        fn an_idm_follower_stays_above_the_capped_gap(
+            gap in 1.0f64..25.0,
+            ego_speed in 0.0f64..2.4,
+            follower_speed in 0.0f64..6.0,
+            braking in 1.5f64..8.0,
+            dark in 0.0f64..1.0,
+            late in any::<bool>(),
+            at_once in any::<bool>(),
+            switches in proptest::collection::vec(0u32..60, 0..5),
+        ) {
+            let mut f = ReactingFollower::careful_driver(35.0);
+            f.reaction_acceleration = 1.0;
+            f.braking = 6.0;
+            if at_once {
+                f.jerk = f32::INFINITY;
+            }
+            let least = least_gap_behind_idm(
+                (gap, ego_speed, follower_speed),
+                braking,
+                &f,
+                dark,
+                late,
+                &switches,
+            );
+            let bound = gap + ego_speed * ego_speed / (2.0 * braking);
+            let hold = if late { f.reaction_time } else { 0.0 };
+            let cap = crate::IdmParameters::HIGHWAY.speed_cap(
+                1.0,
+                bound as f32,
+                ego_speed as f32,
+                hold,
+            );
+            let waiting = ReactingFollower {
+                reaction_time: f.reaction_time + dark as f32,
+                ..f
+            };
+            let capped = rear_gap_capped(
+                gap as f32,
+                ego_speed as f32,
+                follower_speed as f32,
+                cap,
+                braking as f32,
+                0.0,
+                &waiting,
+            );
+            prop_assert!(
+                least >= f64::from(capped) - 2e-3,
+                "least {least} below the capped {capped} (cap {cap})"
+            );
+        }
+    }
+
+    /// At the IDM's jam distance behind an ego at rest, with its follower at rest: the model's
+    /// follower, accelerating at 1 m/s^2 for its 1.15 s and the lights' 0.5 s, closes 1.6 m of
+    /// the 2 m; the capped one stays where it is (the IDM gives it no acceleration there); with
+    /// a measured speed of 0.4 m/s it closes 0.7 m, where the model's closes 2.4 m.
+    #[test]
+    fn the_capped_follower_at_the_jam_distance() {
+        let p = crate::IdmParameters::HIGHWAY;
+        let f = ReactingFollower {
+            reaction_time: CAREFUL_DRIVER_REACTION + 0.5,
+            reaction_acceleration: 1.0,
+            braking: 6.0,
+            jerk: f32::INFINITY,
+            max_speed: 35.0,
+        };
+        let model = rear_gap(2.0, 0.0, 0.0, 3.5, &f);
+        assert!((model - (2.0 - 0.5 * 1.65 * 1.65 - 1.65 * 1.65 / 12.0)).abs() < 1e-3);
+        let cap = p.speed_cap(1.0, 2.0, 0.0, 0.0);
+        assert_eq!(cap, 0.0);
+        assert_eq!(rear_gap_capped(2.0, 0.0, 0.0, cap, 3.5, 0.0, &f), 2.0);
+        let moving = rear_gap_capped(2.0, 0.0, 0.4, cap, 3.5, 0.0, &f);
+        assert!(
+            (moving - (2.0 - 0.4 * 1.65 - 0.4 * 0.4 / 12.0)).abs() < 1e-3,
+            "{moving}"
+        );
+        assert!(rear_gap(2.0, 0.0, 0.4, 3.5, &f) < -0.3);
+        assert!(rear_gap_capped(2.0, 0.0, f32::NAN, cap, 3.5, 0.0, &f).is_nan());
     }
 
     /// A bound that is NaN or not finite earns no credit (clamping it at zero would have
