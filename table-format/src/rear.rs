@@ -76,8 +76,11 @@
 //! the follower at that cap. Using it needs a bound of the gap over the follower's reaction,
 //! and from its reaction time before: the ego's travel from now until the lights come on and
 //! the follower has reacted bounds it from above, and the gaps measured in the reaction time
-//! before now bound where a late follower's held acceleration came from. The firmware does
-//! not argue it yet. The property test `an_idm_follower_stays_above_the_capped_gap` checks it
+//! before now bound where a late follower's held acceleration came from. The cap is the
+//! better bound only near a standstill: the gap's bound grows with the ego's travel, and the
+//! cap with the gap's bound, so at 1-2 m/s behind an IDM follower 1 s behind it exceeds the
+//! speed the model's follower reaches in its reaction, and the larger of the two values is the
+//! model's. The firmware does not argue it yet. The property test `an_idm_follower_stays_above_the_capped_gap` checks it
 //! against IDM followers integrated by brute force.
 //!
 //! # The ego's build-up
