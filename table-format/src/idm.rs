@@ -329,11 +329,7 @@ mod tests {
             }
             let a = held.map_or(idm, |(_, a)| a);
             let al = if vl > 0.0 { -braking } else { 0.0 };
-            let nv = (v + a * dt).max(0.0);
-            let nl = (vl + al * dt).max(0.0);
-            s += 0.5 * (vl + nl) * dt - 0.5 * (v + nv) * dt;
-            v = nv;
-            vl = nl;
+            crate::brute::advance(&mut s, &mut vl, &mut v, (al, a), dt);
             fastest = fastest.max(v);
             widest = widest.max(s);
         }

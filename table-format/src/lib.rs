@@ -47,6 +47,8 @@
 )]
 
 pub mod authority;
+#[cfg(test)]
+mod brute;
 mod error;
 pub mod front;
 mod header;

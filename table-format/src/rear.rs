@@ -662,11 +662,7 @@ mod tests {
             } else {
                 (ar - jf * (mid - rho)).max(-bf)
             };
-            let ne = (ve + ae * dt).max(0.0);
-            let nf = (vf + af * dt).max(0.0);
-            g += 0.5 * (ve + ne) * dt - 0.5 * (vf + nf) * dt;
-            ve = ne;
-            vf = nf;
+            crate::brute::advance(&mut g, &mut ve, &mut vf, (ae, af), dt);
             t += dt;
             least = least.min(g);
             if t > 200.0 {
@@ -776,11 +772,7 @@ mod tests {
                 (-jf * (t - reacts)).max(-bf)
             };
             let ae = if ve > 0.0 { -braking } else { 0.0 };
-            let ne = (ve + ae * dt).max(0.0);
-            let nf = (vf + af * dt).max(0.0);
-            g += 0.5 * (ve + ne) * dt - 0.5 * (vf + nf) * dt;
-            ve = ne;
-            vf = nf;
+            crate::brute::advance(&mut g, &mut ve, &mut vf, (ae, af), dt);
             t += dt;
             k += 1;
             least = least.min(g);
