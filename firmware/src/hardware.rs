@@ -1,6 +1,6 @@
 //! The traits the hardware implements: the sensors that deliver the inputs, the actuator that
-//! takes the commands, the driver's display, the clock and the watchdog. A board crate (or a simulation) implements
-//! them; the controller knows none of them.
+//! takes the commands, the driver's display, the clock and the watchdog. A board crate (or a
+//! simulation) implements them; the controller knows none of them.
 
 use crate::controller::Command;
 use crate::driver::DriverState;

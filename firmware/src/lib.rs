@@ -10,9 +10,9 @@
 //!   cast without a range check (the lints below enforce it). Every bad input is a typed
 //!   [`Fault`] with a documented reaction (see [`controller`]).
 //! - One math module ([`math`]) so that host tests run the target's arithmetic.
-//! - Hardware behind traits ([`Sensors`], [`Actuator`], [`Clock`], [`Watchdog`]), with a CAN
-//!   driver over `embedded-can` ([`can`]). The crate knows no board: `board-stm32f4` (in
-//!   `board/`) puts it on an STM32F407.
+//! - Hardware behind traits ([`Sensors`], [`Actuator`], [`DriverDisplay`], [`Clock`],
+//!   [`Watchdog`]), with a CAN driver over `embedded-can` ([`can`]). The crate knows no board:
+//!   `board-stm32f4` (in `board/`) puts it on an STM32F407.
 //!
 //! The default table (`tables/default.bin`, 693 KiB) is the split three-car certificate's rear
 //! value (see [`controller`]); it comes from
