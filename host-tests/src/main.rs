@@ -962,9 +962,9 @@ fn scenarios(
         })
         .collect();
     println!(
-        "| scenario | source | follower | policy | start gap [m] (source's) | jerk/limit | decel/limit | accel/limit | mode switches | override periods | emergency periods | min gap [m] | own check | result |"
+        "| scenario | source | follower | policy | start gap [m] (source's) | jerk/limit | decel/limit | accel/limit | mode switches | override periods | emergency periods | min gap [m] | needless braking / standing [s] | own check | result |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut failed_graded = 0;
     let mut failed_bang = 0;
     let mut report = Vec::new();
@@ -995,7 +995,7 @@ fn scenarios(
             ),
         };
         println!(
-            "| {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {:.1} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {:.1} | {:.1} / {:.1} | {} | {} |",
             r.name,
             if r.source.starts_with("openpilot") {
                 "openpilot"
@@ -1014,6 +1014,8 @@ fn scenarios(
             r.override_periods,
             r.emergency_periods,
             r.min_gap_leader_m.min(999.0),
+            r.needless.braking,
+            r.needless.standstill,
             check,
             if pass {
                 "pass".to_string()
@@ -1039,12 +1041,23 @@ fn scenarios(
     } else {
         "not run (the firmware refuses it with two authorities)".to_string()
     };
+    // Braking and standing the road did not ask for ([`host_tests::world::Needless`]): the
+    // runs with a stretch over the campaign's reporting threshold.
+    let over = |f: fn(&host_tests::world::Needless) -> f32| {
+        report
+            .iter()
+            .filter(|r| f(&r.needless) > host_tests::campaign::NEEDLESS_REPORTED_S)
+            .count()
+    };
     println!(
-        "{} runs in {:.1} s; graded: {} failed, bang-bang: {}; {}",
+        "{} runs in {:.1} s; graded: {} failed, bang-bang: {}; braking / standing on a free road for more than {} s in {} / {} runs; {}",
         report.len(),
         started.elapsed().as_secs_f32(),
         failed_graded,
         bang_bang,
+        host_tests::campaign::NEEDLESS_REPORTED_S,
+        over(|n| n.braking),
+        over(|n| n.standstill),
         out.join("scenarios.json").display()
     );
     anyhow::ensure!(

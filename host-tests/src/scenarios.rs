@@ -36,7 +36,7 @@ use table_format::Table;
 use crate::humans::HumanModel;
 use crate::iso::IsoWorst;
 use crate::sim::{ActuatorModel, Car, Noise, SensorModel};
-use crate::world::{Start, Tolerances, Trace, World};
+use crate::world::{Needless, Start, Tolerances, Trace, World};
 
 /// A leader's speed programme: piecewise linear in time through `(t, v)` points, constant
 /// before the first and after the last.
@@ -152,6 +152,9 @@ pub struct ScenarioResult {
     pub emergency_periods: u64,
     /// Periods with the driver's takeover request.
     pub takeover_periods: u64,
+    /// Braking and standing the road did not ask for: the longest stretches, s
+    /// ([`crate::world::Needless`]; not part of [`ScenarioResult::passed`]).
+    pub needless: Needless,
     /// Smallest gap to the leader, m.
     pub min_gap_leader_m: f32,
     /// The scenario's own criterion, and whether it held.
@@ -754,6 +757,7 @@ pub fn run(
         override_periods: s.periods_by_mode[1],
         emergency_periods: s.emergencies.total(),
         takeover_periods,
+        needless: s.needless,
         min_gap_leader_m: s.min_gap_leader,
         check: scenario.check,
         check_holds,

@@ -135,3 +135,41 @@ fn the_suite_with_two_authorities_engages_only_without_an_emergency() {
         }
     }
 }
+
+/// The suite reports braking and standing the road did not ask for
+/// ([`host_tests::world::Needless`]). At the green light the car has been held at a standstill
+/// for 10 s when the leader moves off, longer than the automatic resume's 3 s, so it waits
+/// for the driver: 13 s standing with the leader more than 40 m ahead and drawing away, where
+/// the driver's resume a second after the green light has it moving within a second.
+#[test]
+fn the_suite_reports_standing_on_a_free_road() {
+    use firmware::DriverRequest;
+    let table = Table::parse(firmware::DEFAULT_TABLE).unwrap();
+    let green = suite()
+        .into_iter()
+        .find(|s| s.name.starts_with("green light"))
+        .expect("the green light scenario");
+    let r = run(
+        &table,
+        firmware::DEFAULT_TABLE,
+        Config::default(),
+        &green,
+        false,
+        None,
+    )
+    .unwrap();
+    assert!(r.needless.standstill > 10.0, "{:?}", r.needless);
+    let mut resumed = green.clone();
+    resumed.driver = vec![(11.0, DriverRequest::Resume)];
+    let r = run(
+        &table,
+        firmware::DEFAULT_TABLE,
+        Config::default(),
+        &resumed,
+        false,
+        None,
+    )
+    .unwrap();
+    assert!(r.needless.standstill < 1.0, "{:?}", r.needless);
+    assert!(r.passed(), "{r:#?}");
+}
