@@ -80,8 +80,9 @@
 //! better bound only near a standstill: the gap's bound grows with the ego's travel, and the
 //! cap with the gap's bound, so at 1-2 m/s behind an IDM follower 1 s behind it exceeds the
 //! speed the model's follower reaches in its reaction, and the larger of the two values is the
-//! model's. The firmware does not argue it yet. The property test `an_idm_follower_stays_above_the_capped_gap` checks it
-//! against IDM followers integrated by brute force.
+//! model's. The firmware does not argue it yet. The property test
+//! `an_idm_follower_stays_above_the_capped_gap` checks it against IDM followers integrated by
+//! brute force.
 //!
 //! # The ego's build-up
 //! [`rear_gap`] brakes the ego at its level at once. A real ego brakes through its actuator: a
