@@ -504,6 +504,17 @@ impl<C: embedded_can::nb::Can> CanBus<C> {
         self.counter
     }
 
+    /// Sends one frame with identifier `id`.
+    fn transmit(&mut self, id: u16, payload: &[u8]) -> Result<(), Error<C::Error>> {
+        let id = StandardId::new(id).ok_or(Error::FrameConstruction)?;
+        let frame = C::Frame::new(id, payload).ok_or(Error::FrameConstruction)?;
+        match self.can.transmit(&frame) {
+            Ok(_) => Ok(()),
+            Err(nb::Error::WouldBlock) => Err(Error::TransmitBusy),
+            Err(nb::Error::Other(e)) => Err(Error::Bus(e)),
+        }
+    }
+
     /// Drains up to [`MAX_FRAMES_PER_READ`] received frames into the inputs.
     pub fn poll(&mut self, now_us: u64) -> Result<(), Error<C::Error>> {
         for _ in 0..MAX_FRAMES_PER_READ {
@@ -599,13 +610,7 @@ impl<C: embedded_can::nb::Can> Actuator for CanBus<C> {
     fn request(&mut self, command: &Command) -> Result<(), Self::Error> {
         let payload = encode_command(command, self.counter);
         self.counter = self.counter.wrapping_add(1);
-        let id = StandardId::new(ACCEL_REQUEST_ID).ok_or(Error::FrameConstruction)?;
-        let frame = C::Frame::new(id, &payload).ok_or(Error::FrameConstruction)?;
-        match self.can.transmit(&frame) {
-            Ok(_) => Ok(()),
-            Err(nb::Error::WouldBlock) => Err(Error::TransmitBusy),
-            Err(nb::Error::Other(e)) => Err(Error::Bus(e)),
-        }
+        self.transmit(ACCEL_REQUEST_ID, &payload)
     }
 }
 
@@ -615,15 +620,7 @@ impl<C: embedded_can::nb::Can> DriverDisplay for CanBus<C> {
     fn show(&mut self, driver: &DriverState) -> Result<(), Self::Error> {
         let payload = encode_driver_display(driver, self.display_counter);
         self.display_counter = self.display_counter.wrapping_add(1);
-        let sent =
-            match StandardId::new(DRIVER_DISPLAY_ID).and_then(|id| C::Frame::new(id, &payload)) {
-                None => Err(Error::FrameConstruction),
-                Some(frame) => match self.can.transmit(&frame) {
-                    Ok(_) => Ok(()),
-                    Err(nb::Error::WouldBlock) => Err(Error::TransmitBusy),
-                    Err(nb::Error::Other(e)) => Err(Error::Bus(e)),
-                },
-            };
+        let sent = self.transmit(DRIVER_DISPLAY_ID, &payload);
         if sent.is_err() {
             self.unshown = self.unshown.saturating_add(1);
         }

@@ -21,6 +21,7 @@ use crate::sim::{ActuatorModel, Car, SensorModel};
 use crate::world::{r157_least_gap, EmergencyCauses, Start, Tolerances, World};
 pub use crate::world::{
     state_of, CutInKind, CutInScore, Half, ModeName, Needless, Trace, TracePoint, FREE_ROAD,
+    NEEDLESS_REPORTED_S,
 };
 
 /// The sensors of an episode.
@@ -630,10 +631,6 @@ pub struct GroupSummary {
     pub cut_ins: Option<CutInSummary>,
 }
 
-/// A stretch of braking or standing the road did not ask for longer than this is counted
-/// ([`NeedlessSummary`]), s: a driver notices it.
-pub const NEEDLESS_REPORTED_S: f32 = 5.0;
-
 /// Braking and standing the road did not ask for over episodes ([`Needless`]).
 #[derive(Debug, Clone, Copy, Default, Serialize)]
 pub struct NeedlessSummary {
@@ -650,7 +647,7 @@ impl NeedlessSummary {
     /// The summary of one episode's figures.
     fn of(seed: u64, n: &Needless) -> NeedlessSummary {
         NeedlessSummary {
-            episodes: [n.braking, n.standstill].map(|t| usize::from(t > NEEDLESS_REPORTED_S)),
+            episodes: n.reported().map(usize::from),
             braking: (n.braking, seed),
             standstill: (n.standstill, seed),
         }

@@ -1043,12 +1043,7 @@ fn scenarios(
     };
     // Braking and standing the road did not ask for ([`host_tests::world::Needless`]): the
     // runs with a stretch over the campaign's reporting threshold.
-    let over = |f: fn(&host_tests::world::Needless) -> f32| {
-        report
-            .iter()
-            .filter(|r| f(&r.needless) > host_tests::campaign::NEEDLESS_REPORTED_S)
-            .count()
-    };
+    let over = |i: usize| report.iter().filter(|r| r.needless.reported()[i]).count();
     println!(
         "{} runs in {:.1} s; graded: {} failed, bang-bang: {}; braking / standing on a free road for more than {} s in {} / {} runs; {}",
         report.len(),
@@ -1056,8 +1051,8 @@ fn scenarios(
         failed_graded,
         bang_bang,
         host_tests::campaign::NEEDLESS_REPORTED_S,
-        over(|n| n.braking),
-        over(|n| n.standstill),
+        over(0),
+        over(1),
         out.join("scenarios.json").display()
     );
     anyhow::ensure!(

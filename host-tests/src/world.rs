@@ -165,7 +165,17 @@ pub struct Needless {
     under_way: [f32; 2],
 }
 
+/// A stretch of braking or standing the road did not ask for longer than this is reported
+/// ([`Needless::reported`]), s: a driver notices it.
+pub const NEEDLESS_REPORTED_S: f32 = 5.0;
+
 impl Needless {
+    /// Whether the longest stretch of braking, and of standing, is longer than
+    /// [`NEEDLESS_REPORTED_S`].
+    pub fn reported(&self) -> [bool; 2] {
+        [self.braking, self.standstill].map(|t| t > NEEDLESS_REPORTED_S)
+    }
+
     /// One period of `h` seconds: on a free road or not, braking or not, standing or not (a
     /// car that stands is counted standing, whatever it commands).
     fn push(&mut self, free_road: bool, braking: bool, standing: bool, h: f32) {
