@@ -10,6 +10,9 @@
 # Fails if a binary does not build or link, or if a run's log lacks what it must show.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=.ci/tools.sh
+source .ci/tools.sh
+ensure_defmt_print
 
 export RUSTC=/usr/bin/rustc RUSTDOC=/usr/bin/rustdoc RUSTC_BOOTSTRAP=1 CARGO_TARGET_DIR=target/thumbv7em
 export DEFMT_LOG=info

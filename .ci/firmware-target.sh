@@ -9,6 +9,9 @@
 # defmt-print.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=.ci/tools.sh
+source .ci/tools.sh
+ensure_defmt_print
 
 export RUSTC=/usr/bin/rustc RUSTDOC=/usr/bin/rustdoc RUSTC_BOOTSTRAP=1 CARGO_TARGET_DIR=target/thumbv7em
 build() {
