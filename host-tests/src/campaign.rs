@@ -593,8 +593,8 @@ pub struct GroupSummary {
     /// Of the scope's episodes, those that started where the comfort band alone certified the
     /// truth ([`Outcome::started_comfort_certified`]: the leader was not closer than comfort
     /// allows from the start, as a late one is), those of them where ISO 15622 held, and their
-    /// emergency periods.
-    pub iso_scope_comfort_start: (usize, usize, u64),
+    /// emergency periods by cause.
+    pub iso_scope_comfort_start: (usize, usize, EmergencyCauses),
     /// Episodes whose engagement was an emergency (left out of the scope above).
     pub engaged_in_emergency: usize,
     /// The worst ISO 15622 ratio (to its limit) over the scope's episodes.
@@ -800,8 +800,9 @@ pub fn run_group(
             outcomes
                 .iter()
                 .filter(|(_, o)| comfort_start(o))
-                .map(|(_, o)| o.emergency_periods)
-                .sum(),
+                .fold(EmergencyCauses::default(), |sum, (_, o)| {
+                    sum.add(&o.emergencies)
+                }),
         ),
         engaged_in_emergency: count(&|o| o.engaged_in_emergency),
         iso_worst_in_scope: outcomes

@@ -19,6 +19,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use host_tests::campaign::{run_episode, CutInKind, Sensing, Trace};
 use host_tests::sim::ActuatorModel;
+use host_tests::world::EmergencyCauses;
 use host_tests::SensorModel;
 use indicatif::{ProgressBar, ProgressStyle};
 use table_format::{Game, Table};
@@ -690,7 +691,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     println!(
-        "| leader | follower | in model | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | min margin [m] (front, rear) | min gap front [m] | min gap rear [m] | override | uncertified min-risk periods | fallback periods (episodes) | oldest track [s] (front, rear) | leader stops | standstill starts | max jerk [m/s^3] | ISO 15622 held (episodes whose leader braked at most 3.5 m/s^2, engaged without an emergency) | worst ISO ratio there | of them from starts the comfort band certifies: ISO 15622 held (emergency periods) | emergency periods: engagement / cut-in / uncertified truth / certified truth [of which by the comfort band alone] (engagements that were one) |"
+        "| leader | follower | in model | episodes | collisions | of them unavoidable | certificate losses (nominal/override/min-risk/uncertified; front/rear/speed/domain) | min margin [m] (front, rear) | min gap front [m] | min gap rear [m] | override | uncertified min-risk periods | fallback periods (episodes) | oldest track [s] (front, rear) | leader stops | standstill starts | max jerk [m/s^3] | ISO 15622 held (episodes whose leader braked at most 3.5 m/s^2, engaged without an emergency) | worst ISO ratio there | of them from starts the comfort band certifies: ISO 15622 held (emergency periods) | emergency periods: engagement / cut-in / uncertified truth / certified truth [of which by the comfort band alone; begun in a radar dropout] (engagements that were one) |"
     );
     println!(
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
@@ -704,7 +705,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
             let l = summary.certificate_losses_by_mode;
             bar.suspend(|| {
                 println!(
-                    "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {} | {} ({}) | {:.2}, {:.2} | {:.1} | {} | {:.0} | {} of {} | {:.2} | {} of {} ({}) | {} / {} / {} / {} [{}] ({}) |",
+                    "| {:?} | {:?} | {} | {} | {} | {} | {} ({}/{}/{}/{}; {}/{}/{}/{}) | {:.4} ({:.4}, {:.4}) | {:.2} | {:.2} | {:.3} | {} | {} ({}) | {:.2}, {:.2} | {:.1} | {} | {:.0} | {} of {} | {:.2} | {} of {} ({}) | {} / {} / {} / {} [{}; {}] ({}) |",
                     summary.leader,
                     summary.follower,
                     summary.in_model,
@@ -739,12 +740,13 @@ fn campaign(args: CampaignArgs) -> Result<()> {
                     summary.iso_worst_in_scope,
                     summary.iso_scope_comfort_start.1,
                     summary.iso_scope_comfort_start.0,
-                    summary.iso_scope_comfort_start.2,
+                    summary.iso_scope_comfort_start.2.total(),
                     summary.emergencies.engagement,
                     summary.emergencies.cut_in,
                     summary.emergencies.uncertified_truth,
                     summary.emergencies.certified_truth,
                     summary.emergencies.comfort_certified_truth,
+                    summary.emergencies.dropout,
                     summary.engaged_in_emergency
                 )
             });
@@ -823,28 +825,32 @@ fn campaign(args: CampaignArgs) -> Result<()> {
     println!(
         "emergency periods there: {} at engagement, {} after a cut-in, {} with the true state \
          uncertified, {} with it certified (made by the measurement or the delays' bounds), \
-         {} of those with it certified by the comfort band alone; \
-         {} periods in {} episodes braked harder than the band",
+         {} of those with it certified by the comfort band alone, {} in runs begun in a radar \
+         dropout; {} periods in {} episodes braked harder than the band",
         e.engagement,
         e.cut_in,
         e.uncertified_truth,
         e.certified_truth,
         e.comfort_certified_truth,
+        e.dropout,
         t.below_band_periods,
         t.below_band_episodes
     );
-    let comfort_start =
-        report
-            .groups
-            .iter()
-            .filter(|g| g.in_model)
-            .fold((0, 0, 0), |(n, held, periods), g| {
-                let (gn, gheld, gperiods) = g.iso_scope_comfort_start;
-                (n + gn, held + gheld, periods + gperiods)
-            });
+    let comfort_start = report.groups.iter().filter(|g| g.in_model).fold(
+        (0, 0, EmergencyCauses::default()),
+        |(n, held, causes), g| {
+            let (gn, gheld, gcauses) = g.iso_scope_comfort_start;
+            (n + gn, held + gheld, causes.add(&gcauses))
+        },
+    );
     println!(
-        "in ISO 15622's scope there (leaders within 3.5 m/s^2), from starts the comfort band certifies: ISO 15622 held in {} of {}, {} emergency periods",
-        comfort_start.1, comfort_start.0, comfort_start.2
+        "in ISO 15622's scope there (leaders within 3.5 m/s^2), from starts the comfort band \
+         certifies: ISO 15622 held in {} of {}, {} emergency periods ({} of them in runs begun in \
+         a radar dropout: a track older than it would be without the radar's losses)",
+        comfort_start.1,
+        comfort_start.0,
+        comfort_start.2.total(),
+        comfort_start.2.dropout
     );
     let needless = &t.needless;
     println!(

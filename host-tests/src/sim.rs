@@ -357,13 +357,15 @@ impl SensorModel {
 }
 
 /// One channel's state: when its next sample is due, the measurements on their way, the last
-/// delivered, and the end of a burst of losses.
+/// delivered, the end of a burst of losses, and the oldest sample lost since the last delivered
+/// one (its time, and when it would have arrived at the least latency).
 #[derive(Debug, Clone)]
 struct ChannelState<T> {
     next_sample_us: u64,
     in_flight: std::collections::VecDeque<(u64, Measurement<T>)>,
     delivered: Option<Measurement<T>>,
     burst_until_us: u64,
+    lost: Option<(u64, u64)>,
 }
 
 impl<T: Copy> ChannelState<T> {
@@ -373,7 +375,15 @@ impl<T: Copy> ChannelState<T> {
             in_flight: std::collections::VecDeque::new(),
             delivered: None,
             burst_until_us: 0,
+            lost: None,
         }
+    }
+
+    /// Whether the last delivered measurement is older than it would be without the losses: a
+    /// sample taken after it was lost and would have arrived by `now_us` (at the channel's
+    /// least latency).
+    fn in_dropout(&self, now_us: u64) -> bool {
+        self.lost.is_some_and(|(_, arrives)| arrives <= now_us)
     }
 
     /// Samples (`value` at `now_us`) if due and not lost, delivers what has arrived, and returns
@@ -393,6 +403,9 @@ impl<T: Copy> ChannelState<T> {
                 self.burst_until_us = now_us + rng.random_range(0..=u64::from(c.burst_max_us));
             }
             let lost = now_us < self.burst_until_us || rng.random::<f32>() < c.dropout;
+            if lost && self.delivered.is_some() && self.lost.is_none() {
+                self.lost = Some((now_us, now_us + u64::from(c.latency_us)));
+            }
             if !lost || self.delivered.is_none() {
                 let jitter = if c.jitter_us > 0 {
                     rng.random_range(0..=u64::from(c.jitter_us))
@@ -419,6 +432,9 @@ impl<T: Copy> ChannelState<T> {
                 .is_none_or(|d| d.timestamp_us < m.timestamp_us)
             {
                 self.delivered = Some(m);
+                if self.lost.is_some_and(|(taken, _)| taken <= m.timestamp_us) {
+                    self.lost = None;
+                }
             }
         }
         self.delivered.unwrap_or(Measurement::new(value, now_us))
@@ -448,6 +464,16 @@ impl Sensors {
     /// The model.
     pub fn model(&self) -> &SensorModel {
         &self.model
+    }
+
+    /// Whether the leader's and the follower's last delivered measurements are older than they
+    /// would be without the channel's losses at `now_us` (a lost sample after them would have
+    /// arrived by then): a radar dropout, one lost refresh or a burst.
+    pub fn in_dropout(&self, now_us: u64) -> [bool; 2] {
+        [
+            self.leader.in_dropout(now_us),
+            self.follower.in_dropout(now_us),
+        ]
     }
 
     /// The firmware's inputs at `now_us` for the true state `cars` (leader, ego, follower) and
@@ -608,6 +634,39 @@ mod tests {
             0.0,
             1.5
         ));
+    }
+
+    /// A channel is in a dropout from when a lost sample would have arrived (at its latency)
+    /// until a sample taken after it is delivered; a channel that loses nothing never is.
+    #[test]
+    fn a_dropout_lasts_from_a_lost_samples_arrival_to_a_newer_delivery() {
+        use rand::SeedableRng;
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let lossy = |dropout: f32| Channel {
+            cycle_us: 60_000,
+            latency_us: 40_000,
+            dropout,
+            ..Channel::IDEAL
+        };
+        let period = 20_000u64;
+        let mut never = ChannelState::new();
+        for k in 0..200u64 {
+            never.step(&lossy(0.0), k * period, 1.0f32, &mut rng);
+            assert!(!never.in_dropout(k * period), "at {k}");
+        }
+        // Every sample after the first is lost: the one at 60 ms would have arrived at 100 ms.
+        let mut all_lost = ChannelState::new();
+        for k in 0..20u64 {
+            let now = k * period;
+            all_lost.step(&lossy(1.0), now, 1.0f32, &mut rng);
+            assert_eq!(all_lost.in_dropout(now), now >= 100_000, "at {now} us");
+        }
+        // Then nothing is lost: the sample at 420 ms arrives at 460 ms and ends it.
+        for k in 20..30u64 {
+            let now = k * period;
+            all_lost.step(&lossy(0.0), now, 1.0f32, &mut rng);
+            assert_eq!(all_lost.in_dropout(now), now < 460_000, "at {now} us");
+        }
     }
 
     #[test]

@@ -284,6 +284,12 @@ pub struct EmergencyCauses {
     /// of what the comfort band could have done: the lights of a run under way are not
     /// credited.
     pub comfort_certified_truth: u64,
+    /// Of the certified-truth periods, those of runs that began while the leader's or the
+    /// follower's newest measurement was older than it would have been without the radar's
+    /// losses ([`crate::sim::Sensors::in_dropout`]): a lost refresh or a burst of losses,
+    /// whose age the certificate's bounds pay for. The datasheet sensors lose 10% of the
+    /// refreshes and draw bursts up to the covered track age.
+    pub dropout: u64,
 }
 
 impl EmergencyCauses {
@@ -300,6 +306,7 @@ impl EmergencyCauses {
             uncertified_truth: self.uncertified_truth + other.uncertified_truth,
             certified_truth: self.certified_truth + other.certified_truth,
             comfort_certified_truth: self.comfort_certified_truth + other.comfort_certified_truth,
+            dropout: self.dropout + other.dropout,
         }
     }
 }
@@ -571,9 +578,11 @@ enum EmergencyCause {
     Engagement,
     CutIn,
     UncertifiedTruth,
-    /// `comfort`: the comfort band alone certified the truth as well.
+    /// `comfort`: the comfort band alone certified the truth as well; `dropout`: a radar was in
+    /// a dropout ([`crate::sim::Sensors::in_dropout`]).
     CertifiedTruth {
         comfort: bool,
+        dropout: bool,
     },
 }
 
@@ -862,8 +871,8 @@ impl<'t> World<'t> {
     /// before [`World::last`] moves on: an engagement, a cut-in within 5 s, or the true state
     /// certified or not along the braking the firmware was committed to when the period began
     /// (the last period's certificate), and then whether the comfort band alone certified it
-    /// (one authority: it is the certificate).
-    fn emergency_cause(&self, engagement: bool) -> EmergencyCause {
+    /// (one authority: it is the certificate) and whether a radar is in a dropout at `now_us`.
+    fn emergency_cause(&self, engagement: bool, now_us: u64) -> EmergencyCause {
         let h = self.period_us as f32 * 1e-6;
         let since_cut_in = self
             .cut_in
@@ -876,6 +885,7 @@ impl<'t> World<'t> {
         } else if truth_before.is_some_and(|m| m > 0.0) {
             EmergencyCause::CertifiedTruth {
                 comfort: self.comfort_band_certifies(),
+                dropout: self.sensors.in_dropout(now_us).contains(&true),
             }
         } else {
             EmergencyCause::UncertifiedTruth
@@ -1030,7 +1040,7 @@ impl<'t> World<'t> {
         let engagement = self.period == self.engaged_from;
         let cause = command.emergency.then(|| {
             self.emergency_run
-                .unwrap_or_else(|| self.emergency_cause(engagement))
+                .unwrap_or_else(|| self.emergency_cause(engagement, now_us))
         });
         // A period into the engagement (its first command issued): whether the comfort band
         // alone certified where it started.
@@ -1063,8 +1073,9 @@ impl<'t> World<'t> {
             *match cause {
                 EmergencyCause::Engagement => &mut e.engagement,
                 EmergencyCause::CutIn => &mut e.cut_in,
-                EmergencyCause::CertifiedTruth { comfort } => {
+                EmergencyCause::CertifiedTruth { comfort, dropout } => {
                     e.comfort_certified_truth += u64::from(comfort);
+                    e.dropout += u64::from(dropout);
                     &mut e.certified_truth
                 }
                 EmergencyCause::UncertifiedTruth => &mut e.uncertified_truth,

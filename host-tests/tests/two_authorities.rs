@@ -313,6 +313,36 @@ fn certified_starts_stay_certified_with_two_authorities() {
         emergencies.comfort_certified_truth < emergencies.certified_truth,
         "{emergencies:?}"
     );
+    // And those begun in a radar dropout among them (the datasheet sensors lose refreshes and
+    // draw bursts): some, not all.
+    assert!(emergencies.dropout > 0, "{emergencies:?}");
+    assert!(
+        emergencies.dropout < emergencies.certified_truth,
+        "{emergencies:?}"
+    );
+}
+
+/// Sensors that lose no refresh make no emergency begun in a radar dropout
+/// ([`host_tests::world::EmergencyCauses::dropout`]), while their emergencies are counted.
+#[test]
+fn sensors_that_lose_nothing_make_no_dropout_emergency() {
+    let bytes = table_bytes(9.8);
+    let table = Table::parse(bytes).unwrap();
+    let bounds = two(2).sensors;
+    let mut rng = <rand::rngs::StdRng as rand::SeedableRng>::seed_from_u64(3);
+    let mut sensors = SensorModel::datasheet(bounds, bounds.max_track_age_us, &mut rng);
+    for c in sensors.channels.iter_mut() {
+        c.dropout = 0.0;
+        c.bursts_per_second = 0.0;
+    }
+    let template = Episode {
+        sensors: Sensing::Fixed(sensors),
+        ..episode(Leader::StopAndGo, Follower::IdmFixed, 1)
+    };
+    let (summary, _) = run_group(&table, bytes, template, 20, &|| {});
+    let e = summary.emergencies;
+    assert!(e.certified_truth > 0, "{e:?}");
+    assert_eq!(e.dropout, 0, "{e:?}");
 }
 
 /// The certificate losses of the 1,700-episode campaigns (`host-tests campaign --authorities
