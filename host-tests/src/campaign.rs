@@ -33,6 +33,10 @@ pub enum Sensing {
     /// The datasheets' radars ([`SensorModel::datasheet`]) at the firmware's declared error
     /// bounds, drawn per episode, with bursts of losses up to the covered track age.
     Datasheet,
+    /// The datasheets' radars as [`Sensing::Datasheet`] draws them, none of their refreshes
+    /// lost: what the control does with the radars' noise, cycles and latencies alone (the
+    /// emergencies the losses make are [`crate::world::EmergencyCauses::dropout`]).
+    DatasheetLossless,
 }
 
 /// One episode's setting.
@@ -319,6 +323,10 @@ pub fn run_episode(
             Sensing::Fixed(m) => m,
             Sensing::Datasheet => {
                 SensorModel::datasheet(config.sensors, config.sensors.max_track_age_us, &mut rng)
+            }
+            Sensing::DatasheetLossless => {
+                SensorModel::datasheet(config.sensors, config.sensors.max_track_age_us, &mut rng)
+                    .lossless()
             }
         };
         let mut world = World::new(

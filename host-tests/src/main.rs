@@ -585,6 +585,9 @@ enum SensorsArg {
     /// uniform, corner or corner-switching noise, 50-80 ms cycles, 40-100 ms latency with jitter,
     /// 10% of refreshes lost and bursts of losses up to the covered track age.
     Datasheet,
+    /// The datasheets' radars as `datasheet` draws them, no refresh lost: the control's own
+    /// emergencies apart from the radars' losses.
+    DatasheetLossless,
 }
 
 /// A cut-in in every episode.
@@ -667,6 +670,7 @@ fn campaign(args: CampaignArgs) -> Result<()> {
         sensing: match sensors {
             SensorsArg::Exact => Sensing::Fixed(SensorModel::exact_with_latency(latency)),
             SensorsArg::Datasheet => Sensing::Datasheet,
+            SensorsArg::DatasheetLossless => Sensing::DatasheetLossless,
         },
         cut_in: match cut_in {
             CutInArg::None => None,

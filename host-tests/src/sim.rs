@@ -348,6 +348,18 @@ impl SensorModel {
         }
     }
 
+    /// These sensors with no refresh lost on any channel.
+    pub fn lossless(self) -> Self {
+        SensorModel {
+            channels: self.channels.map(|c| Channel {
+                dropout: 0.0,
+                bursts_per_second: 0.0,
+                ..c
+            }),
+            ..self
+        }
+    }
+
     /// The longest a measurement that is not lost can be old when the firmware reads it:
     /// latency, jitter and one cycle, per channel, microseconds.
     pub fn delivered_age_us(&self) -> [u64; 3] {

@@ -328,15 +328,8 @@ fn certified_starts_stay_certified_with_two_authorities() {
 fn sensors_that_lose_nothing_make_no_dropout_emergency() {
     let bytes = table_bytes(9.8);
     let table = Table::parse(bytes).unwrap();
-    let bounds = two(2).sensors;
-    let mut rng = <rand::rngs::StdRng as rand::SeedableRng>::seed_from_u64(3);
-    let mut sensors = SensorModel::datasheet(bounds, bounds.max_track_age_us, &mut rng);
-    for c in sensors.channels.iter_mut() {
-        c.dropout = 0.0;
-        c.bursts_per_second = 0.0;
-    }
     let template = Episode {
-        sensors: Sensing::Fixed(sensors),
+        sensors: Sensing::DatasheetLossless,
         ..episode(Leader::StopAndGo, Follower::IdmFixed, 1)
     };
     let (summary, _) = run_group(&table, bytes, template, 20, &|| {});
