@@ -321,12 +321,16 @@ pub fn run_episode(
         };
         let sensors = match episode.sensors {
             Sensing::Fixed(m) => m,
-            Sensing::Datasheet => {
-                SensorModel::datasheet(config.sensors, config.sensors.max_track_age_us, &mut rng)
-            }
-            Sensing::DatasheetLossless => {
-                SensorModel::datasheet(config.sensors, config.sensors.max_track_age_us, &mut rng)
-                    .lossless()
+            Sensing::Datasheet | Sensing::DatasheetLossless => {
+                let drawn = SensorModel::datasheet(
+                    config.sensors,
+                    config.sensors.max_track_age_us,
+                    &mut rng,
+                );
+                match episode.sensors {
+                    Sensing::DatasheetLossless => drawn.lossless(),
+                    _ => drawn,
+                }
             }
         };
         let mut world = World::new(

@@ -478,14 +478,11 @@ impl Sensors {
         &self.model
     }
 
-    /// Whether the leader's and the follower's last delivered measurements are older than they
-    /// would be without the channel's losses at `now_us` (a lost sample after them would have
+    /// Whether the leader's or the follower's last delivered measurement is older than it
+    /// would be without its channel's losses at `now_us` (a lost sample after it would have
     /// arrived by then): a radar dropout, one lost refresh or a burst.
-    pub fn in_dropout(&self, now_us: u64) -> [bool; 2] {
-        [
-            self.leader.in_dropout(now_us),
-            self.follower.in_dropout(now_us),
-        ]
+    pub fn in_dropout(&self, now_us: u64) -> bool {
+        self.leader.in_dropout(now_us) || self.follower.in_dropout(now_us)
     }
 
     /// The firmware's inputs at `now_us` for the true state `cars` (leader, ego, follower) and

@@ -885,7 +885,7 @@ impl<'t> World<'t> {
         } else if truth_before.is_some_and(|m| m > 0.0) {
             EmergencyCause::CertifiedTruth {
                 comfort: self.comfort_band_certifies(),
-                dropout: self.sensors.in_dropout(now_us).contains(&true),
+                dropout: self.sensors.in_dropout(now_us),
             }
         } else {
             EmergencyCause::UncertifiedTruth
