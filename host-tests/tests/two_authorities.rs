@@ -322,6 +322,44 @@ fn certified_starts_stay_certified_with_two_authorities() {
     );
 }
 
+/// The control's own emergencies behind a closing follower, from a 300-per-group survey of
+/// `host-tests campaign --authorities two --sensors datasheet-lossless` behind leaders at
+/// 6 m/s^2 (episodes in ISO 15622's scope from starts the comfort band certifies), now none:
+/// - the first five: an ego below 6 m/s slowing towards a stopped car, a follower closing at
+///   5-9 m/s; the command held at the lights' command lit the brakes slowly, no level cleared
+///   the follower's box, and the command followed the emergency authority's ramp (4, 1, 4, 2
+///   and 6 emergency periods). The comfortable way to the lights now goes on down at ISO
+///   15622's jerk until the run's own commands light them
+///   (`Controller::way_down_past_the_lights`);
+/// - seed 19,000,163 (a stopped car 29 m ahead at 6.4 m/s, a follower closing at 6.4 m/s):
+///   the comfort band's braking, built up at `brake_jerk` (2.5 m/s^3), did not certify the
+///   front and the emergency authority's build-up was in force when nothing passed (1
+///   period); built up at ISO 15622's limit at that speed it certifies
+///   (`Controller::comfort_jerk`).
+#[test]
+fn a_closing_follower_makes_no_emergency_of_a_stop() {
+    let bytes = table_bytes(6.0);
+    let table = Table::parse(bytes).unwrap();
+    for (leader, follower, seed) in [
+        (Leader::HardBrake, Follower::IdmRandom, 1_000_024),
+        (Leader::HardBrake, Follower::IdmSwitching, 2_000_126),
+        (Leader::Comfortable, Follower::IdmFixed, 18_000_046),
+        (Leader::Comfortable, Follower::IdmWorstCase, 21_000_014),
+        (Leader::HardBrake, Follower::IdmWorstCase, 3_000_219),
+        (Leader::Comfortable, Follower::IdmRandom, 19_000_163),
+    ] {
+        let template = Episode {
+            sensors: Sensing::DatasheetLossless,
+            ..episode(leader, follower, seed)
+        };
+        let outcome = run_episode(&table, bytes, &template, None).unwrap();
+        assert!(!outcome.collided, "seed {seed}");
+        assert_eq!(outcome.certificate_lost, None, "seed {seed}");
+        assert!(outcome.started_comfort_certified, "seed {seed}");
+        assert_eq!(outcome.emergency_periods, 0, "seed {seed}: {outcome:?}");
+    }
+}
+
 /// Sensors that lose no refresh make no emergency begun in a radar dropout
 /// ([`host_tests::world::EmergencyCauses::dropout`]), while their emergencies are counted.
 #[test]

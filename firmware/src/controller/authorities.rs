@@ -58,9 +58,10 @@ pub(super) struct Look {
     pub(super) up_to: f32,
     /// When the lights are on for sure along `braking`'s ramp after the period (microseconds).
     pub(super) lights_on_us: u64,
-    /// Where the comfort band's braking (its floor at the braking ramp's jerk) clears the rear
-    /// too, its lights coming on along its own, slower, ramp: when they are on for sure.
-    pub(super) comfort_lights_on_us: Option<u64>,
+    /// Where the comfort band's braking (its floor at [`Controller::comfort_jerk`]) clears the
+    /// rear too, its lights coming on along its own, slower, ramp: that braking, and when they
+    /// are on for sure.
+    pub(super) comfort: Option<(Braking, u64)>,
     /// `up_to` was lowered to the comfortable way down to the lights' command
     /// ([`Controller::look_ahead`]).
     pub(super) way_down: bool,
@@ -79,6 +80,26 @@ struct RearArgued {
 }
 
 impl Controller<'_> {
+    /// The build-up of the comfort band's braking a look-ahead tries first, m/s^3: ISO 15622's
+    /// jerk limit at the highest speed the ego may reach while it brakes (the measured speed's
+    /// upper end, plus what `pending`, the acceleration the actuator may be doing, adds over a
+    /// second), at least the braking ramp's `brake_jerk` and at most the emergency authority's
+    /// build-up where that is faster.
+    ///
+    /// The braking a look-ahead names is in force until another passes, and where none does
+    /// the command follows its ramp: at ISO 15622's jerk limit that is no emergency. Below
+    /// 20 m/s the limit is above `brake_jerk` (5 m/s^3 at and below 5 m/s), and the faster
+    /// build-up certifies the front in less room, so the comfort band's braking is named more
+    /// often there. A comfort choice, not a bound: a ramp at any build-up is argued the same
+    /// way (the front along it, its lights' on-time in the rear check).
+    pub(super) fn comfort_jerk(&self, model: &Model, ego_speed: f32, pending: f32) -> f32 {
+        let band = self.config.certificate.brake_jerk;
+        let fastest = self.config.sensors.ego_speed(ego_speed).1 + math::max(pending, 0.0);
+        let iso = iso15622::jerk_limit(fastest);
+        let emergency = model.emergency.map_or(band, |e| e.jerk);
+        math::max(band, math::min(iso, emergency))
+    }
+
     /// Whether the certificate argues with two authorities.
     pub(super) fn two_authorities(&self) -> bool {
         self.config.certificate.authorities == Authorities::Two
@@ -327,12 +348,13 @@ impl Controller<'_> {
     ) -> Option<Look> {
         // What the actuator may be doing: one bound for every command the look-ahead tries.
         let pending = self.pending(now, model);
+        let comfort = model.band_braking(self.comfort_jerk(model, ego_speed, pending));
         let comfort_lights_on = |up_to: f32| {
-            let jerk = self.config.certificate.brake_jerk;
-            let ((clock, dark), on) = self.dark_after(now, pending, up_to, jerk, -model.ego.min)?;
+            let ((clock, dark), on) =
+                self.dark_after(now, pending, up_to, comfort.jerk, comfort.level)?;
             let rear = self.rear?;
-            self.rear_check(model, &rear, -model.ego.min, clock, dark, now)
-                .then_some(on)
+            self.rear_check(model, &rear, comfort.level, clock, dark, now)
+                .then_some((comfort, on))
         };
         let look = |up_to: f32| {
             let (braking, argued) = self.look_ahead_argued(model, now, pending, up_to)?;
@@ -342,7 +364,7 @@ impl Controller<'_> {
                 lights_on_us: self
                     .ramp_lights_on(now, pending, up_to, braking.jerk, braking.level)
                     .unwrap_or(u64::MAX),
-                comfort_lights_on_us: if self.two_authorities() {
+                comfort: if self.two_authorities() {
                     comfort_lights_on(up_to)
                 } else {
                     None
@@ -408,6 +430,8 @@ impl Controller<'_> {
             } else {
                 0.0
             };
+            let down =
+                self.way_down_past_the_lights(model, now, last - step, l.braking.level, down);
             if down < proposal && !self.lit_in_time(model, l.argued, proposal, ego_speed, spare) {
                 found = Some(Look {
                     up_to: down,
@@ -426,6 +450,41 @@ impl Controller<'_> {
             }
         }
         found
+    }
+
+    /// The comfortable way's next command once it has reached the lights' command (`down`,
+    /// [`Controller::look_ahead`]) while the brakes are not yet lit for sure by the run's own
+    /// commands ([`Controller::lights_run`]: its own on-time is not yet reached, or not
+    /// known): `next` (ISO 15622's jerk down from the last command), no harder than the
+    /// look-ahead's `level` nor the band's floor. Elsewhere `down`.
+    ///
+    /// A command held at the lights' command lights the brakes slowly: through the actuator's
+    /// lag its acceleration only nears the lights' deceleration (with the defaults, -1.5 m/s^2
+    /// against -1.3, the run's own on-time 0.2-0.4 s after the one the look-ahead argued along
+    /// its ramp), while the follower closes. Where its box then came so near that no level
+    /// cleared, the command followed the ramp of the braking in force at the emergency
+    /// authority's build-up, faster than ISO 15622's jerk limit (20 of the 35 first emergency
+    /// periods of a 300-per-group survey with the datasheets' radars losing no refresh, behind
+    /// leaders at 6 m/s^2: an ego below 6 m/s slowing towards a stopped car, a follower
+    /// closing at 5-9 m/s). Going on down at the jerk limit lights them sooner. A comfort
+    /// choice, not a bound: the look-ahead that passed covers every command down to its level
+    /// (a harder command lights the brakes no later), so the certificate does not rest on it.
+    fn way_down_past_the_lights(
+        &self,
+        model: &Model,
+        now: u64,
+        next: f32,
+        level: f32,
+        down: f32,
+    ) -> f32 {
+        let at_the_lights = self
+            .last_command
+            .is_some_and(|last| last <= self.lights_command());
+        let lit = self.lights_run_own_us.is_some_and(|own| own <= now);
+        if self.lights_on_us.is_none() || lit || !at_the_lights {
+            return down;
+        }
+        math::max(next, math::max(model.ego.min, -level))
     }
 
     /// Whether the follower would still allow the comfort band's floor if `command` were held
@@ -605,7 +664,7 @@ impl Controller<'_> {
                 self.lights_expected_us = if b == look.braking {
                     Some(look.lights_on_us)
                 } else {
-                    look.comfort_lights_on_us
+                    look.comfort.map(|(_, on)| on)
                 };
             }
             _ => {

@@ -1042,10 +1042,8 @@ impl<'t> Controller<'t> {
         let up_to = look.map_or(f32::NEG_INFINITY, |l| l.up_to);
         // With two authorities the comfort band's braking is tried first, where the follower
         // allows it (its lights along its own ramp): a braking in force at the comfort jerk
-        // follows ISO 15622's limit.
-        let comfort = look
-            .filter(|l| l.comfort_lights_on_us.is_some())
-            .map(|_| model.band_braking(c.certificate.brake_jerk));
+        // follows ISO 15622's limit (`Controller::comfort_jerk`).
+        let comfort = look.and_then(|l| l.comfort.map(|(b, _)| b));
         let look = look.map(|l| l.braking);
         // The speed cap argues with the slower of the ramps (the peak is higher): with two
         // authorities the speed's own (`Controller::speed_jerk`).

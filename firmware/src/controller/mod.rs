@@ -145,7 +145,9 @@
 //!   with the lights' on-time of its own ramp or a later one), as the rule's brakings go down
 //!   to `table_format::authority::LEAST_LEVEL`: the front then needs more room, which the
 //!   look-ahead checks and the law's gap keeps;
-//!   or along the comfort band's braking (`beta` at `brake_jerk`) where its front passes and
+//!   or along the comfort band's braking (`beta` built up at ISO 15622's jerk limit at the
+//!   ego's speed, at least `brake_jerk`: `Controller::comfort_jerk`, so that following its ramp
+//!   is no emergency) where its front passes and
 //!   the rear clears with its own, slower, lights: a command that passes names the braking it
 //!   passed with, which is in force from then on. One level serves every command up to the one
 //!   it was found for (a gentler command lights the brakes no later), so the command is capped
@@ -166,6 +168,12 @@
 //!   leaves it only for a proposal that leaves a second to spare: a prediction for comfort
 //!   (the look-ahead that passed covers the lower command), so that the lights come on
 //!   without the jump to the lights' command that the look-ahead would otherwise need later.
+//!   Once there, while the run's own commands have not lit the brakes for sure, the way goes
+//!   on down at the same jerk, no harder than the look-ahead's level or the band's floor
+//!   (`Controller::way_down_past_the_lights`): held at the lights' command the actuator
+//!   only nears the lights' deceleration through its lag, and where a follower closed
+//!   meanwhile until no level cleared, the command followed the ramp of the braking in force,
+//!   at the emergency authority's build-up.
 //! - **Keeping the lights**: a proposal above the lights' command ends a lights' run, and the
 //!   follower's reaction starts again when the lights next come on; once the run's own
 //!   commands have lit the brakes for sure, only one at or above the lights' deceleration's
