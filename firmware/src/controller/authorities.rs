@@ -463,10 +463,11 @@ impl Controller<'_> {
     /// against -1.3, the run's own on-time 0.2-0.4 s after the one the look-ahead argued along
     /// its ramp), while the follower closes. Where its box then came so near that no level
     /// cleared, the command followed the ramp of the braking in force at the emergency
-    /// authority's build-up, faster than ISO 15622's jerk limit (20 of the 35 first emergency
-    /// periods of a 300-per-group survey with the datasheets' radars losing no refresh, behind
-    /// leaders at 6 m/s^2: an ego below 6 m/s slowing towards a stopped car, a follower
-    /// closing at 5-9 m/s). Going on down at the jerk limit lights them sooner. A comfort
+    /// authority's build-up, faster than ISO 15622's jerk limit (the first emergency period
+    /// of 20 of the 35 episodes that had one in a 300-per-group survey with the datasheets'
+    /// radars losing no refresh, behind leaders at 6 m/s^2, the comfort band's braking at
+    /// [`Controller::comfort_jerk`]: an ego below 6 m/s slowing towards a stopped car, a
+    /// follower closing at 5-9 m/s). Going on down at the jerk limit lights them sooner. A comfort
     /// choice, not a bound: the look-ahead that passed covers every command down to its level
     /// (a harder command lights the brakes no later), so the certificate does not rest on it.
     fn way_down_past_the_lights(
