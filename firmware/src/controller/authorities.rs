@@ -348,8 +348,9 @@ impl Controller<'_> {
     ) -> Option<Look> {
         // What the actuator may be doing: one bound for every command the look-ahead tries.
         let pending = self.pending(now, model);
-        let comfort = model.band_braking(self.comfort_jerk(model, ego_speed, pending));
+        // (Built where it is asked for: the band's step never pays for it.)
         let comfort_lights_on = |up_to: f32| {
+            let comfort = model.band_braking(self.comfort_jerk(model, ego_speed, pending));
             let ((clock, dark), on) =
                 self.dark_after(now, pending, up_to, comfort.jerk, comfort.level)?;
             let rear = self.rear?;
