@@ -467,9 +467,10 @@ fn the_search_with_late_reacting_followers() {
 /// follower stopped at the IDM's jam distance (2 m) behind, the two-authority firmware holds
 /// the car along the emergency authority's ramp (it cannot certify a move-off: the follower's
 /// model lets it accelerate blind until the lights), its command dropping faster than
-/// ISO 15622's jerk limit in several periods (7 in 20 s: the gentlest command that keeps the
-/// lit run holds it between them, `Controller::look_ahead`); the car does not move, and none
-/// of those periods
+/// ISO 15622's jerk limit in several periods (5 in 20 s: the gentlest command that keeps the
+/// lit run holds it between them, `Controller::look_ahead`, and the comfortable way goes past
+/// the lights' command to -2.3 m/s^2 at times: a car at rest does not light its brakes by its
+/// deceleration); the car does not move, and none of those periods
 /// is flagged an emergency or asks the driver to take over (`Command::emergency`: the jerk
 /// check leaves out a car whose measured speed's error box reaches zero).
 #[test]
@@ -513,7 +514,7 @@ fn a_car_held_at_standstill_is_no_emergency() {
         takeovers += usize::from(command.takeover);
     }
     println!("{fast_drops} drops faster than ISO's jerk limit, {emergencies} emergencies, {takeovers} takeover requests");
-    assert!(fast_drops > 5, "{fast_drops}");
+    assert!(fast_drops > 0, "{fast_drops}");
     assert_eq!((emergencies, takeovers), (0, 0));
 }
 
