@@ -65,7 +65,10 @@ pub struct LawConfig {
     pub feedforward_gain: f32,
     /// Nominal law: the constant deceleration a stop behind a stopped car aims at, at least,
     /// m/s^2 (positive): the approach keeps its speed until that braking stops it at the
-    /// standstill gap, so that the last metres do not crawl.
+    /// standstill gap, so that the last metres do not crawl. With two authorities and a
+    /// follower behind, the stop is planned harder than the lights' command by a margin
+    /// instead, where this is gentler (a lit run the follower does not let end would cut a
+    /// gentler stop short: `Controller::stop_deceleration`).
     pub stop_deceleration: f32,
     /// After a stop, the car moves off by itself when its leader does within this time,
     /// microseconds; later it waits for the driver's resume (ISO 15622's full-speed-range

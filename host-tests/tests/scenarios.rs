@@ -136,6 +136,44 @@ fn the_suite_with_two_authorities_engages_only_without_an_emergency() {
     }
 }
 
+/// With two authorities and an IDM follower, a stop behind a stopped car halts within a metre
+/// of the standstill gap where the stop's own braking lights the brakes: the stop is planned
+/// harder than the lights' command by a margin (`Controller::stop_deceleration`), so
+/// that the lit run the closing follower does not let end brakes as the plan does. Planned at
+/// the configured 1.0 m/s^2 these halted 35-48 m short (the lit run held the car at the
+/// gentlest command that keeps it, -1.35 m/s^2) and stood there. Two stops of the suite still halt short: their runs
+/// are lit at the start, where the follower sits at the rear half's edge (CCRs at 40 km/h and
+/// the stop from 10 m/s, 154 m and 23 m).
+#[test]
+fn a_stop_ahead_of_a_follower_halts_at_the_standstill_gap() {
+    let config = two_authorities();
+    let stops = [
+        "approaching a 0mph car while cruising at 40mph from 150m away",
+        "CCRs: stationary target, ego 50 km/h",
+        "CCRs: stationary target, ego 60 km/h",
+        "CCRs: stationary target, ego 70 km/h",
+        "CCRs: stationary target, ego 80 km/h",
+    ];
+    for leader_braking in [6.0, 9.8] {
+        let bytes = with_leader(leader_braking);
+        let table = Table::parse(bytes).unwrap();
+        for name in stops {
+            let s = suite()
+                .into_iter()
+                .find(|s| s.name == name)
+                .expect("the stop is in the suite");
+            let r = run(&table, bytes, config, &s, true, None).unwrap();
+            assert!(r.engagement_refused.is_none(), "{leader_braking}: {r:#?}");
+            assert_eq!(r.emergency_periods, 0, "{leader_braking}: {r:#?}");
+            let short = r.check_figures[1];
+            assert!(
+                (0.0..1.0).contains(&short),
+                "{leader_braking} {name}: {short} m beyond the standstill gap"
+            );
+        }
+    }
+}
+
 /// The suite reports braking and standing the road did not ask for
 /// ([`host_tests::world::Needless`]). At the green light the car has been held at a standstill
 /// for 10 s when the leader moves off, longer than the automatic resume's 3 s, so it waits

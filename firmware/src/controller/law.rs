@@ -31,7 +31,10 @@
 //!   set speed is reached gently.
 //! - **Stop and go**: behind a stopped car (estimated speed below 0.5 m/s) the law tracks the
 //!   stopping profile `v*(d) = sqrt(2 b d)`, `d` the gap beyond the standstill gap and
-//!   `b = stop_deceleration`: `a = -b v / v* + (v* - v)`, the profile's own deceleration along
+//!   `b = stop_deceleration` (with two authorities and a follower behind, harder than the
+//!   lights' command by a margin: the lit run the follower does not let end brakes as the
+//!   plan does, [`Controller::stop_deceleration`](super::Controller::stop_deceleration)):
+//!   `a = -b v / v* + (v* - v)`, the profile's own deceleration along
 //!   the way fed forward and the speed error fed back (it decays as `e^-t`). On the profile the
 //!   car brakes at exactly `b` and stops at the standstill gap, from 1 m/s in `1 / b` seconds,
 //!   with no crawl (a proportional law converges exponentially: 9 s below 1 m/s before). The
@@ -104,6 +107,9 @@ pub(super) struct LawInputs {
     pub(super) resume: bool,
     /// The ego speed's measurement error at this speed, m/s.
     pub(super) speed_error: f32,
+    /// The deceleration a stop behind a stopped car is planned with, m/s^2 (positive:
+    /// [`Controller::stop_deceleration`](super::Controller::stop_deceleration)).
+    pub(super) stop_deceleration: f32,
 }
 
 impl Law {
@@ -256,7 +262,7 @@ impl Law {
             // The actuator's delays are anticipated: the distance left is what remains after
             // the dead time and the lag at the present speed. Towards a stopped car the law
             // accelerates gently at most.
-            let b = c.law.stop_deceleration;
+            let b = x.stop_deceleration;
             let delay = (c.plant.actuator_dead_time_us + c.plant.actuator_lag_us) as f32 * 1e-6;
             let d = math::max(beyond - v * delay, 0.0);
             let profile = math::max(math::sqrt(2.0 * b * d), 0.05);

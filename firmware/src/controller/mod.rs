@@ -191,6 +191,11 @@
 //!   under a closing follower made the next look-ahead fail and the command follow the
 //!   emergency authority's ramp), not bounds: they only lower the proposal the look-ahead
 //!   then checks.
+//! - **A stop behind a follower**: the law plans a stop behind a stopped car harder than the
+//!   lights' command by a margin (`Controller::stop_deceleration`), so that the lit run the
+//!   closing follower does not let end brakes as the plan does, and the car halts at the
+//!   standstill gap rather than where the run's braking took it (a comfort choice in the law:
+//!   the look-ahead checks its proposals as any other).
 //! - **The override** grades its braking between the refused command and the comfort band's
 //!   floor reached at ISO 15622's jerk limit (`last - jerk_limit h`, at least `-beta`); where
 //!   nothing passes, the command follows the ramp of the braking in force (an emergency, by the
@@ -1299,6 +1304,7 @@ impl<'t> Controller<'t> {
                     last_command: self.last_command_or_unknown(&model),
                     resume: self.driver.resume_requested,
                     speed_error: self.config.sensors.ego_speed(ego_speed).1 - ego_speed,
+                    stop_deceleration: self.stop_deceleration(),
                 };
                 let a = self.law.propose(&config, &x);
                 if !self.law.is_holding() {
