@@ -138,12 +138,12 @@ fn the_suite_with_two_authorities_engages_only_without_an_emergency() {
 
 /// With two authorities and an IDM follower, a stop behind a stopped car halts within a metre
 /// of the standstill gap where the stop's own braking lights the brakes: the stop is planned
-/// harder than the lights' command by a margin (`Controller::stop_deceleration`), so
-/// that the lit run the closing follower does not let end brakes as the plan does. Planned at
-/// the configured 1.0 m/s^2 these halted 35-48 m short (the lit run held the car at the
-/// gentlest command that keeps it, -1.35 m/s^2) and stood there. Two stops of the suite still halt short: their runs
-/// are lit at the start, where the follower sits at the rear half's edge (CCRs at 40 km/h and
-/// the stop from 10 m/s, 154 m and 23 m).
+/// harder than the lights' command by a margin (`Controller::stop_deceleration`), so that the
+/// lit run the closing follower does not let end brakes as the plan does. Planned at the
+/// configured 1.0 m/s^2 these halted 35-48 m short (the lit run held the car at the gentlest
+/// command that keeps it, -1.35 m/s^2) and stood there. Two stops of the suite still halt
+/// short: their runs are lit at the start, where the follower sits at the rear half's edge
+/// (CCRs at 40 km/h and the stop from 10 m/s, 154 m and 23 m).
 #[test]
 fn a_stop_ahead_of_a_follower_halts_at_the_standstill_gap() {
     let config = two_authorities();

@@ -46,13 +46,13 @@ pub(super) const RELEASE_WATCH_US: u64 = 1_000_000;
 /// feedback swings its commands by a few tenths around the planned deceleration, and a command
 /// above the lights' deceleration's negative ends a lit run, which the follower closing on a
 /// slowing car rarely allows: the run is then kept at the gentlest command that keeps it and
-/// the car stops short. Chosen by measurement (`host-tests scenarios --authorities two`, the seven stops
-/// behind a stopped car with an IDM follower that engage, leaders at 6 and at 9.8 m/s^2
-/// alike): planned at 1.0 m/s^2 five of them halted 35-48 m short of the standstill gap, at
-/// 1.5 (the lights' command) 1.3-10 m, at 1.6 0.8-2.2 m, at 1.8 (this margin) 0.63-0.74 m
-/// beyond it, at 2.0 0.6-0.7 m; the other two halt 154 m and 23 m short at every plan (their runs are lit
-/// by the comfortable way to the lights at the start, with the follower at the rear half's
-/// edge). None has an emergency period.
+/// the car stops short. Chosen by measurement (`host-tests scenarios --authorities two`, the
+/// seven stops behind a stopped car with an IDM follower that engage, leaders at 6 and at
+/// 9.8 m/s^2 alike): planned at 1.0 m/s^2 five of them halted 35-48 m short of the standstill
+/// gap, at 1.5 (the lights' command) 1.3-10 m, at 1.6 0.8-2.2 m, at 1.8 (this margin)
+/// 0.63-0.74 m beyond it, at 2.0 0.6-0.7 m; the other two halt 154 m and 23 m short at every
+/// plan (their runs are lit by the comfortable way to the lights at the start, with the
+/// follower at the rear half's edge). None has an emergency period.
 pub(super) const STOP_UNDER_LIGHTS: f32 = 0.3;
 
 /// How many levels below the band's floor a look-ahead tries where the follower allows not
