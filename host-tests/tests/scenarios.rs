@@ -154,15 +154,16 @@ fn a_stop_ahead_of_a_follower_halts_at_the_standstill_gap() {
         "CCRs: stationary target, ego 70 km/h",
         "CCRs: stationary target, ego 80 km/h",
     ];
+    let suite = suite();
     for leader_braking in [6.0, 9.8] {
         let bytes = with_leader(leader_braking);
         let table = Table::parse(bytes).unwrap();
         for name in stops {
-            let s = suite()
-                .into_iter()
+            let s = suite
+                .iter()
                 .find(|s| s.name == name)
                 .expect("the stop is in the suite");
-            let r = run(&table, bytes, config, &s, true, None).unwrap();
+            let r = run(&table, bytes, config, s, true, None).unwrap();
             assert!(r.engagement_refused.is_none(), "{leader_braking}: {r:#?}");
             assert_eq!(r.emergency_periods, 0, "{leader_braking}: {r:#?}");
             let short = r.check_figures[1];
