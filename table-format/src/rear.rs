@@ -91,6 +91,57 @@
 //! `an_idm_follower_stays_above_the_capped_gap` checks it against IDM followers integrated by
 //! brute force.
 //!
+//! # A committed move-off
+//! [`rear_gap_moving_off`] is the rear half for the one thing the fresh clock cannot certify
+//! behind a follower close behind: pulling away. At a standstill with the lights on and the
+//! follower stopped at its jam distance, a release darkens the lights, the model's follower
+//! may then accelerate blind, and any braking after it reaches the follower only after its
+//! reaction: the gentlest level's rear value is below zero, and the car stands until the
+//! follower leaves, which it does not. The ego that instead commits to accelerating, every
+//! command in force at least a positive `commitment` until a declared end
+//! ([`MoveOff`]), drives away from the follower when it commits harder than the follower
+//! can accelerate blind, and the rear half then needs only the closed form at the
+//! commitment's end.
+//!
+//! **The ego's least travel.** The actuator's acceleration is at least `from` (taken at most
+//! zero: a held brake) until the commitment is in force (`delay`: the longest dead time
+//! after the first committed command), then at least the lag of the slowest actuator from
+//! there towards the commitment `c` (a first-order lag is monotone in its start and its
+//! input, and a faster one towards a command above it is above it: at a touch, `(u - a) /
+//! tau' >= (c - a) / tau`), which crosses zero at `t_0 = delay + tau ln((c - from) / c)` and
+//! stays above it. An ego at or above zero speed at `t_0` is at least as fast as its
+//! acceleration's bound integrated from there, so its least travel is that of an ego at rest
+//! until `t_0`, then along the lag from zero ([`lag_segment`]): [`MoveOff::least_ego`]. Any
+//! speed it had is credited nothing.
+//!
+//! **The follower's farthest travel.** Until it reacts to lights that come on after the
+//! commitment's end it accelerates at most at `reaction_acceleration` (taken at least zero),
+//! up to its top speed.
+//!
+//! **The least gap.** Within the move-off the gap is at least the measured one plus the
+//! ego's least travel less the follower's farthest: both extremals are the same run of each
+//! car. Their speeds' difference starts at minus the follower's and is convex (its derivative,
+//! the ego's bound less the follower's acceleration, never falls), so the travel difference
+//! falls, then rises: its least is where the ego's speed overtakes the follower's, found by
+//! bisection and taken less the follower's travel over the bracket. At the commitment's end
+//! the pair is at least at the extremals' gap, the ego at least at their ego's speed and the
+//! follower at most at theirs, and every command after is at least the braking level: the
+//! closed form [`rear_gap`] there, with the follower's reaction counted from the end (the
+//! caller adds how long after it the lights are on for sure, [`lights_on_within`]), bounds
+//! the rest (it is non-decreasing in the gap and the ego's speed and non-increasing in the
+//! follower's). The property tests check the bound against brute-force integration of
+//! actuators no slower than declared, commands above the bounds and followers below theirs,
+//! and that it is met by the extremal pair.
+//!
+//! A commitment is a promise about the ego's commands: a controller that argues with it must
+//! keep every command at or above the commitment until the end it declared, and argue the
+//! front with the ego accelerating for as long. Against the firmware's follower, blind at its
+//! IDM's largest acceleration, that is a long promise: the braking after it must outlast a
+//! follower that gains speed for its reaction and the lights' on-time, which at a few metres
+//! a second only a fast ego does, so the commitment lasts seconds and the front needs the
+//! leader far ahead for all of it. The firmware does not argue it (`host-tests move-off`
+//! measures it; docs/closed-loop.md has the figures).
+//!
 //! # The ego's build-up
 //! [`rear_gap`] brakes the ego at its level at once. A real ego brakes through its actuator: a
 //! dead time in which the commands already issued act, then a first-order lag. Any ego whose
@@ -424,6 +475,172 @@ pub fn rear_gap_built_up(
         return f32::NAN;
     }
     at_once.max(credited)
+}
+
+/// A committed move-off, for [`rear_gap_moving_off`] (module docs: a committed move-off):
+/// what the ego's commands guarantee of its acceleration from the follower measurement's time
+/// on while it pulls away from a follower close behind. All in SI units, times from the
+/// measurement.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct MoveOff {
+    /// A lower bound of the ego's acceleration at the measurement's time and of every command
+    /// in force until `delay`, m/s^2 (taken at most zero: a held brake).
+    pub from: f32,
+    /// From when every command in force is at least `commitment`, s: the actuator's longest
+    /// dead time after the first committed command's issue.
+    pub delay: f32,
+    /// The least committed command, m/s^2 (positive).
+    pub commitment: f32,
+    /// Until when every command in force is at least `commitment`, s (at least `delay`): the
+    /// last committed command's end, plus the actuator's shortest dead time. After it every
+    /// command is at least the braking level asked about.
+    pub until: f32,
+    /// The actuator's first-order lag, s: the longest it may be (zero: none).
+    pub lag: f32,
+}
+
+/// How many halvings [`rear_gap_moving_off`] brackets the moment the ego's speed overtakes the
+/// follower's with: a window of 10 s to 0.6 microseconds.
+const MOVE_OFF_HALVINGS: u32 = 24;
+
+impl MoveOff {
+    /// When the lower bound of the ego's acceleration crosses zero for good, s: the dead time
+    /// holds it at `from` (at most zero), then the lag `tau` takes it towards `commitment`
+    /// `c`: `delay + tau ln((c - from) / c)`. `+inf` where the commitment is not positive.
+    fn moving_from(&self) -> f32 {
+        let from = self.from.min(0.0);
+        let c = self.commitment;
+        // (NaN is no commitment.)
+        if c.is_nan() || c <= 0.0 {
+            return f32::INFINITY;
+        }
+        if self.lag > 0.0 {
+            self.delay + self.lag * libm::logf((c - from) / c)
+        } else {
+            self.delay
+        }
+    }
+
+    /// The ego's least travel and speed `t` seconds after the measurement, to `until`
+    /// (`(m, m/s)`; module docs: a committed move-off): at rest until the lower bound of its
+    /// acceleration crosses zero, then the lag from zero towards the commitment
+    /// ([`lag_segment`]: travel `D int a - int s a` over the `D` seconds since).
+    pub fn least_ego(&self, t: f32) -> (f32, f32) {
+        let start = self.moving_from();
+        let d = t.min(self.until) - start;
+        // (NaN: no travel credited.)
+        if d.is_nan() || d <= 0.0 {
+            return (0.0, 0.0);
+        }
+        let (speed, moment, _) = lag_segment(0.0, self.commitment, d, self.lag);
+        (d * speed - moment, speed)
+    }
+}
+
+/// The follower's farthest travel and highest speed `t` seconds after the measurement from
+/// `speed`, accelerating at `acceleration` (at least zero) up to `max_speed`: `(m, m/s)`.
+fn farthest_follower(speed: f32, acceleration: f32, max_speed: f32, t: f32) -> (f32, f32) {
+    if acceleration > 0.0 && speed < max_speed {
+        let to_top = (max_speed - speed) / acceleration;
+        if t <= to_top {
+            return (
+                speed * t + 0.5 * acceleration * t * t,
+                speed + acceleration * t,
+            );
+        }
+        let run = speed * to_top + 0.5 * acceleration * to_top * to_top;
+        (run + max_speed * (t - to_top), max_speed)
+    } else {
+        (speed * t, speed)
+    }
+}
+
+/// The least of the ego's travel less the follower's over a move-off, m: the follower from
+/// `follower_speed` (at least zero) accelerating at `climb` (at least zero) up to `top`.
+/// The difference falls while the ego is the slower, and the difference of their speeds is
+/// convex (its derivative, the ego's acceleration bound less the follower's, never falls: the
+/// ego's rises along the lag, the follower's drops to zero at its top), so it is negative,
+/// then positive: the least is where it changes sign (bracketed, less the follower's travel
+/// over the bracket), or at the end.
+fn least_within_move_off(follower_speed: f32, m: &MoveOff, climb: f32, top: f32) -> f32 {
+    let follower_at = |t: f32| farthest_follower(follower_speed, climb, top, t);
+    let closing = |t: f32| {
+        let (ego, ego_speed) = m.least_ego(t);
+        let (behind, behind_speed) = follower_at(t);
+        (ego - behind, ego_speed - behind_speed)
+    };
+    let (mut lo, mut hi) = (0.0f32, m.until);
+    if closing(hi).1 <= 0.0 {
+        return closing(hi).0;
+    }
+    for _ in 0..MOVE_OFF_HALVINGS {
+        let mid = 0.5 * (lo + hi);
+        if closing(mid).1 > 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    // Over the bracket the travel falls no faster than the follower's speed at its end.
+    closing(lo).0 - (hi - lo) * follower_at(hi).1
+}
+
+/// The smallest gap (m) behind an ego that moves off along `move_off` from `gap` metres ahead
+/// of a follower at `follower_speed`, and brakes at `ego_braking` (m/s^2, positive) once the
+/// commitment ends, the follower accelerating blind at its `reaction_acceleration` all the
+/// while and then as [`rear_gap`] has it: the lights, dark through the move-off, come on no
+/// earlier than the commitment's end, so `follower`'s `reaction_time` counts from there and
+/// must include how long after it they are on for sure ([`lights_on_within`]). The ego's speed
+/// at the measurement is taken as zero (the least; it is at least that). The smaller of the
+/// least gap within the move-off and the closed form at its end (module docs: a committed
+/// move-off). NaN in, NaN out; `-inf` where the move-off is not one (a commitment not
+/// positive, a negative delay or lag, an end before the delay, anything infinite).
+pub fn rear_gap_moving_off(
+    gap: f32,
+    follower_speed: f32,
+    move_off: &MoveOff,
+    ego_braking: f32,
+    follower: &ReactingFollower,
+) -> f32 {
+    let m = move_off;
+    let inputs = [
+        gap,
+        follower_speed,
+        m.from,
+        m.delay,
+        m.commitment,
+        m.until,
+        m.lag,
+        ego_braking,
+    ];
+    if inputs.iter().any(|x| x.is_nan()) {
+        return f32::NAN;
+    }
+    let usable = inputs.iter().all(|x| x.is_finite())
+        && m.commitment > 0.0
+        && m.delay >= 0.0
+        && m.lag >= 0.0
+        && m.until >= m.delay;
+    if !usable {
+        return f32::NEG_INFINITY;
+    }
+    let climb = follower.reaction_acceleration.max(0.0);
+    let (top, follower_speed) = (follower.max_speed, follower_speed.max(0.0));
+    let least_within = least_within_move_off(follower_speed, m, climb, top);
+    let (follower_travel, speed_at_end) = farthest_follower(follower_speed, climb, top, m.until);
+    let (ego_travel, ego_speed) = m.least_ego(m.until);
+    let at_end = rear_gap(
+        gap + ego_travel - follower_travel,
+        ego_speed,
+        speed_at_end,
+        ego_braking,
+        follower,
+    );
+    if at_end.is_nan() {
+        return f32::NAN;
+    }
+    at_end.min(gap + least_within)
 }
 
 /// How finely [`lights_on_within`] brackets a last zero on the ramp's phase, s: a
@@ -1502,5 +1719,201 @@ mod tests {
         assert!((b - 0.1472).abs() < 0.0005, "{b}");
         // A faster follower that reacts late is hit even by an ego holding its speed.
         assert_eq!(allowed_braking(1.0, 20.0, 25.0, &at_once, 0.0, 12.0), None);
+    }
+
+    /// A move-off by brute force (f64, 0.1 ms steps): the least gap over the whole run from
+    /// `gap` behind an ego at `ego_speed`, its actuator a dead time `dead` and a lag `tau`
+    /// from the acceleration `a_0`, its commands in force `early(t)` before the dead time's
+    /// end, `committed(t)` until `until` and `late(t)` after; the follower at `follower(t,
+    /// since)` (`since`: seconds since `until`, negative before it). For `run_for` seconds, then
+    /// until the follower stops where `to_standstill` says so.
+    #[allow(clippy::too_many_arguments)]
+    fn moved_off(
+        (gap, ego_speed, follower_speed): (f64, f64, f64),
+        (dead, tau, a_0): (f64, f64, f64),
+        until: f64,
+        early: impl Fn(f64) -> f64,
+        committed: impl Fn(f64) -> f64,
+        late: impl Fn(f64) -> f64,
+        follower: impl Fn(f64, f64) -> f64,
+        (run_for, to_standstill): (f64, bool),
+    ) -> f64 {
+        let dt = 1e-4;
+        let (mut g, mut ve, mut vf, mut a, mut t) = (gap, ego_speed, follower_speed, a_0, 0.0);
+        let mut least = g;
+        while t < run_for - 0.5 * dt || (to_standstill && vf > 0.0) {
+            let mid = t + 0.5 * dt;
+            let u = if mid < dead {
+                early(mid)
+            } else if mid < until {
+                committed(mid)
+            } else {
+                late(mid)
+            };
+            let next_a = if tau > 0.0 {
+                u + (a - u) * (-dt / tau).exp()
+            } else {
+                u
+            };
+            let ae = 0.5 * (a + next_a);
+            a = next_a;
+            let af = follower(mid, mid - until);
+            crate::brute::advance(&mut g, &mut ve, &mut vf, (ae, af), dt);
+            t += dt;
+            least = least.min(g);
+            if t > 120.0 {
+                break;
+            }
+        }
+        least
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+
+        /// Every admissible move-off keeps at least [`rear_gap_moving_off`]'s gap: an actuator
+        /// no slower than the one declared (its dead time and lag drawn below theirs), starting
+        /// at or above `from`, commands at or above the bounds (`from` in the dead time, the
+        /// commitment until `until`, `-level` after), an ego that may be moving, and a follower
+        /// that accelerates at most at its `reaction_acceleration` until its reaction after
+        /// `until` has run, then at most along its build-up.
+        #[test]
+        fn a_move_off_keeps_the_gap_its_closed_form_bounds(
+            gap in 0.3f32..8.0, vf in 0.0f32..4.0, from in -3.0f32..0.5,
+            delay in 0.0f32..0.5, c in 0.3f32..3.0, window in 0.0f32..4.0,
+            lag in prop_oneof![Just(0.0f32), 0.0f32..0.5], level in 1.0f32..8.0,
+            rho in 0.0f32..2.0, ar in 0.0f32..2.0, bf in 4.0f32..8.0,
+            jf in prop_oneof![Just(f32::INFINITY), 5.0f32..30.0],
+            ve in prop_oneof![Just(0.0f32), 0.0f32..1.0],
+            slower in prop_oneof![Just(1.0f64), 0.0f64..1.0], draws in proptest::collection::vec(0.0f64..1.0, 64),
+        ) {
+            let f = follower(rho, ar, bf, jf);
+            let m = MoveOff { from, delay, commitment: c, until: delay + window, lag };
+            let bound = rear_gap_moving_off(gap, vf, &m, level, &f);
+            prop_assert!(!bound.is_nan());
+            let draw = |t: f64| draws[((t / 0.05) as usize) % draws.len()];
+            // Mostly at the bound, now and then above it.
+            let above = |t: f64| draw(t).powi(4);
+            let (from, c, level) = (f64::from(from), f64::from(c), f64::from(level));
+            let (rho, ar, bf, jf) = (f64::from(rho), f64::from(ar), f64::from(bf), f64::from(jf));
+            let until = f64::from(m.until);
+            let least = moved_off(
+                (f64::from(gap), f64::from(ve), f64::from(vf)),
+                (f64::from(delay) * slower, f64::from(lag) * slower, from + above(0.0)),
+                until,
+                |t| from + 2.0 * above(t),
+                |t| c + above(t),
+                |t| -level + 2.0 * above(t),
+                |t, since| {
+                    let most = if since < rho {
+                        ar
+                    } else {
+                        (ar - jf * (since - rho)).max(-bf)
+                    };
+                    most - 3.0 * above(t + 0.025)
+                },
+                (until + rho + 1.0, true),
+            );
+            prop_assert!(
+                least >= f64::from(bound) - 2e-3,
+                "brute force {} below the bound {}", least, bound
+            );
+        }
+
+        /// The bound is tight where everything is at its bound and the ego brakes at once
+        /// (no lag): the extremal move-off by brute force comes within 1 cm of it.
+        #[test]
+        fn the_extremal_move_off_meets_its_closed_form(
+            gap in 0.3f32..8.0, vf in 0.0f32..4.0, from in -3.0f32..0.0,
+            delay in 0.0f32..0.5, c in 0.3f32..3.0, window in 0.0f32..4.0, level in 1.0f32..8.0,
+            rho in 0.0f32..2.0, ar in 0.0f32..2.0, bf in 4.0f32..8.0,
+        ) {
+            let f = follower(rho, ar, bf, f32::INFINITY);
+            let m = MoveOff { from, delay, commitment: c, until: delay + window, lag: 0.0 };
+            let bound = f64::from(rear_gap_moving_off(gap, vf, &m, level, &f));
+            let (from, c, level) = (f64::from(from), f64::from(c), f64::from(level));
+            let (rho, ar, bf) = (f64::from(rho), f64::from(ar), f64::from(bf));
+            let until = f64::from(m.until);
+            let least = moved_off(
+                (f64::from(gap), 0.0, f64::from(vf)),
+                (f64::from(delay), 0.0, from),
+                until,
+                |_| from,
+                |_| c,
+                |_| -level,
+                |_, since| if since < rho { ar } else { -bf },
+                (until + rho + 1.0, true),
+            );
+            prop_assert!((least - bound).abs() < 1e-2, "brute force {} against {}", least, bound);
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+
+        /// Within the move-off the bound is tight with a lag too: the extremal pair (the
+        /// actuator at its declared dead time and lag from `from`, the commitment held, the
+        /// follower at its climb) by brute force to the commitment's end comes within 2 mm of
+        /// the least travel difference.
+        #[test]
+        fn the_extremal_move_off_meets_its_least_within(
+            vf in 0.0f32..4.0, from in -3.0f32..0.0, delay in 0.0f32..0.5, c in 0.3f32..3.0,
+            window in 0.0f32..4.0, lag in 0.0f32..0.5, ar in 0.0f32..2.0,
+        ) {
+            let m = MoveOff { from, delay, commitment: c, until: delay + window, lag };
+            let bound = f64::from(least_within_move_off(vf, &m, ar, 35.0));
+            let (from, c) = (f64::from(from), f64::from(c));
+            let until = f64::from(m.until);
+            // Run to the end only.
+            let least = moved_off(
+                (0.0, 0.0, f64::from(vf)),
+                (f64::from(delay), f64::from(lag), from),
+                until,
+                |_| from,
+                |_| c,
+                |_| 0.0,
+                |_, _| f64::from(ar),
+                (until, false),
+            );
+            prop_assert!(
+                (least - bound).abs() < 2e-3,
+                "brute force {} against {}", least, bound
+            );
+        }
+    }
+
+    /// Worked by hand: from rest 2 m ahead of a stopped follower that accelerates at 1 m/s^2,
+    /// the ego's acceleration at 2 m/s^2 from 0.5 s (no lag): the ego's speed catches the
+    /// follower's at `t = 2 (t - 0.5)`, 1 s, where the follower is 0.5 m on and the ego 0.25 m:
+    /// 1.75 m. At the commitment's end, 3 s, the ego is at 6.25 m and 5 m/s, the follower at
+    /// 4.5 m and 3 m/s: 3.75 m apart, and an ego that then brakes at 1 m/s^2 with the follower
+    /// braking at 6 m/s^2 after 1 s keeps the gap from falling below `3.75 + 5 + 12.5 - (3 +
+    /// 0.5 + 3 + 16 / 12) = 13.417` m (the ego stops last).
+    #[test]
+    fn a_move_off_worked_out_by_hand() {
+        let f = follower(1.0, 1.0, 6.0, f32::INFINITY);
+        let m = MoveOff {
+            from: -1.0,
+            delay: 0.5,
+            commitment: 2.0,
+            until: 3.0,
+            lag: 0.0,
+        };
+        assert!((rear_gap_moving_off(2.0, 0.0, &m, 1.0, &f) - 1.75).abs() < 1e-4);
+        // Braking at 8 m/s^2 after it: the least gap is where the speeds meet, after the
+        // ego's braking; `rear_gap` has it from 3.75 m, 5 and 3 m/s.
+        let after = rear_gap(3.75, 5.0, 3.0, 8.0, &f);
+        assert!(after < 1.75);
+        assert!((rear_gap_moving_off(2.0, 0.0, &m, 8.0, &f) - after).abs() < 1e-4);
+        // Not a move-off: no commitment, a NaN.
+        let none = MoveOff {
+            commitment: 0.0,
+            ..m
+        };
+        assert_eq!(
+            rear_gap_moving_off(2.0, 0.0, &none, 1.0, &f),
+            f32::NEG_INFINITY
+        );
+        assert!(rear_gap_moving_off(f32::NAN, 0.0, &m, 1.0, &f).is_nan());
     }
 }
