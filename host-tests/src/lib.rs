@@ -12,7 +12,7 @@
 //! certified boundary and at the domain's edges, humans chosen by cross-entropy, hill climbing
 //! and greedy rollouts within the model; [`gap_policy`] tells what the gap policy and two braking
 //! authorities cost in distance, and [`floor`] the least gap any certificate of the model can
-//! give; [`plots`] draws a trace and the gap policy. The ego is `firmware::Controller` itself, on
+//! give; [`move_off`] what a committed move-off from a standstill would certify; [`plots`] draws a trace and the gap policy. The ego is `firmware::Controller` itself, on
 //! the same table bytes the target runs.
 #![warn(missing_docs)]
 
@@ -22,6 +22,7 @@ pub mod floor;
 pub mod gap_policy;
 pub mod humans;
 pub mod iso;
+pub mod move_off;
 pub mod plots;
 pub mod scenarios;
 pub mod sim;

@@ -84,6 +84,13 @@ enum Command {
         #[arg(long, default_value = "out/gap-policy")]
         out: PathBuf,
     },
+    /// Measures what a committed move-off would certify at a standstill with a follower
+    /// stopped close behind: the shortest commitment, and the leader's room the front needs.
+    MoveOff {
+        /// Output folder.
+        #[arg(long, default_value = "out/move-off")]
+        out: PathBuf,
+    },
     /// Replays one case of a findings file and writes its trace.
     Replay {
         /// The findings file (`falsify`'s `findings.json`).
@@ -348,6 +355,7 @@ fn real_main() -> Result<()> {
             certificate,
         } => scenarios(&out, only.as_deref(), &certificate),
         Command::GapPolicy { out } => host_tests::gap_policy::run(&out),
+        Command::MoveOff { out } => host_tests::move_off::run(&out),
     }
 }
 
