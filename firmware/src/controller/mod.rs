@@ -230,9 +230,9 @@
 //! taken as hard as `beta` or the emergency's level, whatever level the look-ahead argues
 //! with); move off from standstill with a follower at the IDM's jam distance behind (the
 //! follower's model lets it accelerate blind until it sees the lights, and no braking
-//! certifies that; an IDM follower's speed cap, `table_format::rear::rear_gap_capped`, would,
-//! with a bound of the gap over the follower's reaction that the controller does not keep),
-//! so in stop and go the car is held, by the emergency authority's ramp; and
+//! certifies that: `table_format::rear`'s module docs have why neither an IDM follower's speed
+//! cap nor a committed move-off does with the declared errors, and docs/closed-loop.md the
+//! figures), so in stop and go the car is held, by the emergency authority's ramp; and
 //! leave a lit run where the follower would then allow not even the gentlest level a
 //! look-ahead argues with (the lights' command's, 1.5 m/s^2): at 8-10 m/s with a follower
 //! 1-1.5 s behind the car is brought to a standstill the comfortable way, with no car ahead
