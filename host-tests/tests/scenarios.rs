@@ -142,7 +142,7 @@ fn the_suite_with_two_authorities_engages_only_without_an_emergency() {
 /// margin (`Controller::stop_deceleration`), so that the lit run the closing follower does not
 /// let end brakes as the plan does, and the law asks its profile at the state the last
 /// command brings the car to (`law::predicted_stop`), so that it does not ease off mid-stop
-/// into the run's own command. Planned at the configured 1.0 m/s^2 these halted 28-39 m short
+/// into the run's own command. Planned at the configured 1.0 m/s^2 these halted 28-44 m short
 /// (the lit run held the car at the gentlest command that keeps it, -1.35 m/s^2) and stood
 /// there; with the profile asked at the present speed over the distance less the delay's
 /// travel, 0.63-0.74 m short. Two stops of the suite still halt short: their runs are lit at
