@@ -48,12 +48,11 @@ pub(super) const RELEASE_WATCH_US: u64 = 1_000_000;
 /// slowing car rarely allows: the run is then kept at the gentlest command that keeps it and
 /// the car stops short. Chosen by measurement (`host-tests scenarios --authorities two`, the
 /// seven stops behind a stopped car with an IDM follower that engage, leaders at 6 and at
-/// 9.8 m/s^2 alike, the law asking its profile at the predicted state): planned at the
-/// configured 1.0 m/s^2 five of them halted 28-44 m short of the standstill gap, at 1.5 (the
-/// lights' command) one 4.35 m short, at 1.6 one 0.41 m short, at 1.7 within 0.14 m, at 1.8
-/// (this margin) 0.03-0.22 m closer than it, at 2.0 0.10-0.18 m closer; the other two halt
-/// 154 m and 23 m short at every plan (their runs are lit by the comfortable way to the lights at the start,
-/// with the follower at the rear half's edge). None has an emergency period.
+/// 9.8 m/s^2 alike): planned at 1.0 m/s^2 five of them halted 35-48 m short of the standstill
+/// gap, at 1.5 (the lights' command) 1.3-10 m, at 1.6 0.8-2.2 m, at 1.8 (this margin)
+/// 0.63-0.74 m beyond it, at 2.0 0.6-0.7 m; the other two halt 154 m and 23 m short at every
+/// plan (their runs are lit by the comfortable way to the lights at the start, with the
+/// follower at the rear half's edge). None has an emergency period.
 pub(super) const STOP_UNDER_LIGHTS: f32 = 0.3;
 
 /// How many levels below the band's floor a look-ahead tries where the follower allows not

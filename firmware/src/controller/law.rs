@@ -38,10 +38,8 @@
 //!   the way fed forward and the speed error fed back (it decays as `e^-t`). On the profile the
 //!   car brakes at exactly `b` and stops at the standstill gap, from 1 m/s in `1 / b` seconds,
 //!   with no crawl (a proportional law converges exponentially: 9 s below 1 m/s before). The
-//!   profile is asked at the state the last command's braking (no harder than `b`) brings the
-//!   car to over the actuator's dead time and lag (invariant along the profile, so the car
-//!   brakes at `b` to the gap), and the law accelerates towards a stopped car at 1 m/s^2 at
-//!   most. Stopped, the car holds at -1
+//!   distance is taken less what the actuator's dead time and lag cover at the present speed,
+//!   and the law accelerates towards a stopped car at 1 m/s^2 at most. Stopped, the car holds at -1
 //!   m/s^2; it moves off when the leader does, within `auto_resume_us` of the stop by itself, later
 //!   on the driver's resume.
 //! - **Comfort**: the command is held within ISO 15622's acceleration and deceleration limits at
@@ -112,40 +110,6 @@ pub(super) struct LawInputs {
     /// The deceleration a stop behind a stopped car is planned with, m/s^2 (positive:
     /// [`Controller::stop_deceleration`](super::Controller::stop_deceleration)).
     pub(super) stop_deceleration: f32,
-}
-
-/// Where a car at `v` (m/s) braking at `last_command` (m/s^2; a command above zero taken as
-/// zero, a NaN as zero) for `delay` seconds is then: `(distance covered, speed)`, to a
-/// standstill. The stopping profile is asked there (module docs: stop and go): along a braking
-/// at the profile's own deceleration `b` the prediction stays on the profile
-/// (`(v - b T)^2 = 2 b (d - v T + b T^2 / 2)` when `v^2 = 2 b d`), so the car brakes at `b`
-/// to the standstill gap whatever the delay. Asked at the present speed over the distance less
-/// `v T` instead, a car on the profile found itself below it as the delay's share of the
-/// distance shrank with the speed, and the law eased off mid-stop: a lit run the follower
-/// does not let end then held the commands at its own (-1.35 m/s^2) and the car stopped
-/// 0.6-0.7 m short. The law passes the last command no harder than the profile's
-/// deceleration: an override braking harder would otherwise have the law ask to accelerate
-/// towards the stopped car while it brakes (measured with `host-tests campaign --authorities
-/// two --episodes 300`: 696 emergency periods in ISO 15622's scope from comfort starts with
-/// the override's braking extrapolated, 669 with it capped, 648 with no prediction).
-fn predicted_stop(v: f32, last_command: f32, delay: f32) -> (f32, f32) {
-    let braking = if last_command < 0.0 {
-        last_command
-    } else {
-        0.0
-    };
-    let speed = v + braking * delay;
-    if speed <= 0.0 {
-        // Stopped within the delay: its stopping distance (`braking` is negative here).
-        let stopping = if braking < 0.0 {
-            v * v / (-2.0 * braking)
-        } else {
-            0.0
-        };
-        (stopping, 0.0)
-    } else {
-        (v * delay + 0.5 * braking * delay * delay, speed)
-    }
 }
 
 impl Law {
@@ -295,16 +259,14 @@ impl Law {
             // The stopping profile `v*(d) = sqrt(2 b d)`: its own deceleration along the way,
             // `-b v / v*`, fed forward, and the speed error fed back; on the profile the car
             // brakes at exactly `b` and stops at the standstill gap in `v / b` seconds.
-            // The actuator's delays are anticipated: the profile is asked at the state the
-            // last command's braking, taken no harder than the profile's own, brings the car
-            // to after the dead time and the lag (`predicted_stop`). Towards a stopped car the
-            // law accelerates gently at most.
+            // The actuator's delays are anticipated: the distance left is what remains after
+            // the dead time and the lag at the present speed. Towards a stopped car the law
+            // accelerates gently at most.
             let b = x.stop_deceleration;
             let delay = (c.plant.actuator_dead_time_us + c.plant.actuator_lag_us) as f32 * 1e-6;
-            let (ahead, speed) = predicted_stop(v, math::max(x.last_command, -b), delay);
-            let d = math::max(beyond - ahead, 0.0);
+            let d = math::max(beyond - v * delay, 0.0);
             let profile = math::max(math::sqrt(2.0 * b * d), 0.05);
-            let a = -b * speed / profile + STOP_GAIN * (profile - speed);
+            let a = -b * v / profile + STOP_GAIN * (profile - v);
             return math::min(a, STOP_APPROACH);
         }
         let desired = Law::desired_gap(c, x.time_gap, x.certified_gap, v);
@@ -330,38 +292,5 @@ impl Law {
             CLOSING_ACCELERATION
         };
         math::min(c.law.rel_speed_gain * (track.rel_speed + closing), cap) + feedforward
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::predicted_stop;
-
-    /// Along a braking at the profile's deceleration the prediction stays on the profile
-    /// `v^2 = 2 b d`, at every speed and delay the car does not stop within.
-    #[test]
-    fn a_car_on_the_stopping_profile_is_predicted_on_it() {
-        for b in [1.0f32, 1.8, 3.0] {
-            for v in [1.0f32, 3.0, 8.0, 14.0] {
-                for delay in [0.1f32, 0.4, 0.3] {
-                    if v - b * delay <= 0.0 {
-                        continue;
-                    }
-                    let d = v * v / (2.0 * b);
-                    let (ahead, speed) = predicted_stop(v, -b, delay);
-                    let profile = (2.0 * b * (d - ahead)).sqrt();
-                    assert!((profile - speed).abs() < 1e-4, "{b} {v} {delay}");
-                }
-            }
-        }
-    }
-
-    /// A car that stops within the delay is predicted at its stopping distance, at rest; a
-    /// command above zero, or NaN, predicts the present speed held.
-    #[test]
-    fn a_stop_within_the_delay_and_a_coast_are_predicted() {
-        assert_eq!(predicted_stop(0.5, -2.0, 0.4), (0.0625, 0.0));
-        assert_eq!(predicted_stop(2.0, 1.0, 0.4), (0.8, 2.0));
-        assert_eq!(predicted_stop(2.0, f32::NAN, 0.4), (0.8, 2.0));
     }
 }
