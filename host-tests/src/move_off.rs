@@ -107,9 +107,10 @@ impl Scene {
     }
 
     /// A commitment at `commitment` for `window` seconds from its first command: the brake
-    /// held before it no harder than the comfort band's floor (ISO 15622's -3.5 m/s^2; a stop
-    /// is planned well above it), the commitment in force after the longest dead time, its
-    /// last command in force until the window's end after the shortest (none).
+    /// held before it no harder than the comfort band's floor (ISO 15622's -3.5 m/s^2: a stop
+    /// is planned and held well above it, bar the emergency ramp's steps at a standstill; a
+    /// harder hold only delays the ego's start), the commitment in force after the longest
+    /// dead time, its last command in force until the window's end after the shortest (none).
     fn move_off(&self, commitment: f32, window: f32) -> MoveOff {
         MoveOff {
             from: firmware::config::ISO_15622_LIMITS.0,
