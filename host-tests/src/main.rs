@@ -1052,6 +1052,12 @@ fn scenarios(
         }
         report.push(r);
     }
+    // Per source and policy: docs/closed-loop.md's table (a test compares them).
+    println!();
+    println!("{}", host_tests::scenarios::SUMMARY_HEADER);
+    for row in host_tests::scenarios::summary_rows(&report) {
+        println!("{row}");
+    }
     let json = serde_json::to_string_pretty(&report)?;
     std::fs::write(out.join("scenarios.json"), json)?;
     let bang_bang = if bang_bang.is_some() {

@@ -179,6 +179,87 @@ impl ScenarioResult {
     }
 }
 
+/// The header of [`summary_rows`]' table, with its alignment row.
+pub const SUMMARY_HEADER: &str = "| source | policy | runs | passed | collisions | certificate losses | runs in ISO 15622's scope (leader within 3.5 m/s^2) | worst jerk / deceleration / acceleration against its limit there | mode switches | override periods | emergency periods |\n|---|---|---|---|---|---|---|---|---|---|---|";
+
+/// The suite's figures per source and policy, one Markdown row each, sources in the order
+/// they first come and the graded policy first:
+/// the scenario table of docs/closed-loop.md, which `host-tests scenarios` prints and a test
+/// compares with the doc. Columns: the source, the policy, runs, passed
+/// ([`ScenarioResult::passed`]), collisions, certificate losses, runs in ISO 15622's scope,
+/// the worst jerk / deceleration / acceleration against its limit over those (bold above
+/// the limit), mode switches, override periods and emergency periods.
+pub fn summary_rows(results: &[ScenarioResult]) -> Vec<String> {
+    let mut groups: Vec<(&str, &str, Vec<&ScenarioResult>)> = Vec::new();
+    for r in results {
+        match groups
+            .iter_mut()
+            .find(|(source, policy, _)| *source == r.source && *policy == r.policy)
+        {
+            Some((_, _, runs)) => runs.push(r),
+            None => groups.push((r.source, r.policy, vec![r])),
+        }
+    }
+    // Sources as they first come, the graded policy first within each.
+    let first = |source: &str| results.iter().position(|r| r.source == source);
+    groups.sort_by_key(|(source, policy, _)| (first(source), *policy != "graded"));
+    let ratio = |x: f32| {
+        if x > 1.0 {
+            format!("**{x:.2}**")
+        } else {
+            format!("{x:.2}")
+        }
+    };
+    groups
+        .iter()
+        .map(|(source, policy, runs)| {
+            let short = match *source {
+                OPENPILOT => "openpilot",
+                NCAP => "Euro NCAP",
+                _ => source,
+            };
+            let policy = if *policy == "graded" {
+                "graded (default)"
+            } else {
+                "bang-bang"
+            };
+            let count = |f: &dyn Fn(&ScenarioResult) -> bool| runs.iter().filter(|r| f(r)).count();
+            let in_scope: Vec<_> = runs.iter().filter(|r| r.comfort_scope).collect();
+            let worst = |f: &dyn Fn(&IsoWorst) -> f32| {
+                in_scope.iter().map(|r| f(&r.iso)).fold(0.0f32, f32::max)
+            };
+            let sum = |f: &dyn Fn(&ScenarioResult) -> u64| runs.iter().map(|r| f(r)).sum::<u64>();
+            format!(
+                "| {short} | {policy} | {} | {} | {} | {} | {} | {} / {} / {} | {} | {} | {} |",
+                runs.len(),
+                count(&|r| r.passed()),
+                count(&|r| r.collided),
+                count(&|r| r.certificate_lost),
+                in_scope.len(),
+                ratio(worst(&|i| i.jerk)),
+                ratio(worst(&|i| i.deceleration)),
+                ratio(worst(&|i| i.acceleration)),
+                sum(&|r| u64::from(r.mode_switches)),
+                thousands(sum(&|r| r.override_periods)),
+                thousands(sum(&|r| r.emergency_periods)),
+            )
+        })
+        .collect()
+}
+
+/// `n` with a comma between each three digits, as the docs write counts.
+fn thousands(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (k, c) in digits.chars().enumerate() {
+        if k > 0 && (digits.len() - k) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
 const MPH: f32 = 0.447_04;
 const KMH: f32 = 1.0 / 3.6;
 const OPENPILOT: &str = "openpilot selfdrive/test/longitudinal_maneuvers/test_longitudinal.py";

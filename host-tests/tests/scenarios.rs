@@ -7,7 +7,7 @@
 //! too: no collision and no loss, but it breaks the jerk limit, which is why it is not the default.
 
 use firmware::{Authorities, CertificateConfig, Config};
-use host_tests::scenarios::{run, suite, ScenarioResult};
+use host_tests::scenarios::{run, suite, summary_rows, ScenarioResult, SUMMARY_HEADER};
 use host_tests::world::Trace;
 use table_format::Table;
 
@@ -53,6 +53,34 @@ fn the_bang_bang_policy_is_safe_but_jerks() {
     let results = results(Config::bang_bang());
     assert!(results.iter().all(|r| !r.collided && !r.certificate_lost));
     assert!(results.iter().any(|r| r.comfort_scope && r.iso.jerk > 1.01));
+}
+
+/// docs/closed-loop.md's scenario table is what the suite gives now, row by row
+/// ([`summary_rows`], which `host-tests scenarios` prints below its runs). The table had gone
+/// stale once without anything noticing (the paper's policy's openpilot row: 32 passed and 154
+/// emergency periods, where the code gave 30 and 86).
+#[test]
+fn the_docs_scenario_table_is_the_suites() {
+    let mut all = results(Config::default());
+    all.extend(results(Config::bang_bang()));
+    let rows = summary_rows(&all);
+    let doc = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../docs/closed-loop.md"
+    ))
+    .unwrap();
+    let at = doc
+        .find(SUMMARY_HEADER)
+        .expect("the scenario table's header in docs/closed-loop.md");
+    let documented: Vec<&str> = doc[at + SUMMARY_HEADER.len()..]
+        .lines()
+        .skip(1)
+        .take_while(|l| l.starts_with('|'))
+        .collect();
+    assert_eq!(
+        documented, rows,
+        "docs/closed-loop.md's scenario table is not the suite's: `host-tests scenarios` prints it"
+    );
 }
 
 /// The ego's speed near the domain's top, with two authorities: closing on a leader at 30 m/s
