@@ -231,8 +231,9 @@
 //! with); move off from standstill with a follower at the IDM's jam distance behind (the
 //! follower's model lets it accelerate blind until it sees the lights, and no braking
 //! certifies that: `table_format::rear`'s module docs have why neither an IDM follower's speed
-//! cap nor a committed move-off does with the declared errors, and docs/closed-loop.md the
-//! figures), so in stop and go the car is held, by the emergency authority's ramp; and
+//! cap, with the declared errors, nor a committed move-off, against this follower, does, and
+//! docs/closed-loop.md the figures), so in stop and go the car is held, by the emergency
+//! authority's ramp; and
 //! leave a lit run where the follower would then allow not even the gentlest level a
 //! look-ahead argues with (the lights' command's, 1.5 m/s^2): at 8-10 m/s with a follower
 //! 1-1.5 s behind the car is brought to a standstill the comfortable way, with no car ahead
