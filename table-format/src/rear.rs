@@ -1785,7 +1785,8 @@ mod tests {
             rho in 0.0f32..2.0, ar in 0.0f32..2.0, bf in 4.0f32..8.0,
             jf in prop_oneof![Just(f32::INFINITY), 5.0f32..30.0],
             ve in prop_oneof![Just(0.0f32), 0.0f32..1.0],
-            slower in prop_oneof![Just(1.0f64), 0.0f64..1.0], draws in proptest::collection::vec(0.0f64..1.0, 64),
+            slower in prop_oneof![Just(1.0f64), 0.0f64..1.0],
+            draws in proptest::collection::vec(0.0f64..1.0, 64),
         ) {
             let f = follower(rho, ar, bf, jf);
             let m = MoveOff { from, delay, commitment: c, until: delay + window, lag };
