@@ -359,13 +359,6 @@ impl SensorModel {
             ..self
         }
     }
-
-    /// The longest a measurement that is not lost can be old when the firmware reads it:
-    /// latency, jitter and one cycle, per channel, microseconds.
-    pub fn delivered_age_us(&self) -> [u64; 3] {
-        self.channels
-            .map(|c| u64::from(c.latency_us) + u64::from(c.jitter_us) + u64::from(c.cycle_us))
-    }
 }
 
 /// One channel's state: when its next sample is due, the measurements on their way, the last
