@@ -923,7 +923,7 @@ impl<'t> Deployed<'t> {
 
 /// How late the ego learns of the leader's braking at the worst, s: a track as old as the
 /// sensors declare (`latency + cycle`) and a control period.
-fn learnt_after(config: &firmware::Config) -> f32 {
+pub(crate) fn learnt_after(config: &firmware::Config) -> f32 {
     let sensors = config.sensors;
     (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6
 }

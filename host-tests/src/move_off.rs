@@ -16,7 +16,7 @@ use anyhow::{Context, Result};
 use table_format::front::{front_value, FrontModel};
 use table_format::rear::{rear_gap_moving_off, MoveOff, ReactingFollower};
 
-use crate::gap_policy::EgoActuator;
+use crate::gap_policy::{learnt_after, EgoActuator};
 
 /// The gaps at which the follower stands behind the ego, m: about the IDM's jam distance (2 m),
 /// and more.
@@ -85,12 +85,11 @@ impl Scene {
             .certifier()
             .map(|c| c.reacting_follower())
             .ok_or_else(|| anyhow::anyhow!("the default table is refused"))?;
-        let sensors = config.sensors;
         Ok(Scene {
             config,
             actuator: EgoActuator::declared(&config),
             follower,
-            learnt_after: (sensors.latency_us + sensors.cycle_us + config.period_us) as f32 * 1e-6,
+            learnt_after: learnt_after(&config),
         })
     }
 
@@ -209,9 +208,11 @@ pub fn survey() -> Result<Vec<MoveOffRow>> {
                     // braked again at once) on.
                     let shortest = (scene.actuator.dead_time / WINDOW_STEP).ceil() as usize;
                     let steps = (LONGEST_WINDOW / WINDOW_STEP) as usize;
-                    let window = (shortest..=steps)
+                    let found = (shortest..=steps)
                         .map(|k| k as f32 * WINDOW_STEP)
-                        .find(|&w| scene.rear_value(gap, commitment, w, level) >= 0.0);
+                        .map(|w| (w, scene.rear_value(gap, commitment, w, level)))
+                        .find(|&(_, value)| value >= 0.0);
+                    let window = found.map(|(w, _)| w);
                     let leader_room = match window {
                         Some(w) => LEADER_BRAKING
                             .iter()
@@ -230,7 +231,7 @@ pub fn survey() -> Result<Vec<MoveOffRow>> {
                         commitment,
                         level,
                         window,
-                        rear_value: window.map(|w| scene.rear_value(gap, commitment, w, level)),
+                        rear_value: found.map(|(_, value)| value),
                         ego_speed: window.map(|w| {
                             scene
                                 .move_off(commitment, w)
