@@ -12,13 +12,13 @@ use crate::sim::{lowest_gap, Actuator, ActuatorModel, Car};
 /// The error box around the worst measurement of a follower `time_gap` seconds behind (plus
 /// the IDM's jam distance) an ego at `v`, both at `v`: the gap read short (the range's error
 /// taken against it), then every state within the declared error of that reading.
-struct RearBox {
+pub(crate) struct RearBox {
     /// The gap's interval, m.
-    gap: (f32, f32),
+    pub(crate) gap: (f32, f32),
     /// The ego's speed's interval, m/s.
-    ego: (f32, f32),
+    pub(crate) ego: (f32, f32),
     /// The follower's speed's interval, m/s (the range rate's error on each of two readings).
-    follower: (f32, f32),
+    pub(crate) follower: (f32, f32),
 }
 
 impl RearBox {
@@ -29,7 +29,7 @@ impl RearBox {
 
     /// The box around the worst measurement of a follower `gap` behind an ego at `v`, both
     /// at `v`.
-    fn around_gap(config: &firmware::Config, gap: f32, v: f32) -> Self {
+    pub(crate) fn around_gap(config: &firmware::Config, gap: f32, v: f32) -> Self {
         let error = config.sensors.error;
         let measured = gap - (error.range + error.range_relative * gap);
         let ego_measured = v - (error.ego_speed + error.ego_speed_relative * v);
