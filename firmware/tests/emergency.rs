@@ -373,3 +373,82 @@ fn the_emergency_answer_holds_its_braking_until_its_lights_are_on() {
         "released once the lights are on: {commands:?}"
     );
 }
+
+/// A follower closing on the ego caps the law's acceleration (`LAW_FOLLOWER_HORIZON_S`):
+/// behind a follower 30 m back closing at 3 m/s, at 20 m/s, the gap policy for the braking the
+/// follower would allow 4 s on is at least 1.5 m longer than the one for the braking it allows
+/// now (36.0 m and 29.4 m here at the driver's 1.0 s). With the leader at the ego's speed
+/// halfway between the two, the law (set speed 30 m/s) does not accelerate towards the shorter
+/// one after its first period (which has no look-ahead yet); behind a follower 30 m back at the
+/// ego's speed it does.
+#[test]
+fn a_closing_follower_caps_the_laws_acceleration() {
+    let config = firmware::Config {
+        certificate: firmware::CertificateConfig {
+            authorities: firmware::Authorities::Two,
+            ..ideal().certificate
+        },
+        // The driver's shortest time gap, 1.0 s: 24 m at 20 m/s.
+        law: firmware::LawConfig {
+            time_gap_setting: 0,
+            set_speed: 30.0,
+            ..ideal().law
+        },
+        ..ideal()
+    };
+    let leader_braking = match firmware::table_format::Table::parse(DEFAULT_TABLE)
+        .unwrap()
+        .header()
+        .game
+    {
+        firmware::table_format::Game::ThreeCarSplit { leader, .. } => -leader.min,
+        g => panic!("not a split table: {g:?}"),
+    };
+    let v = 20.0;
+    let period = config.period_us;
+    let h = f64::from(period) * 1e-6;
+    // The policies now and 4 s on behind the closing follower, a leader far ahead.
+    let mut probe = Controller::new(DEFAULT_TABLE, config);
+    let far = Cars {
+        x: [300.0, 0.0, -30.0],
+        v: [v, v, v + 3.0],
+    };
+    probe.step(&far.inputs(0));
+    probe.step(&far.inputs(u64::from(period)));
+    let now = probe.desired_gap(v as f32);
+    let ahead = probe
+        .braking_ahead()
+        .map(|b| probe.desired_gap_over(v as f32, leader_braking, b))
+        .expect("a follower closing to look ahead at");
+    assert!(ahead >= now + 1.5, "ahead {ahead} m, now {now} m");
+    let gap = f64::from(now + ahead) / 2.0;
+    // The hardest acceleration commanded over 0.6 s after the first period, behind a
+    // follower 30 m back `faster` than the ego.
+    let most = |faster: f64| {
+        let mut c = Controller::new(DEFAULT_TABLE, config);
+        let mut cars = Cars {
+            x: [gap, 0.0, -30.0],
+            v: [v, v, v + faster],
+        };
+        let mut most = f32::NEG_INFINITY;
+        for k in 0..30u64 {
+            let a = c.step(&cars.inputs(k * u64::from(period))).acceleration;
+            // (The first period has no look-ahead to cap it with.)
+            if k > 0 {
+                most = most.max(a);
+            }
+            cars.advance([0.0, f64::from(a), 0.0], h);
+        }
+        most
+    };
+    let closing = most(3.0);
+    assert!(
+        closing <= 1e-3,
+        "behind a closing follower: {closing} m/s^2"
+    );
+    let held = most(0.0);
+    assert!(
+        held >= 0.2,
+        "behind a follower at the ego's speed: {held} m/s^2"
+    );
+}

@@ -484,6 +484,40 @@ impl Controller<'_> {
         found
     }
 
+    /// The hardest braking the follower would allow `horizon` seconds on, were it and the ego
+    /// to keep the speeds of the look-ahead's rear corner ([`RearCorner::ahead_by`]), with the
+    /// look-ahead's reaction clock and lights, at the emergency authority's build-up; the
+    /// comfort band's floor where not even that clears. A prediction that caps the law's
+    /// acceleration (`LAW_FOLLOWER_HORIZON_S`), not a bound. `None` without a follower's track
+    /// to argue with or in the comfort band.
+    pub(super) fn allowed_ahead(
+        &self,
+        model: &Model,
+        look: &Look,
+        horizon: f32,
+    ) -> Option<Braking> {
+        let RearArgued {
+            corner,
+            clock,
+            dark,
+        } = look.argued?;
+        let e = model.emergency?;
+        let beta = -model.ego.min;
+        let margin = self.config.certificate.rear_margin;
+        let ahead = corner.ahead_by(horizon, 0.0);
+        let level = hardest_clearing(
+            |level| ahead.gap_after(model, level, clock, dark) - margin,
+            beta,
+            e.level,
+            LEVEL_RESOLUTION,
+        )
+        .unwrap_or(beta);
+        Some(Braking {
+            level,
+            jerk: e.jerk,
+        })
+    }
+
     /// The comfortable way's next command once it has reached the lights' command (`down`,
     /// [`Controller::look_ahead`]) while the brakes are not yet lit for sure by the run's own
     /// commands ([`Controller::lights_run`]: its own on-time is not yet reached, or not

@@ -14,7 +14,10 @@
 //!   buys a shorter room as well as a shorter gap (1.5 m/s is 7.3 m at 30 m/s in the comfort
 //!   band, 4.5 m with 8 m/s^2 against a leader's 9.8). With two authorities the braking is the
 //!   gentlest the follower allowed over the last one to two seconds: the level moves with the
-//!   follower's measurement noise, and the gap with it.
+//!   follower's measurement noise, and the gap with it. A follower closing on the ego caps the
+//!   following law's acceleration at what its gap policy with the braking the follower would
+//!   allow a few seconds on lets (`ahead_gap`, never below zero): the law does not accelerate
+//!   towards a gap the follower is about to take away, and never brakes for it.
 //! - **Following**: `rel_speed_gain (rel_speed + closing(e)) + feedforward_gain a_leader`, `e`
 //!   the gap's error against the policy: `closing(e) = (gap_gain / rel_speed_gain) e` near the
 //!   policy (the classic `gap_gain e + rel_speed_gain rel_speed`), but never more than
@@ -101,6 +104,10 @@ pub(super) struct LawInputs {
     /// The gap the certificate needs at the ego's speed while the ego closes on its leader at
     /// `gap_room_speed`, m.
     pub(super) certified_gap: f32,
+    /// The same with the braking the follower would allow a short while on, m (at least
+    /// `certified_gap`): the following law accelerates only as far as its gap policy with it
+    /// lets, and never brakes for it.
+    pub(super) ahead_gap: f32,
     /// The last command issued (or what the actuator is doing, before the first), m/s^2.
     pub(super) last_command: f32,
     /// The driver asked to resume.
@@ -269,7 +276,28 @@ impl Law {
             let a = -b * v / profile + STOP_GAIN * (profile - v);
             return math::min(a, STOP_APPROACH);
         }
-        let desired = Law::desired_gap(c, x.time_gap, x.certified_gap, v);
+        let following =
+            |certified_gap| Law::following(c, x, track, certified_gap, leader_acceleration);
+        let law = following(x.certified_gap);
+        // The gap a follower closing on the ego will soon ask caps the acceleration, never
+        // more: braking for it would let the follower close further and ask more.
+        if law > 0.0 && x.ahead_gap > x.certified_gap {
+            math::min(law, math::max(following(x.ahead_gap), 0.0))
+        } else {
+            law
+        }
+    }
+
+    /// The following law over the certificate's gap `certified_gap` (module docs).
+    fn following(
+        c: &Config,
+        x: &LawInputs,
+        track: Track,
+        certified_gap: f32,
+        leader_acceleration: f32,
+    ) -> f32 {
+        let v = x.ego_speed;
+        let desired = Law::desired_gap(c, x.time_gap, certified_gap, v);
         let feedforward = c.law.feedforward_gain * math::clamp(leader_acceleration, -3.5, 1.0);
         // The speed to close at: linear in the gap error near the policy (the classic law's
         // `gap_gain e + rel_speed_gain rel_speed`), and no faster than a braking at
