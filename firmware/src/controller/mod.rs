@@ -587,7 +587,7 @@ pub struct Controller<'t> {
     law_braking: Option<(u64, Option<Braking>, Option<Braking>)>,
     /// With two authorities, the braking the follower would allow [`LAW_FOLLOWER_HORIZON_S`]
     /// after the last look-ahead ([`Controller::allowed_ahead`]): a cap on the law's
-    /// acceleration ([`Controller::law_ahead_gap`]).
+    /// acceleration ([`Controller::law_gaps`]).
     law_ahead: Option<Braking>,
     /// The last command issued (`None` before the first, and after a cancel or a clock jump:
     /// then what the actuator does is only known from its reported state).
@@ -803,24 +803,27 @@ impl<'t> Controller<'t> {
             .unwrap_or(self.braking_in_force(model))
     }
 
-    /// The gap the certificate needs at `speed` while the ego closes on its leader at the law's
-    /// `gap_room_speed` (m), for the gentler of the law's braking and the one the follower
-    /// would allow [`LAW_FOLLOWER_HORIZON_S`] on (`law_ahead`): the following law accelerates
-    /// only as far as its gap policy with it lets. `certified_gap` where the follower is not
-    /// seen to close.
-    fn law_ahead_gap(&self, speed: f32, certified_gap: f32) -> f32 {
-        // (`law_ahead` is `None` in the comfort band: nothing more to evaluate there.)
-        let (Some(ahead), Ok(certifier)) = (self.law_ahead, &self.certifier) else {
-            return certified_gap;
+    /// The law's two gaps at `speed` (m): the gap the certificate needs while the ego closes
+    /// on its leader at the law's `gap_room_speed` with the law's braking
+    /// ([`Controller::law_certified_gap`]), and the same for the gentler of it and the braking
+    /// the follower would allow [`LAW_FOLLOWER_HORIZON_S`] on (`law_ahead`), up to which the
+    /// following law accelerates; the first where the follower is not seen to close (and in
+    /// the comfort band, where `law_ahead` is `None`). One front evaluation, two where the
+    /// follower closes.
+    // (Inlined: called as a function it cost the default configuration's worst step 24
+    // instructions on QEMU, where its budget leaves about 40.)
+    #[inline(always)]
+    fn law_gaps(&self, model: &Model, speed: f32) -> (f32, f32) {
+        let braking = self.law_braking(model);
+        let certified_gap = self.room_gap_with(speed, model.leader_braking, braking);
+        let ahead_gap = match self.law_ahead {
+            Some(ahead) if ahead.level < braking.level => math::max(
+                self.room_gap_with(speed, model.leader_braking, ahead),
+                certified_gap,
+            ),
+            _ => certified_gap,
         };
-        let model = certifier.model;
-        if ahead.level >= self.law_braking(&model).level {
-            return certified_gap;
-        }
-        math::max(
-            self.room_gap_with(speed, model.leader_braking, ahead),
-            certified_gap,
-        )
+        (certified_gap, ahead_gap)
     }
 
     /// [`Controller::closing_gap_with`] at the law's `gap_room_speed`.
@@ -1337,12 +1340,11 @@ impl<'t> Controller<'t> {
             ),
             None => {
                 let config = self.config;
-                // Only a vehicle ahead needs the gap policy (one front evaluation, two where
-                // the follower closes).
-                let certified_gap = if math::is_finite(leader.track.gap) {
-                    self.law_certified_gap(ego_speed)
+                // Only a vehicle ahead needs the gap policy.
+                let (certified_gap, ahead_gap) = if math::is_finite(leader.track.gap) {
+                    self.law_gaps(&model, ego_speed)
                 } else {
-                    f32::INFINITY
+                    (f32::INFINITY, f32::INFINITY)
                 };
                 let x = LawInputs {
                     leader: Some((leader.at_us, leader.track)),
@@ -1360,11 +1362,7 @@ impl<'t> Controller<'t> {
                     ),
                     time_gap: config.time_gap(self.driver.time_gap_setting),
                     certified_gap,
-                    ahead_gap: if math::is_finite(leader.track.gap) {
-                        self.law_ahead_gap(ego_speed, certified_gap)
-                    } else {
-                        f32::INFINITY
-                    },
+                    ahead_gap,
                     last_command: self.last_command_or_unknown(&model),
                     resume: self.driver.resume_requested,
                     speed_error: self.config.sensors.ego_speed(ego_speed).1 - ego_speed,
@@ -1385,10 +1383,7 @@ impl<'t> Controller<'t> {
         let look = self.look_ahead(&model, now, proposal, ego_speed, &front_certified);
         self.lights_way_down = look.is_some_and(|l| l.way_down);
         self.allowed = look.map(|l| l.braking);
-        self.law_ahead = match (look, self.two_authorities()) {
-            (Some(l), true) => self.allowed_ahead(&model, &l, LAW_FOLLOWER_HORIZON_S),
-            _ => None,
-        };
+        self.law_ahead = look.and_then(|l| self.allowed_ahead(&model, &l, LAW_FOLLOWER_HORIZON_S));
         self.remember_law_braking(now);
         let mut front = self.enforce_front(
             &model, &leader, ego_speed, t_e, now, pending, proposal, look,
