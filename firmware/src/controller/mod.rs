@@ -811,7 +811,7 @@ impl<'t> Controller<'t> {
     /// the comfort band, where `law_ahead` is `None`). One front evaluation, two where the
     /// follower closes.
     // (Inlined: called as a function it cost the default configuration's worst step 24
-    // instructions on QEMU, where its budget leaves about 40.)
+    // instructions on QEMU.)
     #[inline(always)]
     fn law_gaps(&self, model: &Model, speed: f32) -> (f32, f32) {
         let braking = self.law_braking(model);
