@@ -380,7 +380,7 @@ fn the_emergency_answer_holds_its_braking_until_its_lights_are_on() {
 /// now (36.0 m and 29.4 m here at the driver's 1.0 s). With the leader at the ego's speed
 /// halfway between the two, the law (set speed 30 m/s) does not accelerate towards the shorter
 /// one after its first period (which has no look-ahead yet); behind a follower 30 m back at the
-/// ego's speed it does.
+/// ego's speed it does. A cancel forgets the cap.
 #[test]
 fn a_closing_follower_caps_the_laws_acceleration() {
     let config = firmware::Config {
@@ -421,6 +421,11 @@ fn a_closing_follower_caps_the_laws_acceleration() {
         .map(|b| probe.desired_gap_over(v as f32, leader_braking, b))
         .expect("a follower closing to look ahead at");
     assert!(ahead >= now + 1.5, "ahead {ahead} m, now {now} m");
+    // A cancel forgets it with the commands it capped: the first period after a resume is
+    // capped by its own look-ahead, not by the one from before the cancel.
+    let mut cancelled = probe.clone();
+    cancelled.request(firmware::DriverRequest::Cancel).unwrap();
+    assert_eq!(cancelled.braking_ahead(), None);
     let gap = f64::from(now + ahead) / 2.0;
     // The hardest acceleration commanded over 0.6 s after the first period, behind a
     // follower 30 m back `faster` than the ego.

@@ -919,6 +919,8 @@ impl<'t> Controller<'t> {
         self.ramp = None;
         self.speed_ramp = None;
         self.in_force = None;
+        // The law's cap was the last look-ahead's: its commands are forgotten with it.
+        self.law_ahead = None;
         self.last_command = None;
         self.law.reset();
     }
