@@ -899,7 +899,15 @@ fn the_box_minimum_finds_an_interior_breakpoint_and_refuses_what_it_cannot_bound
     // A point box is one lookup.
     let point = table.least_over_box(&[1.1, 3.0, 3.0], &[1.1, 3.0, 3.0]);
     assert_eq!(point, table.value_at(&[1.1, 3.0, 3.0]));
-    // Eight uniform breakpoints inside the follower-speed range: too wide.
+    // Six uniform breakpoints inside the follower-speed range are taken, seven are too
+    // wide ([`BOX_INTERIOR`]), and so are eight.
+    assert!(table
+        .least_over_box(&[1.0, 0.5, 1.0], &[1.0, 6.5, 1.0])
+        .is_ok());
+    assert_eq!(
+        table.least_over_box(&[1.0, 0.5, 1.0], &[1.0, 7.5, 1.0]),
+        Err(Error::BoxTooWide { axis: 1 })
+    );
     assert_eq!(
         table.least_over_box(&[1.0, 0.5, 1.0], &[1.0, 8.5, 1.0]),
         Err(Error::BoxTooWide { axis: 1 })

@@ -23,8 +23,8 @@ pub(super) const EGO_HISTORY: usize = 16;
 /// near: the first nearest in time order. Along the history the distance to `t` falls, then
 /// rises, so the scan goes from the newest and stops at the first measurement farther than the
 /// one before it: a few steps where `t` is a recent track's time, not the whole history (on
-/// the board, scanning the whole history twice a step made the default step's worst 19,960
-/// instructions of its budget's 20,000; this scan, 18,912: docs/board.md).
+/// the board, scanning the whole history twice a step cost the default step's worst about
+/// 1,050 of its budget's 20,000 instructions: docs/board.md).
 fn nearest_in_time<'h>(
     history: impl DoubleEndedIterator<Item = &'h (u64, f32)>,
     t: u64,
