@@ -374,6 +374,38 @@ fn a_closing_follower_makes_no_emergency_of_a_stop() {
     }
 }
 
+/// Where the follower allows not even the comfort band's floor, the look-ahead names the
+/// gentler level it found built up at ISO 15622's jerk limit where that certifies too
+/// (`Look::comfort`), so that a braking in force whose ramp the command then follows is no
+/// emergency. From the 200-per-group lossless surveys with two authorities, behind the
+/// comfortable leader (a follower closing at 3-7 m/s on an ego slowing at 6-9 m/s): each of
+/// these had one emergency period, a step down the ramp of a gentler level named at the
+/// emergency authority's 12 m/s^3, and has none now.
+#[test]
+fn a_gentler_level_is_followed_at_the_comfort_jerk() {
+    for (leader_braking, follower, seed) in [
+        (6.0, Follower::IdmFixed, 18_000_186),
+        (6.0, Follower::IdmSwitching, 20_000_168),
+        (9.8, Follower::IdmSwitching, 20_000_085),
+        (9.8, Follower::IdmSwitching, 20_000_168),
+    ] {
+        let bytes = table_bytes(leader_braking);
+        let table = Table::parse(bytes).unwrap();
+        let template = Episode {
+            sensors: Sensing::DatasheetLossless,
+            ..episode(Leader::Comfortable, follower, seed)
+        };
+        let outcome = run_episode(&table, bytes, &template, None).unwrap();
+        assert!(!outcome.collided, "seed {seed}");
+        assert_eq!(outcome.certificate_lost, None, "seed {seed}");
+        assert!(outcome.started_comfort_certified, "seed {seed}");
+        assert_eq!(
+            outcome.emergency_periods, 0,
+            "{leader_braking} seed {seed}: {outcome:?}"
+        );
+    }
+}
+
 /// Sensors that lose no refresh make no emergency begun in a radar dropout
 /// ([`host_tests::world::EmergencyCauses::dropout`]), while their emergencies are counted.
 #[test]

@@ -148,7 +148,9 @@
 //!   or along the comfort band's braking (`beta` built up at ISO 15622's jerk limit at the
 //!   ego's speed, at least `brake_jerk`: `Controller::comfort_jerk`, so that following its ramp
 //!   is no emergency) where its front passes and
-//!   the rear clears with its own, slower, lights: a command that passes names the braking it
+//!   the rear clears with its own, slower, lights, and where the rear allows not even `beta`,
+//!   along the gentler level found, built up at that jerk, where the same holds: a command
+//!   that passes names the braking it
 //!   passed with, which is in force from then on. One level serves every command up to the one
 //!   it was found for (a gentler command lights the brakes no later), so the command is capped
 //!   there, as by the speed: where the follower allows nothing after the law's proposal, the
