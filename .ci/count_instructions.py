@@ -5,14 +5,17 @@ so one log line per executed instruction) from a file or FIFO, and counts the li
 each entry into `hjacc_step_begin` and the next entry into `hjacc_step_end` (the markers the
 qemu-scenario binary calls around `Controller::step`). The scenario then calls one marker per
 mode or path (every `hjacc_mode_*` symbol: `hjacc_mode_nominal`, ...), which files the step's
-count under it. Prints the worst, median and mean over every step and per path.
-Usage: count_instructions.py ELF LOG"""
+count under it. Prints the worst, median and mean over every step and per path, and exits
+non-zero when the worst step exceeds BUDGET instructions (docs/board.md justifies each budget
+in cycles).
+Usage: count_instructions.py ELF LOG [BUDGET]"""
 import re
 import statistics
 import subprocess
 import sys
 
 elf, log = sys.argv[1], sys.argv[2]
+budget = int(sys.argv[3]) if len(sys.argv) > 3 else None
 symbols = {}
 for line in subprocess.run(["nm", elf], capture_output=True, text=True, check=True).stdout.splitlines():
     parts = line.split()
@@ -54,3 +57,8 @@ for mode, values in per_mode.items():
         print(f"  {mode}: no step")
 if sum(len(v) for v in per_mode.values()) != len(counts):
     sys.exit("a counted step has no mode marker")
+if budget is not None:
+    if max(counts) > budget:
+        sys.exit(f"the worst control step, {max(counts)} instructions, is over its budget of {budget}")
+    print(f"worst step within its budget: {max(counts)} of {budget} instructions "
+          f"({100 * max(counts) / budget:.0f}%)")
