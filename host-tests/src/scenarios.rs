@@ -530,8 +530,8 @@ pub fn suite() -> Vec<Scenario> {
         ));
     }
     // The checks.
-    // 34 m/s at the top: the law keeps the set speed below the domain's 35 m/s by the ego
-    // speed's error and 0.5 m/s (firmware::controller's SET_SPEED_ROOM).
+    // 34 m/s at the top: the law keeps the set speed below the domain's 35 m/s by three of
+    // the ego speed's errors and 0.1 m/s (firmware::controller's SET_SPEED_ROOM).
     for v in [10.0f32, 15.0, 20.0, 25.0, 30.0, 34.0] {
         let mut steady = scenario(
             format!("steady following at {v:.0} m/s"),

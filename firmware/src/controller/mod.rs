@@ -294,8 +294,8 @@
 //! from `now + h` keeps that peak within `max_ego_speed` (a bisection: the peak is
 //! non-decreasing in `u`), and when even the ramp's floor breaks it, nothing passes and the
 //! ramp goes on. Why it is invariant: as for the front value. The law's set speed is held
-//! below the domain's top by the ego speed's error and 0.5 m/s, so that cruising never leans on
-//! the cap.
+//! below the domain's top by three of the ego speed's errors and 0.1 m/s (`SET_SPEED_ROOM` has
+//! the derivation), so that cruising never leans on the cap.
 //!
 //! **With two authorities the speed has its own ramp.** The braking in force's ramp is the
 //! emergency authority's build-up (12 m/s^3 by default), past ISO 15622's jerk limit, and the
@@ -515,9 +515,20 @@ use emergency::{EmergencyMemo, LightsHold};
 /// command, microseconds: the label does not chatter while the law rides the look-ahead's edge.
 pub const OVERRIDE_HOLD_US: u64 = 500_000;
 
-/// How far below the domain's top (less the ego speed's error) the law's set speed is held,
-/// m/s: room for the speed law's overshoot under the speed headroom.
-const SET_SPEED_ROOM: f32 = 0.5;
+/// How far below the domain's top, less three times the ego speed's error, the law's set speed
+/// is held, m/s: room for the speed's rise under the commands in force (the dead time and lag
+/// of the law's small corrections, the speed's ramp down) and the law's overshoot.
+///
+/// Why three errors: the law holds the *measured* speed `m` at its set speed, so a measurement
+/// biased low by the error `E` leaves the true speed at `set + E`; the speed headroom is taken
+/// at the top of the next measurement's box, `m' + E`, and that measurement may be biased high,
+/// `m' = v + E`. So the headroom sees `set + 3E` plus the rise, and the law's set speed is held
+/// at `max_ego_speed - 3E - SET_SPEED_ROOM` (34.08 m/s with the datasheet errors, `E` 0.275
+/// m/s at 35) so that cruising at the top never leans on the speed cap. The rise measured in
+/// the suite's steady following at 30 m/s (closing at the law's top behind a 9.8 m/s^2
+/// leader, the error switching corners) is about 0.07 m/s; with the error taken once and
+/// 0.5 m/s of room the cap trimmed the law there in 27 periods.
+const SET_SPEED_ROOM: f32 = 0.1;
 
 /// How long the law remembers the gentlest braking the follower allowed, microseconds: its
 /// gap is the certificate's for the gentlest of the last one to two seconds. The level is
@@ -1356,13 +1367,15 @@ impl<'t> Controller<'t> {
                     ego_speed,
                     now_us: now,
                     period: seconds(u64::from(self.config.period_us)),
-                    // Below the domain's top by the speed's error and a margin: the certificate
-                    // cannot certify an ego measured at the top (its speed headroom).
+                    // Below the domain's top by three of the speed's errors and a margin
+                    // (`SET_SPEED_ROOM`): the certificate cannot certify an ego measured at
+                    // the top (its speed headroom).
                     set_speed: math::min(
                         self.driver.set_speed,
                         model.max_ego_speed
-                            - (self.config.sensors.ego_speed(model.max_ego_speed).1
-                                - model.max_ego_speed)
+                            - 3.0
+                                * (self.config.sensors.ego_speed(model.max_ego_speed).1
+                                    - model.max_ego_speed)
                             - SET_SPEED_ROOM,
                     ),
                     time_gap: self.config.time_gap(self.driver.time_gap_setting),
