@@ -886,6 +886,64 @@ proptest! {
     }
 }
 
+proptest! {
+    /// `least_over_box` is the least of the interpolant at every combination of each axis'
+    /// candidates (the box's ends and the breakpoints strictly inside), each looked up alone
+    /// with `value_at`: the box's upper cell found by the breakpoint scan is the one a lookup
+    /// finds, also where the box ends exactly on a breakpoint or at the grid's top (drawn here
+    /// a third of the time each).
+    #[test]
+    fn the_box_minimum_is_the_least_over_its_candidates(
+        x in -1.0f32..150.0, dx in 0.0f32..6.0, sx in 0u8..3,
+        v in 0.0f32..35.0, dv in 0.0f32..4.5,
+        w in 0.0f32..35.0, dw in 0.0f32..2.0, sw in 0u8..3,
+    ) {
+        let (bytes, [gaps, _, speeds]) = listed_table(rough, ValueBits::Sixteen);
+        let table = Table::parse(&bytes).unwrap();
+        // The upper end: as drawn, snapped to the first breakpoint at or above it, or the top.
+        let snap = |lo: f32, d: f32, how: u8, nodes: &[f32]| -> f32 {
+            let top = *nodes.last().unwrap();
+            match how {
+                0 => (lo + d).min(top),
+                1 => nodes.iter().copied().find(|&b| b >= lo + d).unwrap_or(top),
+                _ => top,
+            }
+        };
+        let hi = [snap(x, dx, sx, &gaps), (v + dv).min(35.0), snap(w, dw, sw, &speeds)];
+        let lo = [x, v, w];
+        let least = match table.least_over_box(&lo, &hi) {
+            Ok(l) => l,
+            Err(Error::BoxTooWide { .. }) => return Ok(()),
+            Err(e) => panic!("{e}"),
+        };
+        let candidates = |axis: usize| -> Vec<f32> {
+            let mut c = vec![lo[axis]];
+            let mut k = 0;
+            while let Some(b) = table.breakpoint(axis, k) {
+                if b > lo[axis] && b < hi[axis] {
+                    c.push(b);
+                }
+                k += 1;
+            }
+            c.push(hi[axis]);
+            c
+        };
+        let (cx, cv, cw) = (candidates(0), candidates(1), candidates(2));
+        let mut reference = f32::INFINITY;
+        for &a in &cx {
+            for &b in &cv {
+                for &c in &cw {
+                    reference = reference.min(table.value_at(&[a, b, c]).unwrap());
+                }
+            }
+        }
+        prop_assert!(
+            (least - reference).abs() <= 1e-6,
+            "{least} against {reference} over {lo:?}..{hi:?}"
+        );
+    }
+}
+
 #[test]
 fn the_box_minimum_finds_an_interior_breakpoint_and_refuses_what_it_cannot_bound() {
     // A valley at the gap breakpoint 1.25 m, between box ends at 1.1 and 1.4.
