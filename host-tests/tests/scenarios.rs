@@ -122,8 +122,6 @@ fn the_speed_near_the_domains_top_is_no_emergency_with_two_authorities() {
             );
             // The run passes its own check too: no override at all, the law's set speed held
             // below the top by three of the speed's errors (the firmware's `SET_SPEED_ROOM`).
-            // With one error and 0.5 m/s of room the speed cap trimmed the law for 27 periods
-            // behind the 9.8 m/s^2 leader.
             assert!(r.passed(), "{leader_braking}: {r:#?}");
             // Not vacuous: the ego comes within 1 m/s of the top (its set speed is the
             // domain's), less than twice the ego speed's error box (0.55 m/s wide there).

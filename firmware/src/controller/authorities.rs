@@ -77,10 +77,8 @@ pub(super) struct Look {
     /// are on for sure. Where the follower allows not even the band's floor, the same for
     /// `braking`'s gentler level built up at that jerk: where nothing passes later, the
     /// command follows the ramp of the braking in force, and one at ISO 15622's jerk limit is
-    /// no emergency (a braking at 1.5-2.5 m/s^2 named at the emergency authority's build-up
-    /// was followed at 12 m/s^3 behind a follower closing on a slowing ego: measured, 24 -> 22
-    /// and 16 -> 14 emergency periods from comfort starts in the lossless surveys with two
-    /// authorities behind leaders at 6 and 9.8 m/s^2).
+    /// no emergency, where the same level named at the emergency authority's build-up would be
+    /// followed at its 12 m/s^3 (the CHANGELOG has the lossless surveys' figures).
     pub(super) comfort: Option<(Braking, u64)>,
     /// `up_to` was lowered to the comfortable way down to the lights' command
     /// ([`Controller::look_ahead`]).

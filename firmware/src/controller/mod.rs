@@ -526,8 +526,8 @@ pub const OVERRIDE_HOLD_US: u64 = 500_000;
 /// at `max_ego_speed - 3E - SET_SPEED_ROOM` (34.08 m/s with the datasheet errors, `E` 0.275
 /// m/s at 35) so that cruising at the top never leans on the speed cap. The rise measured in
 /// the suite's steady following at 30 m/s (closing at the law's top behind a 9.8 m/s^2
-/// leader, the error switching corners) is about 0.07 m/s; with the error taken once and
-/// 0.5 m/s of room the cap trimmed the law there in 27 periods.
+/// leader, the error switching corners) is about 0.07 m/s
+/// (`the_speed_near_the_domains_top_is_no_emergency_with_two_authorities`).
 const SET_SPEED_ROOM: f32 = 0.1;
 
 /// How long the law remembers the gentlest braking the follower allowed, microseconds: its
