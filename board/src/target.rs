@@ -1,12 +1,15 @@
 //! What only exists on the target: the table's flash slot, bounded by the linker's symbols
 //! (`memory.x`), and words of RAM that a reset keeps (cortex-m-rt's `.uninit`, never
 //! initialised), where the fault handlers leave their marker for the next boot and the loop
-//! keeps the acceleration requests' rolling counter. The binaries'
+//! keeps the acceleration requests' rolling counter; and the controller's state, in `.bss`
+//! (where the linker checks it against RAM) rather than on the 16 KiB stack. The binaries'
 //! only other unsafe code is their entry and fault handlers.
 #![allow(unsafe_code)]
 
 use core::mem::MaybeUninit;
 use core::ptr::{addr_of, addr_of_mut};
+
+use firmware::{Config, Controller};
 
 use crate::boot::{counter_from_words, counter_words, FaultMarker};
 
@@ -145,4 +148,19 @@ pub fn kept_request_counter() -> u8 {
 pub fn keep_request_counter(counter: u8) {
     // SAFETY: as in `kept_request_counter`.
     unsafe { write(addr_of_mut!(REQUEST_COUNTER), counter_words(counter)) }
+}
+
+/// The controller, made once in a static: its state (the command history, the event log, the
+/// table's view: about 8 KB) then sits in `.bss`, sized and placed by the linker, and the
+/// stack keeps its 16 KiB for the control step's frames. `None` at a second call (there is one
+/// controller). The constructor's value is written straight into the static
+/// (`cortex_m::singleton!`); `.ci/board.sh`'s stack budget shows that no copy of it passes
+/// through the stack.
+// The `&'static mut` is the static's, made once; the table is only borrowed by it.
+#[allow(clippy::mut_from_ref)]
+pub fn controller(
+    table: &'static [u8],
+    config: Config,
+) -> Option<&'static mut Controller<'static>> {
+    cortex_m::singleton!(CONTROLLER: Controller<'static> = Controller::new(table, config))
 }

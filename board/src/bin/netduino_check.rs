@@ -342,7 +342,10 @@ fn main() -> ! {
     let restart = boot::restart_fault(ResetFlags::default(), marker);
     let slot = target::table_slot();
     let table = boot::table_in_slot(slot);
-    let mut controller = Controller::new(table, Config::default());
+    let Some(controller) = target::controller(table, Config::default()) else {
+        // Made once, here: unreachable, but never a panic.
+        finish(false);
+    };
     defmt::info!(
         "boot: table slot {=usize:#x}, {=usize} of {=usize} bytes, accepted {=bool}, fault restart {=bool}",
         slot.as_ptr() as usize,
@@ -354,7 +357,7 @@ fn main() -> ! {
 
     if controller.table().is_none() && restart.is_none() {
         // No table in the slot, or a bad one: the fallback, on healthy sensors.
-        let run = drive(&mut controller, 250);
+        let run = drive(controller, 250);
         let refused = matches!(run.first_fault, Some(Fault::Table(_)));
         if let Some(fault) = run.first_fault {
             defmt::info!(
@@ -369,7 +372,7 @@ fn main() -> ! {
 
     match (restart, stage()) {
         (None, _) => {
-            let run = drive(&mut controller, 1500);
+            let run = drive(controller, 1500);
             defmt::info!(
                 "closed loop, 30 s: {=u32} nominal, {=u32} minimum-risk steps, smallest gap {=f32} m, ego at {=f32} m/s at the end, {=u32} end-to-end faults, {=u32} display frames",
                 run.nominal,
@@ -379,7 +382,7 @@ fn main() -> ! {
                 run.e2e_faults,
                 run.displays
             );
-            // Everything on the stack so far: main's frame (the controller), the loop's (the
+            // Everything on the stack so far: main's frame, the loop's (the
             // CAN driver, the plant) and the deepest control step.
             let stack = target::stack_high_water();
             defmt::info!(
@@ -419,7 +422,7 @@ fn main() -> ! {
             }
             controller.latch_minimum_risk(fault);
             let resumed = target::kept_request_counter();
-            let run = drive(&mut controller, 250);
+            let run = drive(controller, 250);
             // The sequence goes on: the last frame took the counter the loop had kept, and the
             // first request after the reset carries the next one.
             let [expected, check] = read_words(addr_of!(EXPECTED_COUNTER));

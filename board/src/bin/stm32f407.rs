@@ -45,7 +45,7 @@ use bxcan::{Fifo, StandardId};
 use cortex_m_rt::entry;
 use defmt_rtt as _;
 use firmware::can::{CanBus, DRIVER_REQUEST_ID, EGO_SPEED_ID, FRONT_TRACK_ID};
-use firmware::{Config, Controller};
+use firmware::Config;
 use stm32f4xx_hal::pac;
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::rcc::{Config as ClockConfig, Enable, Reset};
@@ -106,7 +106,10 @@ fn main() -> ! {
     //    before the watchdog starts so that its length cannot trip it.
     let slot = target::table_slot();
     let table = boot::table_in_slot(slot);
-    let mut controller = Controller::new(table, Config::default());
+    let Some(controller) = target::controller(table, Config::default()) else {
+        // Made once, here: unreachable, but never a panic.
+        fault_exit();
+    };
     defmt::info!(
         "hjacc: table slot {=usize:#x}, {=usize} of {=usize} bytes, accepted {=bool}",
         slot.as_ptr() as usize,
@@ -200,7 +203,7 @@ fn main() -> ! {
         }
         // Joins the bus once it has seen it idle; a no-op afterwards.
         let _ = bus.bus_mut().enable_non_blocking();
-        let sent = firmware::run_period_on_bus(&mut controller, &mut bus, &mut clock, &mut dog);
+        let sent = firmware::run_period_on_bus(controller, &mut bus, &mut clock, &mut dog);
         target::keep_request_counter(bus.next_counter());
         if let Err(e) = sent {
             let why = match e {
