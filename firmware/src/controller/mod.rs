@@ -783,6 +783,30 @@ impl<'t> Controller<'t> {
         self.law_ahead.filter(|_| self.two_authorities())
     }
 
+    /// The speed the nominal law holds where nothing ahead is closer than its gap policy,
+    /// m/s: the driver's set speed, at most the domain's top less three of the ego speed's
+    /// errors and `SET_SPEED_ROOM` (34.08 m/s with the datasheet errors). The driver's set speed
+    /// without a table.
+    pub fn law_set_speed(&self) -> f32 {
+        match &self.certifier {
+            Ok(certifier) => self.law_set_speed_in(&certifier.model),
+            Err(_) => self.driver.set_speed,
+        }
+    }
+
+    /// [`Controller::law_set_speed`] with the table's model: below the domain's top by three
+    /// of the speed's errors and a margin, because the certificate cannot certify an ego
+    /// measured at the top (its speed headroom).
+    fn law_set_speed_in(&self, model: &Model) -> f32 {
+        math::min(
+            self.driver.set_speed,
+            model.max_ego_speed
+                - 3.0
+                    * (self.config.sensors.ego_speed(model.max_ego_speed).1 - model.max_ego_speed)
+                - SET_SPEED_ROOM,
+        )
+    }
+
     /// The desired gap of the nominal law at `speed` with the driver's time-gap setting, m:
     /// the gap policy (the driver's `standstill_gap + time_gap v`, at least the gap the
     /// certificate needs while closing at `gap_room_speed`, plus `gap_room`) with the braking
@@ -1367,17 +1391,7 @@ impl<'t> Controller<'t> {
                     ego_speed,
                     now_us: now,
                     period: seconds(u64::from(self.config.period_us)),
-                    // Below the domain's top by three of the speed's errors and a margin
-                    // (`SET_SPEED_ROOM`): the certificate cannot certify an ego measured at
-                    // the top (its speed headroom).
-                    set_speed: math::min(
-                        self.driver.set_speed,
-                        model.max_ego_speed
-                            - 3.0
-                                * (self.config.sensors.ego_speed(model.max_ego_speed).1
-                                    - model.max_ego_speed)
-                            - SET_SPEED_ROOM,
-                    ),
+                    set_speed: self.law_set_speed_in(&model),
                     time_gap: self.config.time_gap(self.driver.time_gap_setting),
                     certified_gap,
                     ahead_gap,
