@@ -3,7 +3,7 @@
 //! micromath's; everything here calls micromath (or plain IEEE operations) explicitly.
 //!
 //! The controller needs comparisons, products and sums, `abs`, and one square root (the law's
-//! approach speed to a stopped car), which is libm's correctly rounded `sqrtf`; nothing here
+//! approach speed to a stopped car), which is correctly rounded ([`sqrt`]); nothing here
 //! uses micromath's approximate `powf` or `sqrt`.
 
 use micromath::F32Ext;
@@ -49,10 +49,11 @@ pub fn max(a: f32, b: f32) -> f32 {
     }
 }
 
-/// `sqrt(x)`, correctly rounded (libm; NaN below zero).
+/// `sqrt(x)`, correctly rounded; NaN below zero ([`table_format::math::sqrt`]: the FPU's
+/// instruction on the target, libm's on a host, the same bits).
 #[inline]
 pub fn sqrt(x: f32) -> f32 {
-    libm::sqrtf(x)
+    table_format::math::sqrt(x)
 }
 
 /// Whether `x` is neither NaN nor infinite.

@@ -180,7 +180,7 @@ pub fn front_value(gap: f32, leader_speed: f32, ego_speed: f32, model: &FrontMod
         // The ego stops where `ve + ae s + rate s^2 / 2` reaches zero.
         let t_ego = if rate < 0.0 {
             let j = -rate;
-            (ae + libm::sqrtf((ae * ae + 2.0 * j * ve).max(0.0))) / j
+            (ae + crate::math::sqrt((ae * ae + 2.0 * j * ve).max(0.0))) / j
         } else if ae < 0.0 {
             ve / -ae
         } else {
@@ -197,7 +197,7 @@ pub fn front_value(gap: f32, leader_speed: f32, ego_speed: f32, model: &FrontMod
             let c = -0.5 * rate;
             let disc = da * da - 4.0 * c * dv;
             if disc >= 0.0 {
-                (-da + libm::sqrtf(disc)) / (2.0 * c)
+                (-da + crate::math::sqrt(disc)) / (2.0 * c)
             } else {
                 f32::NAN
             }

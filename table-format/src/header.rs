@@ -437,7 +437,7 @@ impl FollowerModel {
             FollowerModel::Idm { idm, .. } => {
                 let desired = idm.jam_distance + speed * parameter;
                 let free = 1.0 - idm.free_road_term(speed);
-                desired / libm::sqrtf(if free > 0.1 { free } else { 0.1 })
+                desired / crate::math::sqrt(if free > 0.1 { free } else { 0.1 })
             }
         }
     }

@@ -70,7 +70,7 @@ power!(power_f32, squaring_f32, f32);
 power!(power_f64, squaring_f64, f64);
 
 /// The square root, correctly rounded either way: the instruction (which the solver's loops
-/// vectorise) with `std`, libm's without.
+/// vectorise) with `std`, [`crate::math::sqrt`] without.
 #[inline(always)]
 fn sqrt_f32(x: f32) -> f32 {
     #[cfg(feature = "std")]
@@ -79,7 +79,7 @@ fn sqrt_f32(x: f32) -> f32 {
     }
     #[cfg(not(feature = "std"))]
     {
-        libm::sqrtf(x)
+        crate::math::sqrt(x)
     }
 }
 

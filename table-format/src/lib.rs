@@ -53,6 +53,7 @@ mod error;
 pub mod front;
 mod header;
 pub mod idm;
+pub mod math;
 pub mod rear;
 pub mod sensing;
 mod table;

@@ -453,6 +453,21 @@ fn main() -> ! {
     }
     let stack_bytes = used_words * 4;
 
+    // The FPU's square root (`table_format::math::sqrt`, which the certificate's closed forms
+    // take) against libm's software one, which the host runs: the same bits over a sweep of
+    // the non-negative floats, subnormals to the largest, and NaN below zero.
+    let mut sqrt_checked = 0u32;
+    let mut sqrt_differ = 0u32;
+    let mut bits = 0u32;
+    while bits < 0x7f80_0000 {
+        let x = f32::from_bits(bits);
+        let root = table_format::math::sqrt(black_box(x));
+        sqrt_differ += u32::from(root.to_bits() != libm::sqrtf(x).to_bits());
+        sqrt_checked += 1;
+        bits += 0xff3d;
+    }
+    sqrt_differ += u32::from(!table_format::math::sqrt(black_box(-1.0)).is_nan());
+
     report!(
         "hjacc qemu scenario: {} steps ({} s), nominal {}, override {}, minimum-risk {} (outside the fault window: {})",
         steps,
@@ -492,6 +507,11 @@ fn main() -> ! {
         stack_bytes
     );
     report!(
+        "square root: the FPU's and libm's differ at {} of {} floats",
+        sqrt_differ,
+        sqrt_checked + 1
+    );
+    report!(
         "controller state (its command history, event log and table view): {} bytes",
         core::mem::size_of::<Controller<'static>>()
     );
@@ -504,6 +524,7 @@ fn main() -> ! {
         && min_margin > -CERTIFICATE_TOLERANCE
         && below_band > 0
         && cut_in_front > 0.0
+        && sqrt_differ == 0
         // Both verdicts of an engagement ran (with two authorities, the refusal too).
         && accepted > 0
         && (needs_emergency > 0 || !cfg!(feature = "qemu-two-authorities"));
