@@ -8,7 +8,7 @@
 //! too: no collision and no loss, but it breaks the jerk limit, which is why it is not the default.
 
 use firmware::{Authorities, CertificateConfig, Config};
-use host_tests::scenarios::{run, suite, summary_rows, ScenarioResult, SUMMARY_HEADER};
+use host_tests::scenarios::{run, suite, summary_rows, Scenario, ScenarioResult, SUMMARY_HEADER};
 use host_tests::world::Trace;
 use table_format::Table;
 
@@ -34,6 +34,14 @@ fn bang_bang_results() -> &'static [ScenarioResult] {
 }
 
 /// The default configuration with the certificate argued with two authorities.
+/// The suite's scenario of that name.
+fn scenario_named(name: &str) -> Scenario {
+    suite()
+        .into_iter()
+        .find(|s| s.name == name)
+        .unwrap_or_else(|| panic!("no scenario {name:?}"))
+}
+
 fn two_authorities() -> Config {
     Config {
         certificate: CertificateConfig {
@@ -109,10 +117,7 @@ fn the_speed_near_the_domains_top_is_no_emergency_with_two_authorities() {
     for leader_braking in [6.0, 9.8] {
         let bytes = with_leader(leader_braking);
         let table = Table::parse(bytes).unwrap();
-        let steady = suite()
-            .into_iter()
-            .find(|s| s.name == "steady following at 30 m/s")
-            .unwrap();
+        let steady = scenario_named("steady following at 30 m/s");
         for follower in [false, true] {
             let mut trace = Trace::new();
             let r = run(&table, bytes, config, &steady, follower, Some(&mut trace)).unwrap();
@@ -145,10 +150,7 @@ fn a_leader_at_the_domains_top_is_followed_by_cruising_at_the_set_speed() {
     for leader_braking in [6.0, 9.8] {
         let bytes = with_leader(leader_braking);
         let table = Table::parse(bytes).unwrap();
-        let steady = suite()
-            .into_iter()
-            .find(|s| s.name == "steady following at 34 m/s")
-            .unwrap();
+        let steady = scenario_named("steady following at 34 m/s");
         let probe = firmware::Controller::new(
             bytes,
             Config {
