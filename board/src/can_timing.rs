@@ -63,7 +63,7 @@ impl BitTiming {
     /// The bit rate at peripheral clock `pclk1_hz`, bits per second, if it is a whole number.
     pub fn bit_rate(&self, pclk1_hz: u32) -> Option<u32> {
         let cycles = u32::from(self.prescaler) * self.quanta();
-        (pclk1_hz % cycles == 0).then(|| pclk1_hz / cycles)
+        pclk1_hz.is_multiple_of(cycles).then(|| pclk1_hz / cycles)
     }
 
     /// The sample point, per mille of the bit.

@@ -162,7 +162,7 @@ fn main() {
         "| method | sweeps | largest change (m) | plateau (m) | nodes with W > 0 | wall (s) |"
     );
     println!("|---|---|---|---|---|---|");
-    let marks = |k: usize| k % (sweeps / 4).max(1) == 0 || k == sweeps;
+    let marks = |k: usize| k.is_multiple_of((sweeps / 4).max(1)) || k == sweeps;
 
     let t = Instant::now();
     let mut jacobi = Iteration::new(&game, &grid, h);

@@ -983,7 +983,7 @@ mod tests {
         let mut least = g;
         let mut k = 0u32;
         while ve > 0.0 || vf > 0.0 || t <= reacts {
-            if k % 200 == 0 && switches.contains(&(k / 200)) {
+            if k.is_multiple_of(200) && switches.contains(&(k / 200)) {
                 time_gap = if time_gap == 1.0 { 2.0 } else { 1.0 };
             }
             let idm = p.acceleration_f64(vf, vf - ve, g, time_gap).clamp(-bf, 2.0);

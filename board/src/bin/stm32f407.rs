@@ -184,7 +184,7 @@ fn main() -> ! {
     let mut periods: u32 = 0;
     loop {
         periods = periods.wrapping_add(1);
-        if periods % 500 == 0 {
+        if periods.is_multiple_of(500) {
             defmt::info!(
                 "{=u32} periods, stack high-water mark {=usize} of 16384 bytes, {=u32} overruns",
                 periods,

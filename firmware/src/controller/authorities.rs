@@ -62,7 +62,7 @@ pub(super) const STOP_UNDER_LIGHTS: f32 = 0.3;
 /// look-ahead.
 const GENTLER_LEVELS: usize = 4;
 // The levels are tried in pairs (`Controller::gentler_than_band`).
-const _: () = assert!(GENTLER_LEVELS % 2 == 0);
+const _: () = assert!(GENTLER_LEVELS.is_multiple_of(2));
 
 /// What a look-ahead argues with: the braking after the period, and the largest command it
 /// holds for (the follower may allow less after a command that keeps the lights off longer).
