@@ -5,7 +5,8 @@
 //! the same bits: on a hard-float Arm core (a Cortex-M4F) it is the FPU's `vsqrt.f32`, one
 //! instruction of 14 cycles; elsewhere libm's `sqrtf`, whose software routine is about 50
 //! instructions on a core without that path (libm has none for 32-bit Arm). The front's closed
-//! form calls it up to twice per value, and the control step takes up to 18 of them.
+//! form calls it up to twice per segment of its integration, and the control step's worst
+//! takes 18.
 
 /// `sqrt(x)`, correctly rounded; NaN below zero.
 #[inline]
@@ -40,8 +41,8 @@ mod tests {
 
     /// The host's path is libm's, correctly rounded: it agrees with `f64`'s square root
     /// rounded once to `f32` (exact for `f32` inputs: the double rounding is innocuous for a
-    /// square root, 2p + 2 <= 53), over the finite non-negative floats in a sweep of their bit
-    /// patterns, subnormals and the largest included.
+    /// square root, 2p + 2 <= 53), over a sweep of the finite non-negative floats' bit
+    /// patterns (subnormals included), and at the largest float.
     #[test]
     fn the_root_is_correctly_rounded() {
         let mut bits = 0u32;
