@@ -99,6 +99,10 @@ pub struct Scenario {
     pub check: Check,
 }
 
+/// How close to its set speed the ego holds it, m/s: the set speed held on a grade, and the
+/// cruising that steady following takes as following.
+const SET_SPEED_HELD: f32 = 0.5;
+
 /// A scenario's own criterion.
 #[derive(Debug, Clone, Copy, Serialize, PartialEq)]
 #[serde(rename_all = "snake_case")]
@@ -747,7 +751,8 @@ pub fn run(
         if scenario.lead.is_some() {
             let policy = world.controller().desired_gap(e.v);
             let error = (l.x - e.x) - policy;
-            let cruising = error > 0.0 && (e.v - world.controller().law_set_speed()).abs() <= 0.5;
+            let cruising =
+                error > 0.0 && (e.v - world.controller().law_set_speed()).abs() <= SET_SPEED_HELD;
             policy_errors.push((t, error, cruising));
         }
         let set = world.controller().driver().set_speed;
@@ -810,7 +815,7 @@ pub fn run(
                         .filter(|(t, _)| *t >= at + 10.0)
                         .map(|(_, e)| e.abs())
                         .fold(0.0f32, f32::max);
-                    (worst <= 0.5, vec![worst, at])
+                    (worst <= SET_SPEED_HELD, vec![worst, at])
                 }
                 None => (false, vec![f32::NAN]),
             }

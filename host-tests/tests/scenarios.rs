@@ -4,8 +4,8 @@
 //! the comfort braking, and each scenario's own criterion: steady following without the override
 //! within 1 m of the gap policy or cruising at the set speed above it, the set speed held on
 //! grades, a stop from 1 m/s in under 3 s at the standstill gap, set-speed changes without the
-//! override). The paper's bang-bang policy is run
-//! too: no collision and no loss, but it breaks the jerk limit, which is why it is not the default.
+//! override). The paper's bang-bang policy is run too: no collision and no loss, but it breaks
+//! the jerk limit, which is why it is not the default.
 
 use firmware::{Authorities, CertificateConfig, Config};
 use host_tests::scenarios::{run, suite, summary_rows, Scenario, ScenarioResult, SUMMARY_HEADER};
@@ -33,7 +33,6 @@ fn bang_bang_results() -> &'static [ScenarioResult] {
     RESULTS.get_or_init(|| results(Config::bang_bang()))
 }
 
-/// The default configuration with the certificate argued with two authorities.
 /// The suite's scenario of that name.
 fn scenario_named(name: &str) -> Scenario {
     suite()
@@ -42,6 +41,7 @@ fn scenario_named(name: &str) -> Scenario {
         .unwrap_or_else(|| panic!("no scenario {name:?}"))
 }
 
+/// The default configuration with the certificate argued with two authorities.
 fn two_authorities() -> Config {
     Config {
         certificate: CertificateConfig {
