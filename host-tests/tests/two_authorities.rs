@@ -929,3 +929,50 @@ fn a_start_only_the_emergency_authority_certifies_is_told_apart() {
         );
     }
 }
+
+/// A known hole, pinned: `host-tests/cases/idm-after-reaction-collision.json` (the adversarial
+/// search with followers that react late, leader at 6 m/s^2, seed 1: its Greedy method's
+/// collision). The ego, braking from its engagement at 34.6 m/s, takes the emergency authority
+/// at 1.8 s, which the firmware's follower (braking at its whole level, 6 m/s^2, once it has
+/// reacted to the lights) allows; the search's follower drives by its IDM once it has reacted,
+/// and, 15 m behind and slower than the ego, keeps accelerating, reaching 6 m/s^2 only as the
+/// gap closes: the rear certificate is lost at 2.36 s and the follower hits the stopped ego at
+/// 6.34 s. The test holds while the hole does: a follower that answers brake lights by its IDM
+/// is outside the model the certificate declares (docs/certificate.md), and a fix of either
+/// makes it fail, so that the docs' known limits change with it.
+#[test]
+fn a_follower_that_drives_by_its_idm_after_reacting_can_hit_the_ego() {
+    let text = include_str!("../cases/idm-after-reaction-collision.json");
+    let json: serde_json::Value = serde_json::from_str(text).unwrap();
+    let case: host_tests::falsify::Case =
+        serde_json::from_value(json["findings"][0]["case"].clone()).unwrap();
+    let bytes = table_bytes(6.0);
+    let table = Table::parse(bytes).unwrap();
+    let setting = host_tests::falsify::Setting::within_model(
+        bytes,
+        &table,
+        HumanModel::of(&table).unwrap(),
+        two(Config::default().law.time_gap_setting),
+    )
+    .with_reacting_follower()
+    .expect("the table is accepted");
+    let mut trace = Vec::new();
+    let score = setting.run(&case, Some(&mut trace));
+    assert!(
+        score.collision_time.is_some_and(|t| (t - 6.34).abs() < 0.05),
+        "{:?}",
+        score.collision_time
+    );
+    // Outside the declared follower: its reaction (1.15 s) has run since the lights came on
+    // (the ego's acceleration below -1.3 m/s^2 from the start), and it brakes at less than its
+    // whole level while they stay on.
+    let lit_from = trace
+        .iter()
+        .find(|p| p.ego_acceleration < -1.3)
+        .map(|p| p.t)
+        .expect("the lights come on");
+    let gentle = trace.iter().find(|p| {
+        p.t > lit_from + 1.2 && p.ego_acceleration < -1.3 && p.human_accelerations[1] > -5.0
+    });
+    assert!(gentle.is_some_and(|p| p.t < 2.5), "{gentle:?}");
+}
