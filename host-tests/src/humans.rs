@@ -69,8 +69,11 @@ impl Follower {
 
     /// Whether the follower keeps to the model the certificate argues with: the table's in the
     /// comfort band; with two authorities the follower that reacts to the brake lights after
-    /// its reaction time, at most at its IDM's top before and no harder than its clip after,
-    /// which every IDM follower and [`Follower::IdmReacting`] keep to.
+    /// its reaction time, at most at its IDM's top before. Every IDM follower and
+    /// [`Follower::IdmReacting`] are counted in it, though the certificate's closed form has a
+    /// follower that has reacted brake at its whole level while the lights stay on
+    /// (docs/certificate.md) and an IDM follower brakes only as hard as its IDM asks: a known
+    /// limit (`host-tests/cases/idm-after-reaction-collision.json`).
     pub fn in_model_for(self, authorities: firmware::Authorities) -> bool {
         match authorities {
             firmware::Authorities::ComfortBand => self.in_model(),

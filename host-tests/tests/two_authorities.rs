@@ -959,7 +959,9 @@ fn a_follower_that_drives_by_its_idm_after_reacting_can_hit_the_ego() {
     let mut trace = Vec::new();
     let score = setting.run(&case, Some(&mut trace));
     assert!(
-        score.collision_time.is_some_and(|t| (t - 6.34).abs() < 0.05),
+        score
+            .collision_time
+            .is_some_and(|t| (t - 6.34).abs() < 0.05),
         "{:?}",
         score.collision_time
     );
