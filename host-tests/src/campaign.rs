@@ -146,7 +146,8 @@ pub struct Outcome {
     /// the IDM at its closest time gap, at once; and the follower the two-authority certificate
     /// argues with ([`firmware::Certifier::reacting_follower`]), at its largest acceleration
     /// while the ego's brake lights are off and until its reaction time has passed after they
-    /// come on, then the IDM at its closest time gap.
+    /// come on, then the IDM at its closest time gap braking at least at the model's level
+    /// while they stay on.
     pub cut_in_hit_from_behind_at_emergency_answered: Option<[bool; 2]>,
     /// The same three followers (as it drove, the IDM at once, the reacting one) started at the
     /// worst corner of the declared error box around the follower's true state at the cut-in
@@ -314,7 +315,13 @@ pub fn run_episode(
     let (initial, initial_margin, mut humans, mut world) = loop {
         attempts += 1;
         let (cars, initial_margin) = sample_start(&judge, &model, gap_max, &mut rng)?;
-        let humans = Humans::new(table, episode.leader, episode.follower, &mut rng)?;
+        let humans = Humans::new(
+            table,
+            episode.leader,
+            episode.follower,
+            certifier.reacting_follower(),
+            &mut rng,
+        )?;
         let start = Start {
             cars,
             engaged_acceleration: 0.0,
@@ -481,6 +488,9 @@ pub fn run_episode(
                                 h,
                             )
                         }
+                        (Behind::Reacting, Some(on)) => {
+                            idm().min(reacting.most_acceleration(world.time() - on))
+                        }
                         (Behind::AtOnce | Behind::Reacting, _) => idm(),
                     };
                     !world.step_with(a_leader, a_follower, Some(command), None)
@@ -534,7 +544,8 @@ enum Behind {
     AtOnce,
     /// The follower the two-authority certificate argues with: its largest acceleration while
     /// the ego's brake lights are off and until its reaction time has passed after they come
-    /// on, the same IDM from then on.
+    /// on, then the same IDM braking at least at the model's level while they stay on
+    /// ([`table_format::rear::ReactingFollower::most_acceleration`]).
     Reacting,
 }
 

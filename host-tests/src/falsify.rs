@@ -154,6 +154,21 @@ impl Schedule {
     }
 }
 
+/// What a follower that reacts late ([`Case::follower_reacts`]) does once it has reacted,
+/// while the ego's brake lights stay on.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AfterReaction {
+    /// Brakes at least as the certificate's follower does
+    /// ([`ReactingFollower::most_acceleration`]: its whole level, harder where its IDM asks):
+    /// within the two-authority certificate's model.
+    #[default]
+    AtItsLevel,
+    /// Drives by its IDM, which answers the lights only through the gap it sees: beyond the
+    /// certificate's model (docs/certificate.md), searched to measure what that costs.
+    ByItsIdm,
+}
+
 /// One searched episode, replayable.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Case {
@@ -171,6 +186,9 @@ pub struct Case {
     /// ([`Setting::reacting`]): until then it accelerates at its largest acceleration.
     #[serde(default)]
     pub follower_reacts: bool,
+    /// What a follower that reacts late does once it has reacted, while the lights stay on.
+    #[serde(default)]
+    pub follower_after_reaction: AfterReaction,
     /// The leader brakes at its hardest for [`AT_AUTHORITY_CHANGE`] seconds from every
     /// change of the braking the firmware argues with (with two authorities), whatever the
     /// schedule says.
@@ -211,6 +229,8 @@ pub struct Setting<'t> {
     /// ([`Case::follower_reacts`]); `None`: every follower sees the ego at once (the table's
     /// IDM, which the comfort band's rear half argues with).
     pub reacting: Option<ReactingFollower>,
+    /// What the reacting followers do once they have reacted ([`Case::follower_after_reaction`]).
+    pub after_reaction: AfterReaction,
 }
 
 impl<'t> Setting<'t> {
@@ -233,17 +253,21 @@ impl<'t> Setting<'t> {
                 lag: config.plant.actuator_lag_us as f32 * 1e-6,
             },
             reacting: None,
+            after_reaction: AfterReaction::AtItsLevel,
         }
     }
 
     /// The same search with followers that react to the brake lights after the configured
-    /// reaction time (the two-authority certificate's follower): the model its rear half
-    /// argues with, searched at the edge (the largest acceleration until the reaction, the
-    /// table's IDM from then on). `None` if the table is not accepted.
-    pub fn with_reacting_follower(self) -> Option<Self> {
+    /// reaction time (the two-authority certificate's follower), doing `after` once they have
+    /// reacted: with [`AfterReaction::AtItsLevel`] the model its rear half argues with,
+    /// searched at the edge (the largest acceleration until the reaction, the least braking
+    /// the model allows after it, the table's IDM where that brakes harder). `None` if the
+    /// table is not accepted.
+    pub fn with_reacting_follower(self, after: AfterReaction) -> Option<Self> {
         let certifier = firmware::Certifier::new(self.table.clone(), &self.config).ok()?;
         Some(Setting {
             reacting: Some(certifier.reacting_follower()),
+            after_reaction: after,
             ..self
         })
     }
@@ -267,7 +291,8 @@ impl<'t> Setting<'t> {
     /// `case` says whether the follower reacts late ([`Case::follower_reacts`], with
     /// [`Setting::reacting`]: its largest acceleration from when the ego's brake lights come on
     /// ([`World::lights_on_at_the_earliest`]) until its reaction time has passed, the
-    /// certificate's worst case before the reaction, then the IDM) and whether the leader brakes
+    /// certificate's worst case before the reaction, then what [`Case::follower_after_reaction`]
+    /// says while the lights stay on, the IDM once they are off) and whether the leader brakes
     /// at authority changes.
     fn humans(
         &self,
@@ -316,12 +341,16 @@ impl<'t> Setting<'t> {
                 }
             }
         };
+        let idm = m.follower_acceleration(follower.v, ego.v, ego.x - follower.x, time_gap);
         let a_follower = match (
             self.reacting.filter(|_| case.follower_reacts),
             world.lights_on_at_the_earliest(),
         ) {
             (Some(r), Some(on)) if t - on < r.reaction_time => r.reaction_acceleration,
-            _ => m.follower_acceleration(follower.v, ego.v, ego.x - follower.x, time_gap),
+            (Some(r), Some(on)) if case.follower_after_reaction == AfterReaction::AtItsLevel => {
+                idm.min(r.most_acceleration(t - on))
+            }
+            _ => idm,
         };
         let limit = |a: f32, v: f32| {
             if a > 0.0 {
@@ -531,6 +560,7 @@ impl<'t> Setting<'t> {
                 schedule: schedule.clone(),
                 follower_rule: rule,
                 follower_reacts: self.reacting.is_some(),
+                follower_after_reaction: self.after_reaction,
                 // With two authorities a third of the cases' leaders brake at every change of
                 // the braking in force.
                 leader_brakes_at_authority_change: two && rng.random_bool(1.0 / 3.0),

@@ -4,6 +4,7 @@
 
 use rand::Rng;
 use serde::Serialize;
+use table_format::rear::ReactingFollower;
 use table_format::{FollowerModel, Game, Table};
 
 use crate::sim::Car;
@@ -46,38 +47,46 @@ pub enum Follower {
     /// Breaks the model: the largest acceleration the bounds allow, always (the paper's
     /// baseline follower's worst case).
     Unbounded,
-    /// Breaks the table's model: the IDM at the range's closest time gap, seeing the ego's brake
-    /// lights only after [`REACTION_TIME`]. From when the lights come on (the ego's actual
-    /// acceleration below the declared lights' deceleration's negative, at the earliest the
-    /// loop's samples allow: [`crate::world::World::lights_on_at_the_earliest`]) it keeps the
-    /// acceleration it had for that long, then drives by its IDM again, which by then sees the
-    /// closing gap; lights that go off end it. The follower that reacts like a person of
-    /// `table_format::rear`, with the IDM for its braking.
+    /// Breaks the table's model, keeps the two-authority certificate's: the IDM at the range's
+    /// closest time gap, seeing the ego's brake lights only after its reaction time
+    /// ([`table_format::rear::ReactingFollower`], the firmware's
+    /// [`firmware::Certifier::reacting_follower`]). From when the lights come on (the ego's
+    /// actual acceleration below the declared lights' deceleration's negative, at the earliest
+    /// the loop's samples allow: [`crate::world::World::lights_on_at_the_earliest`]) it keeps
+    /// the acceleration it had for its reaction time, then brakes at least as the model's
+    /// follower does ([`table_format::rear::ReactingFollower::most_acceleration`]: its whole
+    /// level, 6 m/s^2, while the lights stay on; harder where its IDM asks); lights that go
+    /// off end it, and it drives by its IDM again. The follower that reacts like a person of
+    /// `table_format::rear`.
     IdmReacting,
+    /// Breaks both models: [`Follower::IdmReacting`] until it reacts, then the IDM at the
+    /// range's closest time gap, which answers the lights only through the gap it sees (far
+    /// enough back, it keeps accelerating behind an ego that brakes). Beyond the certificate's
+    /// follower, which brakes at its whole level once it has reacted
+    /// (`host-tests/cases/idm-after-reaction-collision.json` is what that costs).
+    IdmAfterReacting,
 }
-
-/// How long a follower takes to react to the ego's brake lights, s: UN R157's careful driver,
-/// 0.4 s to perceive and 0.75 s to brake (Green 2000 measures about 1.25 s for a leader's brake
-/// lights).
-pub const REACTION_TIME: f32 = table_format::rear::CAREFUL_DRIVER_REACTION;
 
 impl Follower {
     /// Whether the follower keeps to the table's model.
     pub fn in_model(self) -> bool {
-        !matches!(self, Follower::Unbounded | Follower::IdmReacting)
+        !matches!(
+            self,
+            Follower::Unbounded | Follower::IdmReacting | Follower::IdmAfterReacting
+        )
     }
 
     /// Whether the follower keeps to the model the certificate argues with: the table's in the
     /// comfort band; with two authorities the follower that reacts to the brake lights after
-    /// its reaction time, at most at its IDM's top before. Every IDM follower and
-    /// [`Follower::IdmReacting`] are counted in it, though the certificate's closed form has a
-    /// follower that has reacted brake at its whole level while the lights stay on
-    /// (docs/certificate.md) and an IDM follower brakes only as hard as its IDM asks: a known
-    /// limit (`host-tests/cases/idm-after-reaction-collision.json`).
+    /// its reaction time, at most at its IDM's top before and braking at its whole level after
+    /// while the lights stay on (docs/certificate.md), which every IDM follower that sees the
+    /// ego at once and [`Follower::IdmReacting`] keep to.
     pub fn in_model_for(self, authorities: firmware::Authorities) -> bool {
         match authorities {
             firmware::Authorities::ComfortBand => self.in_model(),
-            firmware::Authorities::Two => !matches!(self, Follower::Unbounded),
+            firmware::Authorities::Two => {
+                !matches!(self, Follower::Unbounded | Follower::IdmAfterReacting)
+            }
         }
     }
 }
@@ -166,8 +175,9 @@ pub struct Humans<'t> {
     /// Switching follower: the current time gap and when it next jumps.
     switching_time_gap: f32,
     next_switch: f32,
-    /// Reacting follower: since when the ego's lights are on, the acceleration held until the
-    /// follower reacts, and its last acceleration.
+    /// Reacting follower: its model, since when the ego's lights are on, the acceleration held
+    /// until the follower reacts, and its last acceleration.
+    reacting: ReactingFollower,
     lights_since: Option<f32>,
     held: f32,
     last_follower: f32,
@@ -211,11 +221,13 @@ impl<'t> Humans<'t> {
     }
 
     /// The humans of one episode, with the model of the table's game (`None` for a table that
-    /// is not a split table).
+    /// is not a split table); a follower that reacts late reacts as `reacting` does (the
+    /// firmware's [`firmware::Certifier::reacting_follower`]).
     pub fn new(
         table: &'t Table<'t>,
         leader: Leader,
         follower: Follower,
+        reacting: ReactingFollower,
         rng: &mut impl Rng,
     ) -> Option<Self> {
         let model = HumanModel::of(table)?;
@@ -238,6 +250,7 @@ impl<'t> Humans<'t> {
             pull_away: 0.0,
             switching_time_gap: if rng.random::<bool>() { tmin } else { tmax },
             next_switch: rng.random_range(0.2..4.0),
+            reacting,
             lights_since: None,
             held: 0.0,
             last_follower: 0.0,
@@ -304,13 +317,16 @@ impl<'t> Humans<'t> {
                 }
             }
             Follower::Unbounded => m.follower_clip().1,
-            Follower::IdmReacting => {
+            Follower::IdmReacting | Follower::IdmAfterReacting => {
                 if lights_on_since.is_some() && self.lights_since.is_none() {
                     self.held = self.last_follower;
                 }
                 self.lights_since = lights_on_since;
                 match self.lights_since {
-                    Some(on) if t - on < REACTION_TIME => self.held,
+                    Some(on) if t - on < self.reacting.reaction_time => self.held,
+                    Some(on) if self.follower == Follower::IdmReacting => {
+                        idm_with(tmin).min(self.reacting.most_acceleration(t - on))
+                    }
                     _ => idm_with(tmin),
                 }
             }

@@ -63,6 +63,12 @@ enum Command {
         /// then); needs `--authorities two`.
         #[arg(long)]
         follower_reacts: bool,
+        /// What those followers do once they have reacted, while the lights stay on:
+        /// `at-its-level` brakes as the certificate's follower does (within the model);
+        /// `by-its-idm` drives by its IDM (beyond the model: the search reports what it finds
+        /// and does not fail on it). Needs `--follower-reacts`.
+        #[arg(long, value_enum, default_value_t = AfterReactionArg::AtItsLevel)]
+        after_reaction: AfterReactionArg,
     },
     /// Runs the scenario suite (openpilot's maneuvers, Euro NCAP's CCR tests, hjacc's own
     /// checks) under ISO 15622's comfort checks, with the graded override and the paper's
@@ -135,6 +141,25 @@ fn table_bytes(table: &Option<PathBuf>) -> Result<&'static [u8]> {
             .leak(),
         None => firmware::DEFAULT_TABLE,
     })
+}
+
+/// What a follower that reacts late does once it has reacted
+/// ([`host_tests::falsify::AfterReaction`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum AfterReactionArg {
+    /// Brakes as the certificate's follower does (within the model).
+    AtItsLevel,
+    /// Drives by its IDM (beyond the model).
+    ByItsIdm,
+}
+
+impl From<AfterReactionArg> for host_tests::falsify::AfterReaction {
+    fn from(a: AfterReactionArg) -> Self {
+        match a {
+            AfterReactionArg::AtItsLevel => host_tests::falsify::AfterReaction::AtItsLevel,
+            AfterReactionArg::ByItsIdm => host_tests::falsify::AfterReaction::ByItsIdm,
+        }
+    }
 }
 
 /// Which brakings the firmware's certificate argues with ([`firmware::Authorities`]).
@@ -264,20 +289,21 @@ impl CertificateArgs {
 }
 
 /// The search's setting on a table: within the model of `config`, with followers that react to
-/// the brake lights late where `follower_reacts`.
+/// the brake lights late where `follower_reacts`, doing `after` once they have reacted.
 fn search_setting<'t>(
     bytes: &'t [u8],
     table: &'t Table<'t>,
     model: host_tests::humans::HumanModel,
     config: firmware::Config,
     follower_reacts: bool,
+    after: host_tests::falsify::AfterReaction,
 ) -> Result<host_tests::falsify::Setting<'t>> {
     let setting = host_tests::falsify::Setting::within_model(bytes, table, model, config);
     if !follower_reacts {
         return Ok(setting);
     }
     setting
-        .with_reacting_follower()
+        .with_reacting_follower(after)
         .ok_or_else(|| anyhow::anyhow!("the firmware does not accept the table"))
 }
 
@@ -324,15 +350,23 @@ fn real_main() -> Result<()> {
             table,
             certificate,
             follower_reacts,
-        } => falsify(
-            episodes,
-            seconds,
-            seed,
-            &out,
-            &table,
-            &certificate,
-            follower_reacts,
-        ),
+            after_reaction,
+        } => {
+            anyhow::ensure!(
+                follower_reacts || after_reaction == AfterReactionArg::AtItsLevel,
+                "--after-reaction needs --follower-reacts: a follower that sees the ego at once \
+                 has no reaction to come after"
+            );
+            falsify(
+                episodes,
+                seconds,
+                seed,
+                &out,
+                &table,
+                &certificate,
+                follower_reacts.then_some(after_reaction.into()),
+            )
+        }
         Command::Replay {
             findings,
             worst,
@@ -366,9 +400,11 @@ fn falsify(
     out: &std::path::Path,
     table: &Option<PathBuf>,
     certificate: &CertificateArgs,
-    follower_reacts: bool,
+    reacting: Option<host_tests::falsify::AfterReaction>,
 ) -> Result<()> {
-    use host_tests::falsify::{search, Budget};
+    use host_tests::falsify::{search, AfterReaction, Budget};
+    let follower_reacts = reacting.is_some();
+    let beyond_model = reacting == Some(AfterReaction::ByItsIdm);
     // The replay runs the certificate and table it is given, not the file's: the hint at the
     // end carries the search's own (a finding of two authorities replayed in the band is
     // clean).
@@ -389,7 +425,14 @@ fn falsify(
     };
     let (bytes, config) = certificate.resolve(table_bytes(table)?)?;
     let (table, model) = split_table(bytes)?;
-    let setting = search_setting(bytes, &table, model, config, follower_reacts)?;
+    let setting = search_setting(
+        bytes,
+        &table,
+        model,
+        config,
+        follower_reacts,
+        reacting.unwrap_or_default(),
+    )?;
     let budget = Budget::scaled(episodes, seconds);
     let bar = ProgressBar::new(budget.episodes() as u64);
     bar.set_style(
@@ -415,12 +458,17 @@ fn falsify(
     }
     let (collisions, losses) = report.failures();
     println!(
-        "adversarial search, humans within the model{}, {seconds} s: {collisions} collisions and \
-         {losses} certificate losses in {} episodes ({:.0} s)",
-        if follower_reacts {
-            " (followers reacting to the brake lights late)"
-        } else {
-            ""
+        "adversarial search, humans {}, {seconds} s: {collisions} collisions and {losses} \
+         certificate losses in {} episodes ({:.0} s)",
+        match reacting {
+            None => "within the model",
+            Some(AfterReaction::AtItsLevel) => {
+                "within the model (followers reacting to the brake lights late)"
+            }
+            Some(AfterReaction::ByItsIdm) => {
+                "beyond the model (followers reacting to the brake lights late, then driving by \
+                 their IDM)"
+            }
         },
         report.episodes(),
         report.seconds
@@ -432,6 +480,16 @@ fn falsify(
     std::fs::write(&path, serde_json::to_string_pretty(&written)?)
         .with_context(|| format!("writing {}", path.display()))?;
     println!("wrote {}", path.display());
+    if beyond_model {
+        if collisions + losses > 0 {
+            println!(
+                "beyond the model: replay them with `host-tests replay {} --finding K{}{table_flag}`",
+                path.display(),
+                certificate.flags()
+            );
+        }
+        return Ok(());
+    }
     anyhow::ensure!(
         collisions == 0 && losses == 0,
         "the search broke the certificate: {collisions} collisions and {losses} certificate \
@@ -552,7 +610,14 @@ fn replay(
     }
     let (bytes, config) = certificate.resolve(table_bytes(&table)?)?;
     let (table, model) = split_table(bytes)?;
-    let setting = search_setting(bytes, &table, model, config, case.follower_reacts)?;
+    let setting = search_setting(
+        bytes,
+        &table,
+        model,
+        config,
+        case.follower_reacts,
+        case.follower_after_reaction,
+    )?;
     let mut trace = Trace::new();
     let score = setting.run(&case, Some(&mut trace));
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;

@@ -5,7 +5,7 @@
 //! causes and the band alone does not.
 
 use firmware::Config;
-use host_tests::humans::{HumanModel, REACTION_TIME};
+use host_tests::humans::HumanModel;
 use host_tests::sim::{ActuatorModel, Car};
 use host_tests::world::{CutInKind, Start, Tolerances, World};
 use host_tests::SensorModel;
@@ -53,6 +53,7 @@ fn run(case: &Case, config: Config, bytes: &[u8], table: &Table<'_>) -> Outcome 
         model.follower_clip().1.min(idm.max_acceleration),
         -model.follower_clip().0,
     );
+    let reaction_time = config.certificate.emergency.follower_reaction_time;
     let mut rng = StdRng::seed_from_u64(case.seed);
     let sensors = SensorModel::datasheet(config.sensors, config.sensors.max_track_age_us, &mut rng);
     let start = Start {
@@ -102,7 +103,7 @@ fn run(case: &Case, config: Config, bytes: &[u8], table: &Table<'_>) -> Outcome 
             lights_since = None;
         }
         last_ego_speed = ego.v;
-        let reacted = lights_since.is_some_and(|on| t - on >= REACTION_TIME - h);
+        let reacted = lights_since.is_some_and(|on| t - on >= reaction_time - h);
         let a_follower = if reacted {
             -follower_braking
         } else if follower.v >= model.max_speed {

@@ -71,6 +71,7 @@ fn case(start: Start, leader: f32, sensors: SensorModel, seconds: f32) -> Case {
         },
         follower_rule: FollowerRule::Schedule,
         follower_reacts: false,
+        follower_after_reaction: Default::default(),
         leader_brakes_at_authority_change: false,
         sensors,
         actuator: ACTUATOR,

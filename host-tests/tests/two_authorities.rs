@@ -474,7 +474,7 @@ fn the_search_with_late_reacting_followers() {
         let table = Table::parse(bytes).unwrap();
         let model = HumanModel::of(&table).unwrap();
         let setting = Setting::within_model(bytes, &table, model, two(2))
-            .with_reacting_follower()
+            .with_reacting_follower(host_tests::falsify::AfterReaction::AtItsLevel)
             .unwrap();
         let report = search(&setting, &Budget::scaled(300, 60.0), 5, &|_| {});
         let (collisions, losses) = report.failures();
@@ -495,7 +495,7 @@ fn the_search_with_late_reacting_followers() {
     let table = Table::parse(bytes).unwrap();
     let model = HumanModel::of(&table).unwrap();
     let mut setting = Setting::within_model(bytes, &table, model, two(2))
-        .with_reacting_follower()
+        .with_reacting_follower(host_tests::falsify::AfterReaction::AtItsLevel)
         .unwrap();
     setting.reacting = setting
         .reacting
@@ -930,22 +930,25 @@ fn a_start_only_the_emergency_authority_certifies_is_told_apart() {
     }
 }
 
-/// A known hole, pinned: `host-tests/cases/idm-after-reaction-collision.json` (the adversarial
-/// search with followers that react late, leader at 6 m/s^2, seed 1: its Greedy method's
-/// collision). The ego, braking from its engagement at 34.6 m/s, takes the emergency authority
-/// at 1.8 s, which the firmware's follower (braking at its whole level, 6 m/s^2, once it has
-/// reacted to the lights) allows; the search's follower drives by its IDM once it has reacted,
-/// and, 15 m behind and slower than the ego, keeps accelerating, reaching 6 m/s^2 only as the
-/// gap closes: the rear certificate is lost at 2.36 s and the follower hits the stopped ego at
-/// 6.34 s. The test holds while the hole does: a follower that answers brake lights by its IDM
-/// is outside the model the certificate declares (docs/certificate.md), and a fix of either
-/// makes it fail, so that the docs' known limits change with it.
+/// Beyond the model, pinned: `host-tests/cases/idm-after-reaction-collision.json` (the
+/// adversarial search with followers that react late and then drive by their IDM,
+/// `--after-reaction by-its-idm`, leader at 6 m/s^2, seed 1: its Greedy method's collision).
+/// The ego, braking from its engagement at 34.6 m/s, takes the emergency authority at 1.8 s,
+/// which the certificate's follower (braking at its whole level, 6 m/s^2, once it has reacted
+/// to the lights) allows; this follower drives by its IDM once it has reacted, and, 15 m behind
+/// and slower than the ego, keeps accelerating, reaching 6 m/s^2 only as the gap closes: the
+/// rear certificate is lost at 2.36 s and the follower hits the stopped ego at 6.34 s. The
+/// same case with the certificate's follower has no collision. The test holds while the hole
+/// does: a fix (a certificate that covers such followers) makes it fail, so that the docs'
+/// known limits change with it.
 #[test]
 fn a_follower_that_drives_by_its_idm_after_reacting_can_hit_the_ego() {
+    use host_tests::falsify::AfterReaction;
     let text = include_str!("../cases/idm-after-reaction-collision.json");
     let json: serde_json::Value = serde_json::from_str(text).unwrap();
     let case: host_tests::falsify::Case =
         serde_json::from_value(json["findings"][0]["case"].clone()).unwrap();
+    assert_eq!(case.follower_after_reaction, AfterReaction::ByItsIdm);
     let bytes = table_bytes(6.0);
     let table = Table::parse(bytes).unwrap();
     let setting = host_tests::falsify::Setting::within_model(
@@ -954,7 +957,7 @@ fn a_follower_that_drives_by_its_idm_after_reacting_can_hit_the_ego() {
         HumanModel::of(&table).unwrap(),
         two(Config::default().law.time_gap_setting),
     )
-    .with_reacting_follower()
+    .with_reacting_follower(AfterReaction::ByItsIdm)
     .expect("the table is accepted");
     let mut trace = Vec::new();
     let score = setting.run(&case, Some(&mut trace));
@@ -977,4 +980,17 @@ fn a_follower_that_drives_by_its_idm_after_reacting_can_hit_the_ego() {
         p.t > lit_from + 1.2 && p.ego_acceleration < -1.3 && p.human_accelerations[1] > -5.0
     });
     assert!(gentle.is_some_and(|p| p.t < 2.5), "{gentle:?}");
+    // The certificate's follower, from the same start under the same schedule: no collision,
+    // no certificate lost.
+    let declared = host_tests::falsify::Case {
+        follower_after_reaction: AfterReaction::AtItsLevel,
+        ..case
+    };
+    let score = setting.run(&declared, None);
+    assert!(score.collision_time.is_none(), "{:?}", score.collision_time);
+    assert!(
+        score.certificate_lost.is_none(),
+        "{:?}",
+        score.certificate_lost
+    );
 }

@@ -190,6 +190,30 @@ impl ReactingFollower {
         }
     }
 
+    /// The largest acceleration the model allows the follower (m/s^2) `braking_for` seconds
+    /// into a braking of the ego (its brake lights on for that long): `reaction_acceleration`
+    /// until `reaction_time`, then its build-up `reaction_acceleration - jerk (t -
+    /// reaction_time)` down to `-braking`, where it stays while the braking lasts. A follower
+    /// of the model drives anything at or below it (it may brake harder); the closed forms
+    /// are the least gap over all of them (module docs). Before a braking (`braking_for`
+    /// negative) and for NaN, `reaction_acceleration`.
+    pub fn most_acceleration(&self, braking_for: f32) -> f32 {
+        let into_build_up = braking_for - self.reaction_time;
+        if into_build_up.is_nan() || into_build_up < 0.0 {
+            return self.reaction_acceleration;
+        }
+        let built = if self.jerk.is_finite() {
+            self.reaction_acceleration - self.jerk * into_build_up
+        } else {
+            f32::NEG_INFINITY
+        };
+        if built > -self.braking {
+            built
+        } else {
+            -self.braking
+        }
+    }
+
     /// The follower as the car behind in the front game's closed form.
     fn as_car_behind(&self, ego_braking: f32) -> FrontModel {
         FrontModel {
@@ -1687,6 +1711,34 @@ mod tests {
         let at = lights_on_within(0.0, 0.3, 0.0, 0.0, -1.5, f32::INFINITY, 1.5, 1.3);
         assert!((at - 0.3 * (1.5f32 / 0.2).ln()).abs() < 1e-4, "{at}");
         assert!(lights_on_within(0.0, 0.3, 0.0, 0.0, -1.5, f32::INFINITY, 1.5, 0.0) < 1e-6);
+    }
+
+    /// The careful driver (1.15 s, 7.59 m/s^2 over 0.6 s): its speed held through the reaction,
+    /// half its braking 0.3 s into the build-up, all of it from 0.6 s on; the firmware's
+    /// follower (the IDM's 1 m/s^2, 6 m/s^2 at once) at its level the instant it reacts.
+    #[test]
+    fn the_followers_largest_acceleration_worked_out_by_hand() {
+        let careful = ReactingFollower::careful_driver(35.0);
+        for t in [-1.0, 0.0, 0.5, 1.149, f32::NAN] {
+            assert_eq!(careful.most_acceleration(t), 0.0, "at {t}");
+        }
+        let half = careful.most_acceleration(1.15 + 0.3);
+        assert!((half + 0.5 * 0.774 * 9.81).abs() < 1e-3, "{half}");
+        let built = careful.most_acceleration(1.75);
+        assert!((built + 0.774 * 9.81).abs() < 1e-5, "{built}");
+        for t in [2.0, 100.0, f32::INFINITY] {
+            assert_eq!(careful.most_acceleration(t), -0.774 * 9.81, "at {t}");
+        }
+        let firmwares = ReactingFollower {
+            reaction_time: 1.15,
+            reaction_acceleration: 1.0,
+            braking: 6.0,
+            jerk: f32::INFINITY,
+            max_speed: 35.0,
+        };
+        assert_eq!(firmwares.most_acceleration(1.1499), 1.0);
+        assert_eq!(firmwares.most_acceleration(1.15), -6.0);
+        assert_eq!(firmwares.most_acceleration(3.0), -6.0);
     }
 
     /// A follower at the IDM's closest time gap (1 s: 30 m + 2 m at 30 m/s), both at 30 m/s.
