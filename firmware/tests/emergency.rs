@@ -457,3 +457,49 @@ fn a_closing_follower_caps_the_laws_acceleration() {
         "behind a follower at the ego's speed: {held} m/s^2"
     );
 }
+
+/// With two authorities the rear check credits the commands the ego issued since the
+/// follower's measurement (`least_issued_since`): the ego kept at least their least for the
+/// track's age, then brakes at most at the level. In steady following at 30 m/s behind a
+/// follower 1 s back at the same speed, the declared errors and delays, tracks 130 ms old and
+/// nothing else changing, the hardest braking the follower allows the look-ahead rises once
+/// the commands since the engagement reach back far enough (the declared dead time, five lag
+/// time constants and a period before the measurement: 1.75 s in all), by about 0.15 m/s^2:
+/// what 0.13 s of coasting is worth in the closed form.
+#[test]
+fn the_commands_issued_since_the_measurement_are_credited() {
+    let config = firmware::Config {
+        certificate: firmware::CertificateConfig {
+            authorities: firmware::Authorities::Two,
+            ..firmware::Config::default().certificate
+        },
+        law: firmware::LawConfig {
+            set_speed: 30.0,
+            ..firmware::Config::default().law
+        },
+        ..firmware::Config::default()
+    };
+    let period = u64::from(config.period_us);
+    let age = 130_000u64;
+    let cars = Cars {
+        x: [400.0, 0.0, -32.0],
+        v: [30.0, 30.0, 30.0],
+    };
+    let mut c = Controller::new(DEFAULT_TABLE, config);
+    let mut allowed = Vec::new();
+    for k in 0..150u64 {
+        let now = age + k * period;
+        let mut inputs = cars.inputs(now);
+        inputs.leader.timestamp_us = now - age;
+        inputs.follower.timestamp_us = now - age;
+        let command = c.step(&inputs);
+        assert!(command.acceleration.abs() < 0.5, "{command:?}");
+        allowed.push(c.allowed_braking().map(|b| b.level));
+    }
+    let at = |t_us: u64| allowed[(t_us / period) as usize].expect("a level is allowed");
+    let (before, after) = (at(1_000_000), at(2_900_000));
+    assert!(
+        after >= before + 0.1 && after <= before + 0.25,
+        "before {before} m/s^2, after {after} m/s^2"
+    );
+}

@@ -70,6 +70,40 @@ pub fn braking_a_follower_allows(
     allowed_at_the_worst_corner(config, model, follower, delay, None, time_gap, v)
 }
 
+/// The braking the firmware's two-authority argument allows a `follower` `time_gap` seconds
+/// behind (plus the IDM's jam distance, at the ego's speed `v`) in steady following:
+/// [`braking_a_follower_allows`] with the commands the ego issued since the measurement
+/// credited, as its rear check credits them (`firmware::controller`'s `RearCorner::gap_after`:
+/// the least command since the measurement for the track's age at the check, then the level at
+/// once, an instant actuator being the worst). From steady following the commands are zero.
+/// The worse of a track as fresh as the radar delivers one (`latency`) and one as old
+/// (`latency + cycle`), the braking taken to show a period and `lights` seconds after the check.
+pub fn braking_the_firmware_allows(
+    config: &firmware::Config,
+    model: &HumanModel,
+    follower: &ReactingFollower,
+    lights: f32,
+    time_gap: f32,
+    v: f32,
+) -> Option<f32> {
+    let sensors = config.sensors;
+    let period = config.period_us as f32 * 1e-6;
+    [sensors.latency_us, sensors.latency_us + sensors.cycle_us]
+        .into_iter()
+        .map(|age_us| {
+            let age = age_us as f32 * 1e-6;
+            let issued = EgoBuildUp {
+                acceleration: 0.0,
+                commands: 0.0,
+                known_for: age,
+                lag: 0.0,
+            };
+            let delay = age + period + lights;
+            allowed_at_the_worst_corner(config, model, follower, delay, Some(issued), time_gap, v)
+        })
+        .try_fold(f32::INFINITY, |least, level| level.map(|l| least.min(l)))
+}
+
 /// [`braking_a_follower_allows`] with the ego's braking credited with its actuator's build-up
 /// in closed form ([`table_format::rear::rear_gap_built_up`]): from steady following (its
 /// acceleration and the commands already issued at zero), the commands in force for
@@ -521,7 +555,7 @@ fn gaps_with_two_authorities(bytes: &[u8], out: &std::path::Path) -> Result<serd
     let lights = lights_from_steady_following(&config);
     let delay = learnt_after(&config) + lights;
     let allows = |f: &ReactingFollower, time_gap: f32, v: f32| {
-        braking_a_follower_allows(&config, &model, f, delay, time_gap, v)
+        braking_the_firmware_allows(&config, &model, f, lights, time_gap, v)
     };
     let speeds = [10.0f32, 20.0, 30.0];
     let follower_gaps = [0.6f32, 1.0, 2.0];
@@ -929,10 +963,10 @@ pub(crate) fn learnt_after(config: &firmware::Config) -> f32 {
 }
 
 /// How long after a measurement the firmware's argument takes the brake lights to come on
-/// for sure, s, on top of [`learnt_after`]: from steady following (the actuator's
-/// acceleration and commands at zero), braking along the emergency ramp through the declared
-/// dead time and lag (`table_format::rear::lights_on_within`).
-fn lights_from_steady_following(config: &firmware::Config) -> f32 {
+/// for sure, s, on top of `learnt_after` (a track's age and a period): from steady following
+/// (the actuator's acceleration and commands at zero), braking along the emergency ramp
+/// through the declared dead time and lag (`table_format::rear::lights_on_within`).
+pub fn lights_from_steady_following(config: &firmware::Config) -> f32 {
     let actuator = EgoActuator::declared(config);
     let full = config.certificate.emergency.braking;
     config.certificate.emergency.lights_on_within(
@@ -1010,7 +1044,7 @@ pub struct FloorRow {
     /// at least.
     pub floor_with_errors: f32,
     /// The firmware's certified steady gap (a measured gap) with the braking the follower
-    /// allows by its argument ([`braking_a_follower_allows`]), m; `None` where it allows none.
+    /// allows by its argument ([`braking_the_firmware_allows`]), m; `None` where it allows none.
     pub certified: Option<f32>,
 }
 
@@ -1036,7 +1070,7 @@ pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<F
     let sensors = config.sensors;
     let know = learnt_after(&config);
     let actuator = EgoActuator::declared(&config);
-    let delay = know + lights_from_steady_following(&config);
+    let lights = lights_from_steady_following(&config);
     let as_measured = |g: f32| g * (1.0 + sensors.error.range_relative) + sensors.error.range;
     let mut rows = Vec::new();
     for &leader in leaders {
@@ -1068,12 +1102,11 @@ pub fn floor_rows(bytes: &[u8], leaders: &[f32], speeds: &[f32]) -> Result<Vec<F
                 let worst = floor(&worst_measured(&config, scene), actuator, know, full.level);
                 let floor = floor(&scene, actuator, know, full.level);
                 let time_gap = (follower_gap - idm.jam_distance) / v;
-                let certified = braking_a_follower_allows(
-                    &config, &model, &follower, delay, time_gap, v,
-                )
-                .map(|level| {
-                    comfort.steady_gap_with(v, leader, firmware::Braking { level, ..full })
-                });
+                let certified =
+                    braking_the_firmware_allows(&config, &model, &follower, lights, time_gap, v)
+                        .map(|level| {
+                            comfort.steady_gap_with(v, leader, firmware::Braking { level, ..full })
+                        });
                 rows.push(FloorRow {
                     leader_braking: leader,
                     speed: v,

@@ -3,8 +3,8 @@
 use firmware::Config;
 use host_tests::gap_policy::{
     braking_a_follower_allows, braking_a_follower_allows_built_up,
-    braking_a_follower_allows_through, crediting_its_idm, floor_rows, with_exact_sensors,
-    EgoActuator,
+    braking_a_follower_allows_through, braking_the_firmware_allows, crediting_its_idm, floor_rows,
+    lights_from_steady_following, with_exact_sensors, EgoActuator,
 };
 use host_tests::humans::HumanModel;
 use table_format::rear::ReactingFollower;
@@ -148,6 +148,47 @@ fn the_closed_form_build_up_credit_is_below_the_integration_and_close() {
         assert!(closed <= brute + 2e-3, "{closed} above {brute}");
         assert!(closed > brute - 0.01, "{closed} far below {brute}");
     }
+}
+
+/// The firmware's argument with the commands it issued since the follower's measurement
+/// credited (`braking_the_firmware_allows`) against brute-force integration of the same ego:
+/// coasting for the track's age (an instant actuator whose dead time is the age), then braking
+/// at the level at once, the follower's reaction starting a period and the lights' bound after
+/// the check. Within 0.01 m/s^2 of the lesser of a fresh track's (the radar's latency) and an
+/// old one's (latency and cycle); with the firmware's follower 1 s behind at 30 m/s, 4.05 m/s^2
+/// where the argument without the credit allows 3.89 (the old track's delay).
+#[test]
+fn the_firmwares_credit_of_its_issued_commands_agrees_with_integration() {
+    let (model, declared, argued) = deployed();
+    let lights = lights_from_steady_following(&declared);
+    let period = declared.period_us as f32 * 1e-6;
+    let sensors = declared.sensors;
+    let integrated = [sensors.latency_us, sensors.latency_us + sensors.cycle_us].map(|age_us| {
+        let age = age_us as f32 * 1e-6;
+        let coasting = EgoActuator {
+            dead_time: age,
+            lag: 0.0,
+            jerk: f32::INFINITY,
+        };
+        let delay = age + period + lights;
+        braking_a_follower_allows_through(&declared, &model, &argued, coasting, delay, 1.0, 30.0)
+            .expect("a braking is allowed")
+    });
+    let least = integrated[0].min(integrated[1]);
+    let closed = braking_the_firmware_allows(&declared, &model, &argued, lights, 1.0, 30.0)
+        .expect("a braking is allowed");
+    assert!((closed - least).abs() < 0.01, "{closed} vs {integrated:?}");
+    assert!((closed - 4.05).abs() < 0.01, "{closed}");
+    let at_once = braking_a_follower_allows(
+        &declared,
+        &model,
+        &argued,
+        (sensors.latency_us + sensors.cycle_us + declared.period_us) as f32 * 1e-6 + lights,
+        1.0,
+        30.0,
+    )
+    .expect("a braking is allowed");
+    assert!((at_once - 3.89).abs() < 0.01, "{at_once}");
 }
 
 /// The firmware never certifies a steady gap below the floor under every certificate of its

@@ -151,7 +151,11 @@
 //! [`rear_gap_built_up`] is the closed form there (the larger of it and the value at once).
 //! A lower bound of the ego's acceleration needs an actuator no faster than the one argued
 //! with: a dead time and lag declared as the slowest the actuator may be (as the front needs)
-//! do not give one.
+//! do not give one through the lag. What any such actuator does give is the commands already
+//! issued: its acceleration is a weighted average of the commands in force, so it stays at
+//! least their least until new ones are issued. The firmware credits that much
+//! ([`EgoBuildUp`] with no lag: the least command since the follower's measurement, for as long
+//! as it has been known), and nothing of the commands to come.
 
 use crate::front::{front_value, FrontModel};
 

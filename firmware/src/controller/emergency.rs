@@ -3,7 +3,7 @@
 //! band's floor at once cannot keep the leader's worst case off the car, no harder than the
 //! follower allows (the controller's module docs: emergencies).
 
-use table_format::rear::{hardest_clearing, rear_gap_after, ReactingFollower};
+use table_format::rear::{hardest_clearing, rear_gap_after, EgoBuildUp, ReactingFollower};
 
 use super::authorities::{reaction_at, LEVEL_RESOLUTION};
 use super::certificate::{profile, LeaderMemo, Model, Ramp, RearMemo, WorstCorner};
@@ -579,6 +579,7 @@ impl Controller<'_> {
             owing_for,
             held,
             held_for,
+            issued: self.least_issued_since(t_f, now, model),
         }
     }
 
@@ -603,6 +604,10 @@ impl Controller<'_> {
     }
 }
 
+/// One of [`RearCorner::gap_after`]'s bounds: the closed form's gap (m), ego speed (m/s) and
+/// braking level (m/s^2, positive).
+type Bound = (f32, f32, f32);
+
 /// A rear state at a follower measurement's time `t_f` (the worst corner of its box:
 /// [`Controller::rear_corner`]; a true state: [`Controller::rear_state`]) and the ego's
 /// braking from `t_f` until now.
@@ -623,6 +628,10 @@ pub(super) struct RearCorner {
     held: f32,
     /// How long the hold lasts from now, s.
     held_for: f32,
+    /// With two authorities, what the issued commands bound of the ego's acceleration from
+    /// `t_f` until now: its least (m/s^2, at most zero) and for how long (s)
+    /// ([`Controller::least_issued_since`]; `None`: not known).
+    issued: Option<(f32, f32)>,
 }
 
 impl RearCorner {
@@ -645,18 +654,35 @@ impl RearCorner {
     /// m/s^2, checked at 3.5 from a track 0.08 s old, costs 1.1 m/s of speed (0.48 s of the
     /// default lag, dead time and age at 2.25 m/s^2), where the first bound brakes at 5.75 to
     /// a standstill.
+    ///
+    /// With two authorities a third bound holds where the commands issued since `t_f` are known
+    /// ([`Controller::least_issued_since`]: the ego's acceleration was at least `least`, at or
+    /// above `-level`, for the `T` seconds from `t_f` until now) and no lights' hold brakes
+    /// harder than `level`: the ego's acceleration is then at least `least` until now and at
+    /// least `-level` after (every command from now on is, and the older ones still in force
+    /// are at least `least`), whatever the actuator (no slower than declared: an instant one is
+    /// the worst). That is [`table_format::rear::EgoBuildUp`]'s bound with no lag
+    /// ([`table_format::rear::KnownBraking::credit`]: the ego as one braking at `level` from
+    /// `t_f`, `(level + least) T` faster and `(level + least) T^2 / 2` further back). The
+    /// commands from now on are not credited: a later step may command anything down to
+    /// `-level`.
     pub(super) fn gap_after(&self, model: &Model, level: f32, clock: f32, dark: f32) -> f32 {
         let follower = self.follower(model, dark);
-        let at = |(ego_speed, braking)| self.at(ego_speed, braking, clock, &follower);
-        let (owed, held) = self.bounds(level);
-        match owed {
-            Some(owed) => math::max(at(held), at(owed)),
-            None => at(held),
+        let at = |bound| self.at(bound, clock, &follower);
+        let (owed, held, credited) = self.bounds(level);
+        let mut value = at(held);
+        if let Some(owed) = owed {
+            value = math::max(value, at(owed));
         }
+        if let Some(credited) = credited {
+            value = math::max(value, at(credited));
+        }
+        value
     }
 
-    /// Whether [`RearCorner::gap_after`] is above `margin`: the bound that counts the debt
-    /// first, the one that holds the earlier braking for good only where that fails.
+    /// Whether [`RearCorner::gap_after`] is above `margin`: the bound that credits the issued
+    /// commands first, then the one that counts the debt, the one that holds the earlier
+    /// braking for good only where those fail.
     pub(super) fn clears(
         &self,
         model: &Model,
@@ -666,29 +692,52 @@ impl RearCorner {
         margin: f32,
     ) -> bool {
         let follower = self.follower(model, dark);
-        let at = |(ego_speed, braking)| self.at(ego_speed, braking, clock, &follower);
-        let (owed, held) = self.bounds(level);
-        owed.is_some_and(|owed| at(owed) > margin) || at(held) > margin
+        let at = |bound| self.at(bound, clock, &follower);
+        let (owed, held, credited) = self.bounds(level);
+        credited.is_some_and(|credited| at(credited) > margin)
+            || owed.is_some_and(|owed| at(owed) > margin)
+            || at(held) > margin
     }
 
-    /// [`RearCorner::gap_after`]'s two bounds for `level`, as `(ego_speed, braking)` from this
+    /// [`RearCorner::gap_after`]'s bounds for `level`, as `(gap, ego_speed, braking)` from this
     /// state: braking at `level` from the speed less the debt, where `since` is harder than
-    /// `level` (a NaN level is not); and braking at `max(level, since)`.
-    fn bounds(&self, level: f32) -> (Option<(f32, f32)>, (f32, f32)) {
-        let held = (self.ego_speed, math::max(level, self.since));
+    /// `level` (a NaN level is not); braking at `max(level, since)`; and braking at `level`
+    /// credited with the issued commands, where they are known and none brakes harder than
+    /// `level` (with no time known, the ego braking at `level` from now: a braking held
+    /// earlier no longer counts for good).
+    fn bounds(&self, level: f32) -> (Option<Bound>, Bound, Option<Bound>) {
+        let held = (self.gap, self.ego_speed, math::max(level, self.since));
         let harder_before = self.since > level;
         let owed = harder_before.then(|| {
             let debt = debt_bound(self.since, level, self.owing_for, self.held, self.held_for);
-            (math::max(self.ego_speed - debt, 0.0), level)
+            (self.gap, math::max(self.ego_speed - debt, 0.0), level)
         });
-        (owed, held)
+        // A hold harder than the level breaks "at least `-level` from now on" (`held_for` is
+        // never NaN; a NaN level gets no credit).
+        let hold_within = self.held_for <= 0.0 || self.held <= level;
+        let credited = self
+            .issued
+            .filter(|_| hold_within)
+            .and_then(|(least, known_for)| {
+                let (behind, faster) = EgoBuildUp {
+                    acceleration: least,
+                    commands: least,
+                    known_for,
+                    lag: 0.0,
+                }
+                .credit(level);
+                // A least command below `-level` credits nothing (the closed form's ego brakes
+                // at `level` from `t_f`): the bound is then the one held for good's.
+                (least >= -level).then_some((self.gap - behind, self.ego_speed + faster, level))
+            });
+        (owed, held, credited)
     }
 
-    /// [`rear_gap_after`] from this state's gap and follower, the ego at `ego_speed` braking
-    /// at `braking`.
-    fn at(&self, ego_speed: f32, braking: f32, clock: f32, follower: &ReactingFollower) -> f32 {
+    /// [`rear_gap_after`] from this state's follower and a bound's `(gap, ego_speed,
+    /// braking)`.
+    fn at(&self, (gap, ego_speed, braking): Bound, clock: f32, follower: &ReactingFollower) -> f32 {
         rear_gap_after(
-            self.gap,
+            gap,
             ego_speed,
             self.follower_speed,
             braking,
@@ -753,8 +802,31 @@ fn debt_bound(since: f32, level: f32, owing_for: f32, held: f32, held_for: f32) 
 
 #[cfg(test)]
 mod tests {
-    use super::debt_bound;
+    use super::{debt_bound, RearCorner};
     use proptest::prelude::*;
+
+    /// A measurement of this instant (no time since it), after a braking at 8 m/s^2 that the
+    /// issued commands show over (none below -2 m/s^2 in force): the credited bound is the ego
+    /// braking at the level from now, not the earlier braking held for good, and it is what
+    /// the value takes. A least command below `-level` credits nothing.
+    #[test]
+    fn a_measurement_of_now_is_credited_with_the_commands_in_force() {
+        let corner = |least: f32| RearCorner {
+            gap: 30.0,
+            follower_speed: 30.0,
+            ego_speed: 30.0,
+            since: 8.0,
+            owing_for: 0.0,
+            held: 0.0,
+            held_for: 0.0,
+            issued: Some((least, 0.0)),
+        };
+        let (_, held, credited) = corner(-2.0).bounds(4.0);
+        assert_eq!(held, (30.0, 30.0, 8.0));
+        assert_eq!(credited, Some((30.0, 30.0, 4.0)));
+        let (_, _, credited) = corner(-4.5).bounds(4.0);
+        assert_eq!(credited, None);
+    }
 
     /// The speed a first-order lag behind a dead time loses below `-level` from `t_f` on, by
     /// brute force: piecewise-constant commands per 20 ms period, the lag solved exactly over

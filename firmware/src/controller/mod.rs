@@ -226,11 +226,25 @@
 //!   the engaged steps may read (the actuator's report read again at its error's other end,
 //!   the way starting two periods on), not a bound: the engaged steps keep their own
 //!   certificate.
+//! - **The commands since the follower's measurement** are credited where they are known: the
+//!   ego's acceleration was at least the least command issued since then (a lag averages the
+//!   commands in force; the commands older than its five time constants, down to the harder of
+//!   the leader's declared braking and the envelope's least command, weigh at most `e^-5`:
+//!   `Controller::least_issued_since`), so the rear
+//!   check's closed form also takes the ego as braking at the level from the measurement, but
+//!   faster and further back by what it did not brake until now
+//!   (`emergency::RearCorner::gap_after`, the larger of the values). Only the commands issued
+//!   are credited, not the commands to come: a later step may command anything down to the
+//!   level, and the actuator may be instant. In steady following at 30 m/s behind a follower 1 s
+//!   back, tracks 130 ms old, the level the follower allows rises from 4.05 to 4.23 m/s^2 once
+//!   the commands reach back 1.75 s (`the_commands_issued_since_the_measurement_are_credited`).
 //!
-//! What it does not do yet: credit a braking below `beta` since a measurement (the command
-//! history keeps its largest command, so the ego's braking since a follower measurement is
-//! taken as hard as `beta` or the emergency's level, whatever level the look-ahead argues
-//! with); move off from standstill with a follower at the IDM's jam distance behind (the
+//! What it does not do yet: credit the ego's braking harder than its level since a measurement
+//! below `beta` (the command history keeps its largest command, so the held and owed bounds
+//! take the ego's braking since a follower measurement as hard as `beta` or the emergency's
+//! level, whatever level the look-ahead argues with); credit the commands to come (a braking
+//! ramp the commands keep to would be worth as much again: `host-tests gap-policy`'s levers);
+//! move off from standstill with a follower at the IDM's jam distance behind (the
 //! follower's model lets it accelerate blind until it sees the lights, and no braking
 //! certifies that: `table_format::rear`'s module docs have why neither an IDM follower's speed
 //! cap, with the declared errors, nor a committed move-off, against this follower, does, and
@@ -553,7 +567,7 @@ const LAW_BRAKING_MEMORY_US: u64 = 1_000_000;
 /// 36 and 17 with 2 s; 24 and 16 with 6 s, where the steady following behind an IDM follower
 /// at 25 m/s settled 1.46 m from its policy (0.74 m with 4 s).
 const LAW_FOLLOWER_HORIZON_S: f32 = 4.0;
-use history::{seconds, IssuedCommands, REPORTS};
+use history::{seconds, IssuedCommands, LEAST, REPORTS};
 use law::{Law, LawInputs};
 use tracks::EGO_HISTORY;
 
@@ -578,6 +592,10 @@ pub struct Controller<'t> {
     /// was valid and fresh), kept as the commands are: before the controller's own commands
     /// bound the actuator, they do (`Controller::reported_since`).
     reported: IssuedCommands<REPORTS>,
+    /// With two authorities, the issued commands negated, kept as `issued` is: the least
+    /// command since a time, for the rear check's credit
+    /// (`Controller::least_issued_since`).
+    least_issued: IssuedCommands<LEAST>,
     /// The braking ramp under way (`None`: the last command passed the look-ahead): the
     /// commands follow it since its start, not only from now (module docs: the braking ramp).
     ramp: Option<Ramp>,
@@ -699,6 +717,7 @@ impl<'t> Controller<'t> {
             events: Deque::new(),
             issued: IssuedCommands::new(),
             reported: IssuedCommands::new(),
+            least_issued: IssuedCommands::new(),
             ramp: None,
             passed: false,
             speed_ramp: None,
@@ -953,6 +972,7 @@ impl<'t> Controller<'t> {
         self.lights_hold = None;
         self.lights_way_down = false;
         self.issued.forget();
+        self.least_issued.forget();
         self.ramp = None;
         self.speed_ramp = None;
         self.in_force = None;
@@ -1109,6 +1129,12 @@ impl<'t> Controller<'t> {
         // Every command goes to the actuator: the look-ahead of later steps must know it.
         let keep_from = self.keep_commands_from(now);
         self.issued.push(now, command.acceleration, keep_from);
+        if self.two_authorities() {
+            // A period further back: its query reaches for the command in force at its horizon.
+            let keep_least_from = keep_from.saturating_sub(u64::from(self.config.period_us));
+            self.least_issued
+                .push(now, -command.acceleration, keep_least_from);
+        }
         // The ramp (module docs): a command at or below the ramp's floor follows a ramp. One under
         // way keeps its start and reference; a new one starts now through the command itself
         // (reference `c + j h`, the command being the ramp's first: below the committed ramp
