@@ -727,8 +727,14 @@ impl RearCorner {
                 }
                 .credit(level);
                 // A least command below `-level` credits nothing (the closed form's ego brakes
-                // at `level` from `t_f`): the bound is then the one held for good's.
-                (least >= -level).then_some((self.gap - behind, self.ego_speed + faster, level))
+                // at `level` from `t_f`): the bound is then the one held for good's. With no
+                // time known and no harder braking since, it is that bound itself, not
+                // evaluated twice.
+                (least >= -level && (faster > 0.0 || self.since > level)).then_some((
+                    self.gap - behind,
+                    self.ego_speed + faster,
+                    level,
+                ))
             });
         (owed, held, credited)
     }
