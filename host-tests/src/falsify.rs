@@ -156,11 +156,11 @@ impl Schedule {
 
 /// What a follower that reacts late ([`Case::follower_reacts`]) does once it has reacted,
 /// while the ego's brake lights stay on.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "snake_case")]
 pub enum AfterReaction {
     /// Brakes at least as the certificate's follower does
-    /// ([`ReactingFollower::most_acceleration`]: its whole level, harder where its IDM asks):
+    /// (`ReactingFollower::most_acceleration`: its whole level, harder where its IDM asks):
     /// within the two-authority certificate's model.
     #[default]
     AtItsLevel,

@@ -18,6 +18,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use host_tests::campaign::{run_episode, CutInKind, Sensing, Trace};
+use host_tests::falsify::AfterReaction;
 use host_tests::sim::ActuatorModel;
 use host_tests::world::EmergencyCauses;
 use host_tests::SensorModel;
@@ -67,8 +68,8 @@ enum Command {
         /// `at-its-level` brakes as the certificate's follower does (within the model);
         /// `by-its-idm` drives by its IDM (beyond the model: the search reports what it finds
         /// and does not fail on it). Needs `--follower-reacts`.
-        #[arg(long, value_enum, default_value_t = AfterReactionArg::AtItsLevel)]
-        after_reaction: AfterReactionArg,
+        #[arg(long, value_enum, default_value_t = AfterReaction::AtItsLevel)]
+        after_reaction: AfterReaction,
     },
     /// Runs the scenario suite (openpilot's maneuvers, Euro NCAP's CCR tests, hjacc's own
     /// checks) under ISO 15622's comfort checks, with the graded override and the paper's
@@ -141,25 +142,6 @@ fn table_bytes(table: &Option<PathBuf>) -> Result<&'static [u8]> {
             .leak(),
         None => firmware::DEFAULT_TABLE,
     })
-}
-
-/// What a follower that reacts late does once it has reacted
-/// ([`host_tests::falsify::AfterReaction`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum AfterReactionArg {
-    /// Brakes as the certificate's follower does (within the model).
-    AtItsLevel,
-    /// Drives by its IDM (beyond the model).
-    ByItsIdm,
-}
-
-impl From<AfterReactionArg> for host_tests::falsify::AfterReaction {
-    fn from(a: AfterReactionArg) -> Self {
-        match a {
-            AfterReactionArg::AtItsLevel => host_tests::falsify::AfterReaction::AtItsLevel,
-            AfterReactionArg::ByItsIdm => host_tests::falsify::AfterReaction::ByItsIdm,
-        }
-    }
 }
 
 /// Which brakings the firmware's certificate argues with ([`firmware::Authorities`]).
@@ -353,7 +335,7 @@ fn real_main() -> Result<()> {
             after_reaction,
         } => {
             anyhow::ensure!(
-                follower_reacts || after_reaction == AfterReactionArg::AtItsLevel,
+                follower_reacts || after_reaction == AfterReaction::AtItsLevel,
                 "--after-reaction needs --follower-reacts: a follower that sees the ego at once \
                  has no reaction to come after"
             );
@@ -364,7 +346,7 @@ fn real_main() -> Result<()> {
                 &out,
                 &table,
                 &certificate,
-                follower_reacts.then_some(after_reaction.into()),
+                follower_reacts.then_some(after_reaction),
             )
         }
         Command::Replay {
@@ -402,7 +384,7 @@ fn falsify(
     certificate: &CertificateArgs,
     reacting: Option<host_tests::falsify::AfterReaction>,
 ) -> Result<()> {
-    use host_tests::falsify::{search, AfterReaction, Budget};
+    use host_tests::falsify::{search, Budget};
     let follower_reacts = reacting.is_some();
     let beyond_model = reacting == Some(AfterReaction::ByItsIdm);
     // The replay runs the certificate and table it is given, not the file's: the hint at the
